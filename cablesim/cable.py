@@ -1,0 +1,127 @@
+"""The cable model: geometry, axial rigidity, lumped masses and the degree-of-freedom order.
+
+Degrees of freedom are ordered ``[x1, x2, x3, x4, ...]`` = (horizontal, vertical) of node 1,
+then of node 2, and so on; the vertical axis points down. Segment ``r`` (1-based in the paper,
+``r - 1`` here) joins node ``r - 1`` to node ``r``, node 0 being support A = (0, 0) and node
+``n + 1`` support B = (L, H).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Cable:
+    """A weightless cable with ``n`` interior nodes and ``n + 1`` straight segments.
+
+    Parameters
+    ----------
+    L : float
+        Horizontal distance from support A to support B, m.
+    H : float
+        Vertical distance from A to B, m, positive downwards (B below A).
+    S : array_like, shape (n + 1,)
+        Natural (unstretched) segment lengths ``S_r``, m.
+    EA : float
+        Axial rigidity, N. ``numpy.inf`` gives the inextensible cable.
+    masses : array_like, shape (n,)
+        Lumped nodal masses ``M_r``, kg, acting in both directions.
+    """
+
+    L: float
+    H: float
+    S: np.ndarray
+    EA: float
+    masses: np.ndarray
+
+    def __post_init__(self):
+        S = np.asarray(self.S, dtype=float).copy()
+        m = np.asarray(self.masses, dtype=float).copy()
+        S.setflags(write=False)
+        m.setflags(write=False)
+        object.__setattr__(self, "S", S)
+        object.__setattr__(self, "masses", m)
+        object.__setattr__(self, "L", float(self.L))
+        object.__setattr__(self, "H", float(self.H))
+        object.__setattr__(self, "EA", float(self.EA))
+        if S.ndim != 1 or S.size < 2:
+            raise ValueError("S must hold n + 1 >= 2 segment lengths")
+        if m.shape != (S.size - 1,):
+            raise ValueError("masses must hold n = len(S) - 1 values")
+
+    @property
+    def n_nodes(self) -> int:
+        """Number of interior (moving) nodes ``n``."""
+        return self.S.size - 1
+
+    @property
+    def n_segments(self) -> int:
+        """Number of segments ``n + 1``."""
+        return self.S.size
+
+    @property
+    def n_dof(self) -> int:
+        """Number of degrees of freedom ``2n``."""
+        return 2 * self.n_nodes
+
+    @property
+    def chord(self) -> np.ndarray:
+        """Vector from support A to support B, ``(L, H)``, m."""
+        return np.array([self.L, self.H])
+
+    @property
+    def chord_length(self) -> float:
+        """Straight-line distance between the supports, m."""
+        return float(np.hypot(self.L, self.H))
+
+    @property
+    def total_length(self) -> float:
+        """Sum of the natural segment lengths, m."""
+        return float(self.S.sum())
+
+    @property
+    def compliance(self) -> float:
+        """Axial compliance ``1 / EA``, 1/N (zero for the inextensible cable)."""
+        return 0.0 if np.isinf(self.EA) else 1.0 / self.EA
+
+    @property
+    def mass_diagonal(self) -> np.ndarray:
+        """Diagonal of the lumped mass matrix ``M = diag(M1, M1, M2, M2, ...)``, kg."""
+        return np.repeat(self.masses, 2)
+
+    @property
+    def mass_matrix(self) -> np.ndarray:
+        """The lumped mass matrix ``M``, kg, shape (2n, 2n)."""
+        return np.diag(self.mass_diagonal)
+
+    def inextensible(self) -> "Cable":
+        """The same cable with ``EA = inf``."""
+        return Cable(self.L, self.H, self.S, np.inf, self.masses)
+
+    def with_EA(self, EA: float) -> "Cable":
+        """The same cable with another axial rigidity."""
+        return Cable(self.L, self.H, self.S, EA, self.masses)
+
+
+def nodes_with_supports(cable: Cable, y: np.ndarray) -> np.ndarray:
+    """Node coordinates including both supports.
+
+    Parameters
+    ----------
+    cable : Cable
+    y : ndarray, shape (2n,)
+        Interior node coordinates in DOF order.
+
+    Returns
+    -------
+    ndarray, shape (n + 2, 2)
+        Rows are A, node 1, ..., node n, B.
+    """
+    pts = np.empty((cable.n_nodes + 2, 2))
+    pts[0] = 0.0
+    pts[1:-1] = np.asarray(y, dtype=float).reshape(-1, 2)
+    pts[-1] = cable.chord
+    return pts

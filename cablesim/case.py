@@ -1,0 +1,284 @@
+"""Case files: YAML in, a frozen and validated :class:`Case` out.
+
+A case file describes one cable, its loads, the analysis and the damping (SI units throughout:
+m, N, kg, s, rad/s). Unknown keys are errors, so a misspelt key is never silently ignored.
+:func:`load_case` turns every problem into a :class:`~cablesim.errors.CablesimError` whose
+message names the field and says what to do.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from importlib import resources
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from .cable import Cable
+from .errors import CablesimError
+
+EXAMPLE_RESOURCE = "paper-example.yaml"
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+
+def _finite(v: float, what: str) -> float:
+    if not math.isfinite(v):
+        raise ValueError(f"{what} must be a finite number")
+    return v
+
+
+class CableSpec(_Strict):
+    """Geometry, axial rigidity and masses (section ``cable:``)."""
+
+    L: float = Field(gt=0, description="horizontal distance A->B, m")
+    H: float = Field(description="vertical distance A->B, m, positive = B below A")
+    S: tuple[float, ...] = Field(min_length=2, description="natural segment lengths, m (n+1)")
+    EA: float | None = Field(default=None, gt=0, description="axial rigidity, N")
+    E: float | None = Field(default=None, gt=0, description="Young's modulus, N/m^2")
+    A: float | None = Field(default=None, gt=0, description="cross-section area, m^2")
+    masses: tuple[float, ...] = Field(min_length=1, description="lumped nodal masses, kg (n)")
+
+    @field_validator("S", "masses")
+    @classmethod
+    def _positive(cls, v, info):
+        for i, x in enumerate(v):
+            if not math.isfinite(x) or x <= 0:
+                raise ValueError(f"every value must be a positive finite number; item {i + 1} is {x}")
+        return v
+
+    @model_validator(mode="after")
+    def _rigidity_and_sizes(self):
+        if self.EA is None and (self.E is None or self.A is None):
+            raise ValueError("give the axial rigidity as EA (N), or as both E (N/m^2) and A (m^2)")
+        if self.EA is not None and (self.E is not None or self.A is not None):
+            raise ValueError("give either EA or E and A, not both")
+        if len(self.masses) != len(self.S) - 1:
+            raise ValueError(
+                f"cable.masses has {len(self.masses)} values but cable.S has {len(self.S)} "
+                f"segments: n+1 segments need n = {len(self.S) - 1} masses, one per interior node"
+            )
+        return self
+
+    @property
+    def axial_rigidity(self) -> float:
+        """EA, N."""
+        return float(self.EA if self.EA is not None else self.E * self.A)
+
+    @property
+    def n_nodes(self) -> int:
+        """Number of interior nodes."""
+        return len(self.S) - 1
+
+
+class LoadsSpec(_Strict):
+    """Sustained and harmonic nodal loads (section ``loads:``), N, 2n values each."""
+
+    F0: tuple[float, ...] = Field(description="sustained nodal loads, N")
+    FL: tuple[float, ...] | None = Field(default=None, description="peak harmonic loads, N")
+
+
+class DampingSpec(_Strict):
+    """Rayleigh damping ``C = a0 M + a1 K0`` (section ``damping:``).
+
+    Either a damping ratio for two modes (default: 1 and 2) or the coefficients themselves.
+    """
+
+    ratio: float | None = Field(default=None, ge=0, lt=1, description="damping ratio xi")
+    modes: tuple[int, int] = Field(default=(1, 2), description="the two modes given ratio xi")
+    a0: float | None = Field(default=None, ge=0, description="mass-proportional coefficient, 1/s")
+    a1: float | None = Field(default=None, ge=0, description="stiffness-proportional coefficient, s")
+
+    @model_validator(mode="after")
+    def _one_way(self):
+        explicit = self.a0 is not None or self.a1 is not None
+        if explicit and self.ratio is not None:
+            raise ValueError("give damping either as ratio (with modes) or as a0 and a1, not both")
+        if explicit and (self.a0 is None or self.a1 is None):
+            raise ValueError("explicit Rayleigh damping needs both a0 and a1")
+        if not explicit and self.ratio is None:
+            raise ValueError("give damping.ratio (e.g. 0.01), or a0 and a1")
+        if self.modes[0] < 1 or self.modes[1] < 1 or self.modes[0] == self.modes[1]:
+            raise ValueError("damping.modes must be two different mode numbers counted from 1")
+        return self
+
+
+class Case(_Strict):
+    """One analysis case, as read from a YAML case file."""
+
+    name: str | None = Field(default=None, description="case name; default: the file stem")
+    cable: CableSpec
+    loads: LoadsSpec
+    analysis: Literal["exact", "approximate"] = "exact"
+    damping: DampingSpec = DampingSpec(ratio=0.01)
+
+    @field_validator("name")
+    @classmethod
+    def _safe_name(cls, v):
+        if v is not None and not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9._-]*", v):
+            raise ValueError("use letters, digits, '.', '_' and '-' only (it names the output folder)")
+        return v
+
+    @model_validator(mode="after")
+    def _sizes(self):
+        n = self.cable.n_nodes
+        for key in ("F0", "FL"):
+            v = getattr(self.loads, key)
+            if v is not None and len(v) != 2 * n:
+                raise ValueError(
+                    f"loads.{key} has {len(v)} values; this cable has n = {n} interior nodes, so it "
+                    f"needs 2n = {2 * n} (horizontal, vertical for each node in turn)"
+                )
+        if self.damping.modes[1] > 2 * n or self.damping.modes[0] > 2 * n:
+            raise ValueError(f"damping.modes must be between 1 and 2n = {2 * n}")
+        return self
+
+    # -- derived objects ---------------------------------------------------------------------
+    def to_cable(self) -> Cable:
+        """The :class:`~cablesim.cable.Cable` this case describes."""
+        c = self.cable
+        return Cable(c.L, c.H, np.array(c.S), c.axial_rigidity, np.array(c.masses))
+
+    @property
+    def F0(self) -> np.ndarray:
+        """Sustained loads, N."""
+        return np.array(self.loads.F0, dtype=float)
+
+    @property
+    def FL(self) -> np.ndarray:
+        """Peak harmonic loads, N (zeros if not given)."""
+        if self.loads.FL is None:
+            return np.zeros(2 * self.cable.n_nodes)
+        return np.array(self.loads.FL, dtype=float)
+
+
+# ----------------------------------------------------------------------------------------------
+# YAML
+# ----------------------------------------------------------------------------------------------
+class _Loader(yaml.SafeLoader):
+    """YAML 1.1 reads ``1.0e9`` as a string; people write numbers that way, so accept it."""
+
+
+_Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(
+        r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
+        |[-+]?(?:[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)
+        |\.[0-9_]+(?:[eE][-+][0-9]+)?
+        |[-+]?\.(?:inf|Inf|INF)
+        |\.(?:nan|NaN|NAN))$""",
+        re.X,
+    ),
+    list("-+0123456789."),
+)
+
+
+def _field_name(loc) -> str:
+    parts = []
+    for p in loc:
+        if isinstance(p, int):
+            parts.append(f"[{p + 1}]")
+        else:
+            parts.append(("." if parts else "") + str(p))
+    return "".join(parts) or "(top level)"
+
+
+_HINTS = {
+    "extra_forbidden": "is not a known key; check its spelling and indentation "
+    "(`cablesim example` prints a complete case file)",
+    "missing": "is required; add it",
+    "finite_number": "must be a finite number, not NaN or infinity",
+}
+
+
+def format_validation_error(err: ValidationError, source: str) -> str:
+    """One readable paragraph for every problem pydantic found in a case file."""
+    items = []
+    for e in err.errors():
+        field = _field_name(e["loc"])
+        msg = _HINTS.get(e["type"])
+        if msg is None:
+            msg = e["msg"].removeprefix("Value error, ")
+            if "input" in e and e["type"] not in ("model_type",) and not isinstance(e["input"], dict):
+                msg += f" (got {e['input']!r})"
+        items.append(f"`{field}` {msg}" if e["loc"] else msg)
+    return f"Case file {source} is not valid: " + "; ".join(items) + "."
+
+
+def parse_case(text: str, source: str = "<case>", default_name: str = "case") -> Case:
+    """Parse and validate the YAML text of a case file.
+
+    Parameters
+    ----------
+    text : str
+        YAML text.
+    source : str
+        How to name the file in messages.
+    default_name : str
+        The case name if the file gives none.
+
+    Returns
+    -------
+    Case
+
+    Raises
+    ------
+    CablesimError
+        For malformed YAML or any invalid field.
+    """
+    try:
+        data = yaml.load(text, Loader=_Loader)
+    except yaml.YAMLError as exc:
+        where = ""
+        mark = getattr(exc, "problem_mark", None)
+        if mark is not None:
+            where = f" at line {mark.line + 1}, column {mark.column + 1}"
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise CablesimError(
+            f"Case file {source} is not valid YAML{where}: {problem}. Check indentation and that "
+            "lists are written [a, b, c]."
+        ) from None
+    if not isinstance(data, dict):
+        raise CablesimError(
+            f"Case file {source} must be a YAML mapping with at least the keys `cable` and `loads` "
+            "(`cablesim example` prints a complete one)."
+        )
+    data.setdefault("name", default_name)
+    try:
+        return Case.model_validate(data)
+    except ValidationError as err:
+        raise CablesimError(format_validation_error(err, source)) from None
+
+
+def load_case(path: str | Path | None) -> tuple[Case, str]:
+    """Read a case file, or the embedded paper example if ``path`` is None.
+
+    Returns
+    -------
+    case : Case
+    text : str
+        The YAML text, stored with every result so that it can be rerun.
+    """
+    if path is None:
+        text = example_text()
+        return parse_case(text, source="(embedded paper example)", default_name="paper-example"), text
+    p = Path(path)
+    try:
+        text = p.read_text()
+    except FileNotFoundError:
+        raise CablesimError(f"Case file {p} does not exist. Check the path.") from None
+    except (IsADirectoryError, PermissionError, UnicodeDecodeError) as exc:
+        raise CablesimError(f"Case file {p} cannot be read ({exc.__class__.__name__}).") from None
+    stem = re.sub(r"[^A-Za-z0-9._-]", "-", p.stem) or "case"
+    return parse_case(text, source=str(p), default_name=stem), text
+
+
+def example_text() -> str:
+    """The embedded default case (the paper's example), as commented YAML."""
+    return resources.files("cablesim").joinpath("data", EXAMPLE_RESOURCE).read_text()

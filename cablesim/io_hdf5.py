@@ -1,0 +1,134 @@
+"""HDF5 output.
+
+Files are written atomically: into ``NAME.part`` beside the target, then renamed over it, so a
+failed or interrupted run never leaves a corrupt or half-written result under the real name.
+Every dataset carries a ``units`` attribute; non-finite numbers are refused unless a caller
+says explicitly that they mark missing values.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import os
+from contextlib import contextmanager
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from . import __version__
+
+
+@contextmanager
+def atomic_h5(path: str | Path, mode: str = "w"):
+    """Open ``path`` for writing via a temporary file renamed into place on success.
+
+    Parameters
+    ----------
+    path : str or Path
+        Final file name; its folder is created if needed.
+    mode : str
+        ``"w"`` starts empty; ``"a"`` starts from a copy of the existing file.
+
+    Yields
+    ------
+    h5py.File
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".part")
+    if mode == "a" and path.exists():
+        import shutil
+
+        shutil.copyfile(path, tmp)
+    try:
+        with h5py.File(tmp, "a" if mode == "a" else "w") as f:
+            yield f
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def stamp(f: h5py.File, case_text: str, command: str, **attrs) -> None:
+    """Root attributes every cablesim file has: the case, the version, the command."""
+    f.attrs["case_yaml"] = case_text
+    f.attrs["cablesim_version"] = __version__
+    f.attrs["command"] = command
+    f.attrs["created_utc"] = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+    for k, v in attrs.items():
+        f.attrs[k] = v
+
+
+def put(group: h5py.Group, name: str, data, units: str, description: str = "", allow_nan: bool = False):
+    """Write one dataset with its units (and an optional description).
+
+    Raises
+    ------
+    ValueError
+        If ``data`` holds NaN or infinity and ``allow_nan`` is False.
+    """
+    arr = np.asarray(data)
+    if arr.dtype.kind == "f" and not allow_nan and not np.all(np.isfinite(arr)):
+        raise ValueError(f"refusing to write non-finite values to {group.name}/{name}")
+    ds = group.create_dataset(name, data=arr)
+    ds.attrs["units"] = units
+    if description:
+        ds.attrs["description"] = description
+    return ds
+
+
+def write_static(path: str | Path, result, case_text: str) -> Path:
+    """Write a :class:`~cablesim.analyses.static.StaticResult` to HDF5.
+
+    Layout: ``/static/inextensible/{x,T,B,D}``, ``/static/approximate/{x,u,y,T,B,D,f,N,K}``,
+    ``/static/exact/{y,T,K}``, ``/modal/{omega,shapes,damping_ratio}`` with attributes
+    ``analysis``, ``a0``, ``a1``; the case YAML and the version as root attributes.
+    """
+    path = Path(path)
+    r = result
+    with atomic_h5(path) as f:
+        stamp(f, case_text, "static", analysis=r.analysis)
+        st = f.create_group("static")
+        put(st, "P", r.P, "N", "sustained loads F0 in DOF order")
+        if r.inextensible is not None:
+            g = st.create_group("inextensible")
+            put(g, "x", r.inextensible.x, "m", "node coordinates of the inextensible cable")
+            put(g, "T", r.inextensible.T, "N", "segment tensions")
+            put(g, "B", r.inextensible.B, "1", "tangent transformation dT/dP")
+            put(g, "D", r.inextensible.D, "m/N", "configurational flexibility dx/dP")
+            g.attrs["omega_c"] = r.inextensible.omega_c
+        if r.approximate is not None:
+            a = r.approximate
+            g = st.create_group("approximate")
+            for name, val, units, desc in [
+                ("x", a.x, "m", "natural-state coordinates x(P)"),
+                ("u", a.u, "m", "elastic displacements (eq. 7)"),
+                ("y", a.y, "m", "deformed coordinates y = x + u"),
+                ("T", a.T, "N", "segment tensions"),
+                ("B", a.B, "1", "tangent transformation dT/dP"),
+                ("D", a.D, "m/N", "configurational flexibility"),
+                ("f", a.f, "m/N", "elastic flexibility (eq. 8)"),
+                ("N", a.N, "m/N", "elasto-configurational flexibility D + f"),
+                ("K", a.K, "N/m", "tangent stiffness N^-1"),
+            ]:
+                put(g, name, val, units, desc)
+            g.attrs["omega_c"] = a.omega_c
+            g.attrs["omega_e"] = a.omega_e
+        if r.exact is not None:
+            g = st.create_group("exact")
+            put(g, "y", r.exact.y, "m", "deformed node coordinates")
+            put(g, "T", r.exact.T, "N", "segment tensions EA (l - S) / S")
+            put(g, "l", r.exact.length, "m", "stretched segment lengths")
+            put(g, "K", r.exact.K, "N/m", "tangent stiffness of the deformed configuration")
+        m = f.create_group("modal")
+        put(m, "omega", r.modes.omega, "rad/s", "linear modal frequencies, ascending")
+        put(m, "shapes", r.modes.shapes, "1/sqrt(kg)", "mass-normalised mode shapes (columns)")
+        put(m, "damping_ratio", r.damping_ratios, "1", "Rayleigh damping ratio of each mode")
+        put(m, "inextensible_omega", r.inextensible_omega, "rad/s", "finite frequencies of the inextensible cable")
+        m.attrs["analysis"] = r.analysis
+        m.attrs["a0"] = r.a0
+        m.attrs["a1"] = r.a1
+        if r.sole_inextensible_omega is not None:
+            m.attrs["sole_inextensible_omega"] = r.sole_inextensible_omega
+    return path

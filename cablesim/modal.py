@@ -1,0 +1,186 @@
+"""Modal analysis and Rayleigh damping.
+
+Linear modal frequencies are ``sqrt(eig(M^-1 K0))`` with ``K0`` the tangent stiffness of the
+chosen analysis at the static equilibrium; mode shapes are mass-normalised
+(``Phi^T M Phi = I``). Rayleigh damping ``C = a0 M + a1 K0`` (eq. 18) gives two chosen modes
+the same damping ratio.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import eigh
+
+from .errors import CablesimError
+
+
+@dataclass(frozen=True)
+class Modes:
+    """Linear modes about an equilibrium.
+
+    Attributes
+    ----------
+    omega : ndarray, shape (m,)
+        Circular frequencies, rad/s, ascending.
+    shapes : ndarray, shape (2n, m)
+        Mass-normalised mode shapes as columns, in DOF order.
+    """
+
+    omega: np.ndarray
+    shapes: np.ndarray
+
+    @property
+    def frequency_hz(self) -> np.ndarray:
+        """Frequencies in Hz."""
+        return self.omega / (2.0 * np.pi)
+
+    @property
+    def period(self) -> np.ndarray:
+        """Periods, s."""
+        return 2.0 * np.pi / self.omega
+
+
+def modal_analysis(K: np.ndarray, mass_diagonal: np.ndarray) -> Modes:
+    """Frequencies and mass-normalised mode shapes of ``M q'' + K q = 0``.
+
+    Parameters
+    ----------
+    K : ndarray, shape (2n, 2n)
+        Symmetric tangent stiffness, N/m.
+    mass_diagonal : ndarray, shape (2n,)
+        Diagonal of the lumped mass matrix, kg.
+
+    Returns
+    -------
+    Modes
+
+    Raises
+    ------
+    CablesimError
+        If ``K`` is not positive definite (the equilibrium is unstable or a segment is slack).
+    """
+    lam, phi = eigh(0.5 * (K + K.T), np.diag(mass_diagonal))
+    if lam[0] <= 0.0:
+        raise CablesimError(
+            "The tangent stiffness is not positive definite (lowest eigenvalue "
+            f"{lam[0]:.3g} N/m per kg): the static equilibrium has no stable vibration modes. "
+            "Check that every segment is in tension under the sustained loads F0."
+        )
+    # Fix the sign of each shape: its largest component is positive, for reproducible output.
+    idx = np.argmax(np.abs(phi), axis=0)
+    phi = phi * np.sign(phi[idx, np.arange(phi.shape[1])])
+    return Modes(omega=np.sqrt(lam), shapes=phi)
+
+
+def inextensible_frequencies(D: np.ndarray, mass_diagonal: np.ndarray) -> np.ndarray:
+    """Modal frequencies of the inextensible cable, rad/s.
+
+    From the inextensible equation of motion ``(D M) x''' + x' = D F'`` (eq. 20): each nonzero
+    eigenvalue ``mu`` of ``D M`` gives ``omega = mu^(-1/2)``. ``D`` has rank ``n - 1``, so the
+    inextensible cable has ``n - 1`` finite frequencies (one for the paper's 2-node cable); the
+    others are infinite.
+
+    Parameters
+    ----------
+    D : ndarray, shape (2n, 2n)
+        Configurational flexibility, m/N.
+    mass_diagonal : ndarray, shape (2n,)
+        kg.
+
+    Returns
+    -------
+    ndarray
+        Ascending frequencies, rad/s.
+    """
+    r = np.sqrt(mass_diagonal)
+    mu = np.linalg.eigvalsh(r[:, None] * D * r[None, :])
+    mu = mu[mu > 1e-10 * max(mu.max(), 0.0)] if mu.max() > 0 else mu[:0]
+    return np.sort(1.0 / np.sqrt(mu))
+
+
+def sole_inextensible_frequency(
+    x: np.ndarray, P: np.ndarray, T2: float, S: np.ndarray, masses: np.ndarray, L: float, H: float
+) -> float:
+    """The paper's closed-form sole frequency of the 2-node inextensible cable, rad/s.
+
+    ``omega^2 = R / (s (m^2 M1 S1^2 + s^2 M2 S3^2))`` (after eq. 21), with ``R``, ``m``, ``s``
+    and ``A1..A4`` of eq. 21 and ``r = s T2 / S2`` (THEORY.md section 2).
+
+    Parameters
+    ----------
+    x : ndarray, shape (4,)
+        Inextensible node coordinates, m.
+    P : ndarray, shape (4,)
+        Nodal loads, N.
+    T2 : float
+        Tension in the middle segment, N.
+    S : ndarray, shape (3,)
+        Natural segment lengths, m.
+    masses : ndarray, shape (2,)
+        kg.
+    L, H : float
+        Support offsets, m.
+
+    Returns
+    -------
+    float
+    """
+    R, s, m = eq21_R(x, P, T2, S, L, H)
+    return float(np.sqrt(R / (s * (m**2 * masses[0] * S[0] ** 2 + s**2 * masses[1] * S[2] ** 2))))
+
+
+def eq21_R(x, P, T2, S, L, H):
+    """``R``, ``s`` and ``m`` of the paper's closed-form 2-node flexibility (eq. 21)."""
+    x1, x2, x3, x4 = x
+    s = x1 * x4 - x2 * x3
+    m = s + H * x3 + L * x2 - H * x1 - L * x4
+    r = s * T2 / S[1]
+    A1 = r * (L * x4 - H * x3) * (x2 - x4) + P[1] * m * s
+    A2 = r * (L * x4 - H * x3) * (x3 - x1) - P[0] * m * s
+    A3 = r * (L * x2 - H * x1) * (x4 - x2) + P[3] * s**2
+    A4 = r * (L * x2 - H * x1) * (x1 - x3) - P[2] * s**2
+    R = m * (A1 * x2 - A2 * x1) + (A3 * (x4 - H) + A4 * (L - x3)) * s
+    return R, s, m
+
+
+def eq21_flexibility(x, P, T2, S, L, H) -> np.ndarray:
+    """The paper's closed-form configurational flexibility ``D`` of the 2-node cable (eq. 21).
+
+    ``D = (s / R) v v^T`` with ``v = [m x2, -m x1, s (x4 - H), s (L - x3)]``.
+    """
+    R, s, m = eq21_R(x, P, T2, S, L, H)
+    x1, x2, x3, x4 = x
+    v = np.array([m * x2, -m * x1, s * (x4 - H), s * (L - x3)])
+    return (s / R) * np.outer(v, v)
+
+
+def rayleigh_coefficients(omega_i: float, omega_j: float, ratio: float) -> tuple[float, float]:
+    """Rayleigh coefficients giving damping ratio ``ratio`` at two frequencies (eq. 18).
+
+    ``a0 = 2 xi wi wj / (wi + wj)``, ``a1 = 2 xi / (wi + wj)``.
+
+    Parameters
+    ----------
+    omega_i, omega_j : float
+        The two modal frequencies, rad/s.
+    ratio : float
+        Damping ratio ``xi``.
+
+    Returns
+    -------
+    a0 : float
+        Mass-proportional coefficient, 1/s.
+    a1 : float
+        Stiffness-proportional coefficient, s.
+    """
+    a0 = 2.0 * ratio * omega_i * omega_j / (omega_i + omega_j)
+    a1 = 2.0 * ratio / (omega_i + omega_j)
+    return a0, a1
+
+
+def modal_damping_ratios(omega: np.ndarray, a0: float, a1: float) -> np.ndarray:
+    """Damping ratio of each mode under Rayleigh damping: ``a0 / (2 w) + a1 w / 2``."""
+    omega = np.asarray(omega, dtype=float)
+    return a0 / (2.0 * omega) + a1 * omega / 2.0

@@ -1,0 +1,116 @@
+"""PNG plots. Only this module imports matplotlib (lazily, with the Agg backend)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .cable import nodes_with_supports
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def save_atomic(fig, path: str | Path, dpi: int = 130) -> Path:
+    """Save a figure through a temporary file so a failure never leaves a broken PNG."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.stem + ".part.png")
+    try:
+        fig.savefig(tmp, dpi=dpi, bbox_inches="tight")
+        tmp.replace(path)
+    finally:
+        tmp.unlink(missing_ok=True)
+        _plt().close(fig)
+    return path
+
+
+def plot_cable(result, path: str | Path, title: str) -> Path:
+    """Draw the cable: natural and deformed shapes, supports, loads and tensions.
+
+    Parameters
+    ----------
+    result : cablesim.analyses.static.StaticResult
+    path : str or Path
+        PNG file to write.
+    title : str
+        First title line (the case name).
+    """
+    plt = _plt()
+    cable = result.cable
+    fig, ax = plt.subplots(figsize=(9, 5.5))
+    y = result.y0
+    pts = nodes_with_supports(cable, y)
+    if result.inextensible is not None:
+        nat = nodes_with_supports(cable, result.inextensible.x)
+        ax.plot(nat[:, 0], nat[:, 1], "--", color="0.55", lw=1.2, label="natural state x(F0) (inextensible)")
+        dmax = np.abs(y - result.inextensible.x).max()
+        deformed_label = f"deformed y ({result.analysis} analysis; max |y - x| = {dmax:.3g} m)"
+    else:
+        deformed_label = f"deformed y ({result.analysis} analysis)"
+    ax.plot(pts[:, 0], pts[:, 1], "-", color="C0", lw=2, label=deformed_label)
+    masses = cable.masses
+    sizes = 30 + 120 * masses / masses.max()
+    ax.scatter(pts[1:-1, 0], pts[1:-1, 1], s=sizes, color="C0", zorder=3, label="lumped masses (area ~ mass)")
+    ax.plot([0, cable.L], [0, cable.H], "^", color="k", ms=11, zorder=4, label="supports A, B")
+    ax.annotate("A", (0, 0), textcoords="offset points", xytext=(-12, -14))
+    ax.annotate("B", (cable.L, cable.H), textcoords="offset points", xytext=(6, -14))
+
+    # Load arrows, the largest one 15% of the span long.
+    P = result.P.reshape(-1, 2)
+    pmax = np.abs(P).max()
+    span = max(cable.L, np.ptp(pts[:, 1]), 1e-9)
+    if pmax > 0:
+        scale = 0.15 * span / np.hypot(P[:, 0], P[:, 1]).max()
+        for k, (node, load) in enumerate(zip(pts[1:-1], P)):
+            if np.hypot(*load) == 0:
+                continue
+            ax.annotate(
+                "",
+                xy=node + load * scale,
+                xytext=node,
+                arrowprops=dict(arrowstyle="-|>", color="C3", lw=1.5),
+            )
+            if cable.n_nodes <= 10:
+                ax.annotate(
+                    f"F0 = ({load[0] / 1e3:.4g}, {load[1] / 1e3:.4g}) kN",
+                    node + load * scale,
+                    textcoords="offset points",
+                    xytext=(4, 4),
+                    color="C3",
+                    fontsize=8,
+                )
+        ax.plot([], [], color="C3", label="sustained loads F0")
+    if cable.n_segments <= 12:
+        T = result.T0
+        mid = 0.5 * (pts[1:] + pts[:-1])
+        for k in range(cable.n_segments):
+            ax.annotate(
+                f"T{k + 1} = {T[k] / 1e3:.4g} kN",
+                mid[k],
+                textcoords="offset points",
+                xytext=(0, -12),
+                ha="center",
+                fontsize=8,
+                color="0.25",
+            )
+    ax.invert_yaxis()
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("horizontal coordinate (m)")
+    ax.set_ylabel("vertical coordinate (m), pointing down")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="lower left", fontsize=8, framealpha=0.9)
+    ax.set_title(
+        f"{title}: static equilibrium under F0\n"
+        f"n = {cable.n_nodes} nodes, L = {cable.L:g} m, H = {cable.H:g} m, EA = {cable.EA:.3g} N, "
+        f"lowest frequency {result.modes.omega[0]:.4g} rad/s",
+        fontsize=10,
+    )
+    return save_atomic(fig, path)

@@ -1,0 +1,90 @@
+"""Plain-text summaries printed by the commands."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import __version__
+
+
+def _table(header: list[str], rows: list[list[str]]) -> str:
+    widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(header)]
+    line = lambda cells: "  " + "  ".join(c.rjust(w) for c, w in zip(cells, widths))  # noqa: E731
+    return "\n".join([line(header)] + [line(r) for r in rows])
+
+
+def _g(v: float, digits: int = 6) -> str:
+    return f"{v:.{digits}g}"
+
+
+def static_summary(case, result) -> str:
+    """Readable summary of a static analysis: coordinates, tensions, frequencies, damping."""
+    c = result.cable
+    n = c.n_nodes
+    excess = 100.0 * (c.total_length / c.chord_length - 1.0)
+    out = [
+        f"cablesim {__version__}: static analysis of '{case.name}' ({result.analysis} analysis)",
+        f"cable: n = {n} nodes, L = {_g(c.L)} m, H = {_g(c.H)} m (down), sum S = {_g(c.total_length)} m "
+        f"({excess:+.4g} % of the chord {_g(c.chord_length)} m), EA = {c.EA:.4g} N",
+        "",
+        "Node coordinates under F0, m (vertical axis pointing down):",
+    ]
+    header = ["DOF", "F0 (kN)"]
+    cols = []
+    if result.inextensible is not None:
+        header.append("x inextensible")
+        cols.append(result.inextensible.x)
+    if result.approximate is not None:
+        header += ["u approximate", "y approximate"]
+        cols += [result.approximate.u, result.approximate.y]
+    if result.exact is not None:
+        header.append("y exact")
+        cols.append(result.exact.y)
+    rows = []
+    for i in range(2 * n):
+        name = f"{'xy'[i % 2]}{i // 2 + 1} ({i + 1})"
+        rows.append([name, _g(result.P[i] / 1e3, 6)] + [_g(col[i], 8) for col in cols])
+    out.append(_table(header, rows))
+
+    out += ["", "Segment tensions, kN:"]
+    header = ["segment", "S (m)"]
+    cols = []
+    if result.inextensible is not None:
+        header.append("T inextensible")
+        cols.append(result.inextensible.T)
+    if result.exact is not None:
+        header += ["T exact", "strain exact"]
+        cols += [result.exact.T, None]
+    rows = []
+    for r in range(c.n_segments):
+        row = [str(r + 1), _g(c.S[r])]
+        for col in cols:
+            if col is None:
+                row.append(f"{result.exact.T[r] / c.EA:.3e}")
+            else:
+                row.append(_g(col[r] / 1e3, 7))
+        rows.append(row)
+    out.append(_table(header, rows))
+
+    m = result.modes
+    out += ["", f"Linear modes about the equilibrium ({result.analysis} tangent stiffness):"]
+    rows = [
+        [str(k + 1), _g(m.omega[k], 7), _g(m.frequency_hz[k], 6), _g(m.period[k], 6), f"{result.damping_ratios[k]:.4g}"]
+        for k in range(m.omega.size)
+    ]
+    out.append(_table(["mode", "omega (rad/s)", "f (Hz)", "period (s)", "damping ratio"], rows))
+    out.append(f"Rayleigh damping C = a0 M + a1 K0: a0 = {result.a0:.6g} 1/s, a1 = {result.a1:.6g} s")
+    if result.inextensible_omega.size:
+        w = ", ".join(_g(v, 7) for v in result.inextensible_omega[:8])
+        more = " ..." if result.inextensible_omega.size > 8 else ""
+        out.append(f"Inextensible cable (EA -> inf): finite frequencies {w}{more} rad/s")
+    if result.sole_inextensible_omega is not None:
+        out.append(f"  closed form after eq. 21 (sole inextensible frequency): {_g(result.sole_inextensible_omega, 7)} rad/s")
+    if result.approximate is not None:
+        a = result.approximate
+        out.append(
+            f"Complementary energies: Omega_c = T.S = {a.omega_c:.6g} J, Omega_e = {a.omega_e:.6g} J"
+        )
+    if result.exact is not None:
+        out.append(f"Static solver residual (closure error): {result.exact.segments.closure_error:.2e} m")
+    return "\n".join(out)

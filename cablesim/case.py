@@ -109,6 +109,65 @@ class DampingSpec(_Strict):
         return self
 
 
+INTEGRATOR_NAMES = ("rk4", "dopri5", "newmark", "generalized-alpha")
+
+
+class IntegratorSpec(_Strict):
+    """Time-integration scheme and its settings (section ``integrator:``).
+
+    Without a name cablesim chooses: ``dopri5`` for ordinary cables, ``generalized-alpha`` for
+    stiff ones (highest mode over 200 times the frequency of interest).
+    """
+
+    name: Literal["rk4", "dopri5", "newmark", "generalized-alpha"] | None = None
+    dt: float | None = Field(default=None, gt=0, description="fixed step, s (rk4, newmark, generalized-alpha)")
+    rtol: float | None = Field(default=None, gt=0, lt=1, description="relative tolerance (dopri5)")
+    atol: float | None = Field(default=None, gt=0, description="absolute displacement tolerance, m (dopri5)")
+    rho_inf: float | None = Field(default=None, ge=0, le=1, description="spectral radius (generalized-alpha)")
+
+    @model_validator(mode="after")
+    def _fits(self):
+        if self.name in ("rk4", "newmark", "generalized-alpha") and (self.rtol or self.atol):
+            raise ValueError(f"integrator.rtol and atol apply to dopri5, not {self.name} (it uses dt)")
+        if self.name == "dopri5" and self.dt is not None:
+            raise ValueError("dopri5 adapts its step; give rtol/atol instead of integrator.dt")
+        if self.rho_inf is not None and self.name not in (None, "generalized-alpha"):
+            raise ValueError("integrator.rho_inf applies to generalized-alpha only")
+        return self
+
+
+class HistorySpec(_Strict):
+    """Forced response at one frequency (section ``history:``)."""
+
+    omega: float | None = Field(default=None, gt=0, description="forcing frequency, rad/s")
+    duration: float = Field(default=600.0, gt=0, description="simulated time, s")
+    output_step: float | None = Field(default=None, gt=0, description="interval between saved instants, s")
+    channels: tuple[str, ...] | None = Field(default=None, description="DOF to plot, e.g. [z2, z4]")
+
+
+class FreeVibrationSpec(_Strict):
+    """Free vibration about the equilibrium (section ``free_vibration:``).
+
+    Either ``mode`` with ``peak_velocity``, or explicit initial conditions ``z0``/``v0``.
+    """
+
+    mode: int | None = Field(default=None, ge=1, description="linear mode giving the initial velocities")
+    peak_velocity: float | None = Field(default=None, gt=0, description="largest initial velocity, m/s")
+    z0: tuple[float, ...] | None = Field(default=None, description="initial displacement from equilibrium, m")
+    v0: tuple[float, ...] | None = Field(default=None, description="initial velocities, m/s")
+    damping_ratio: float | None = Field(default=None, ge=0, lt=1, description="overrides damping.ratio")
+    duration: float = Field(default=20.0, gt=0, description="simulated time, s")
+    output_step: float | None = Field(default=None, gt=0, description="interval between saved instants, s")
+    channels: tuple[str, ...] | None = Field(default=None, description="DOF to plot, e.g. [z2, z4]")
+
+    @model_validator(mode="after")
+    def _one_way(self):
+        explicit = self.z0 is not None or self.v0 is not None
+        if explicit and (self.mode is not None or self.peak_velocity is not None):
+            raise ValueError("give either mode with peak_velocity, or z0/v0, not both")
+        return self
+
+
 class Case(_Strict):
     """One analysis case, as read from a YAML case file."""
 
@@ -117,6 +176,9 @@ class Case(_Strict):
     loads: LoadsSpec
     analysis: Literal["exact", "approximate"] = "exact"
     damping: DampingSpec = DampingSpec(ratio=0.01)
+    integrator: IntegratorSpec = IntegratorSpec()
+    history: HistorySpec = HistorySpec()
+    free_vibration: FreeVibrationSpec = FreeVibrationSpec()
 
     @field_validator("name")
     @classmethod
@@ -137,6 +199,13 @@ class Case(_Strict):
                 )
         if self.damping.modes[1] > 2 * n or self.damping.modes[0] > 2 * n:
             raise ValueError(f"damping.modes must be between 1 and 2n = {2 * n}")
+        fv = self.free_vibration
+        for key in ("z0", "v0"):
+            v = getattr(fv, key)
+            if v is not None and len(v) != 2 * n:
+                raise ValueError(f"free_vibration.{key} has {len(v)} values; it needs 2n = {2 * n}")
+        if fv.mode is not None and fv.mode > 2 * n:
+            raise ValueError(f"free_vibration.mode must be between 1 and 2n = {2 * n}")
         return self
 
     # -- derived objects ---------------------------------------------------------------------

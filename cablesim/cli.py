@@ -111,6 +111,126 @@ def static(
     typer.echo(msg)
 
 
+class IntegratorName(str, Enum):
+    rk4 = "rk4"
+    dopri5 = "dopri5"
+    newmark = "newmark"
+    generalized_alpha = "generalized-alpha"
+
+
+def _progress(duration: float):
+    """A progress bar on standard error for a run of ``duration`` simulated seconds."""
+    bar = typer.progressbar(length=1000, label="simulating", file=sys.stderr, show_eta=True)
+    state = {"done": 0}
+
+    def update(t: float):
+        target = int(1000 * t / duration)
+        if target > state["done"]:
+            bar.update(target - state["done"])
+            state["done"] = target
+
+    return bar, update
+
+
+def _channels(spec: Optional[str], fallback) -> Optional[list[str]]:
+    if spec:
+        return [c.strip() for c in spec.split(",") if c.strip()]
+    return list(fallback) if fallback else None
+
+
+def _finish_history(case, hist, integ, out: Path, text: str, command: str, plot: bool, channels, wall: float):
+    from .io_hdf5 import write_history
+    from .report import history_summary
+
+    write_history(out, hist, text, command)
+    pngs = []
+    if plot and hist.t.size > 1:
+        from .plot_history import plot_history
+
+        what = f"{case.name} ({hist.analysis} analysis, {integ.name})"
+        pngs = plot_history(hist, out.with_suffix(""), what, channels=channels)
+    typer.echo(history_summary(case, hist, integ, wall))
+    typer.echo(f"\nWrote {out}" + (" and " + ", ".join(str(p) for p in pngs) if pngs else ""))
+    if not hist.completed:
+        _say_error(f"the run did not complete: {hist.status} Results up to that instant were written.")
+        raise typer.Exit(3)
+
+
+@app.command()
+@user_errors
+def history(
+    case_file: Optional[Path] = CASE_ARG,
+    omega: Optional[float] = typer.Option(None, "--omega", help="Forcing frequency w, rad/s [default: history.omega]."),
+    duration: Optional[float] = typer.Option(None, "--duration", help="Simulated time, s [default: history.duration]."),
+    output_step: Optional[float] = typer.Option(None, "--output-step", help="Interval between saved instants, s."),
+    analysis: Optional[Analysis] = typer.Option(None, "--analysis", help="Override the case file's analysis."),
+    integrator: Optional[IntegratorName] = typer.Option(None, "--integrator", help="Time-integration scheme."),
+    channels: Optional[str] = typer.Option(None, "--channels", help="DOF to plot, e.g. z2,z4."),
+    output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file [default: runs/<name>/history-w<omega>.h5]"),
+    plot: bool = typer.Option(True, "--plot/--no-plot", help="Draw waveforms, phase, Lissajous, tension and FFT plots."),
+):
+    """Forced response F(t) = F0 + FL sin(w t) at one frequency, from the equilibrium at rest."""
+    import time
+
+    from .analyses.dynamic import run_history
+    from .case import load_case
+
+    case, text = load_case(case_file)
+    dur = duration if duration is not None else case.history.duration
+    if dur <= 0:
+        raise CablesimError("--duration must be a positive number of seconds.", field="history.duration")
+    w = omega if omega is not None else case.history.omega
+    out = output if output is not None else Path("runs") / case.name / f"history-w{w:g}.h5"
+    bar, update = _progress(dur)
+    t0 = time.perf_counter()
+    with bar:
+        static, hist, integ = run_history(
+            case, omega, dur, output_step, analysis.value if analysis else None,
+            integrator.value if integrator else None, progress=update,
+        )
+    _finish_history(case, hist, integ, out, text, "history", plot, _channels(channels, case.history.channels), time.perf_counter() - t0)
+
+
+@app.command("free-vibration")
+@user_errors
+def free_vibration(
+    case_file: Optional[Path] = CASE_ARG,
+    mode: Optional[int] = typer.Option(None, "--mode", help="Linear mode K giving the initial velocities."),
+    peak_velocity: Optional[float] = typer.Option(None, "--peak-velocity", help="Largest initial velocity V, m/s."),
+    damping_ratio: Optional[float] = typer.Option(None, "--damping-ratio", help="Override damping.ratio (same two modes)."),
+    duration: Optional[float] = typer.Option(None, "--duration", help="Simulated time, s [default: free_vibration.duration]."),
+    output_step: Optional[float] = typer.Option(None, "--output-step", help="Interval between saved instants, s."),
+    analysis: Optional[Analysis] = typer.Option(None, "--analysis", help="Override the case file's analysis."),
+    integrator: Optional[IntegratorName] = typer.Option(None, "--integrator", help="Time-integration scheme."),
+    channels: Optional[str] = typer.Option(None, "--channels", help="DOF to plot, e.g. z2,z4."),
+    output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file [default: runs/<name>/free-vibration-mode<K>.h5]"),
+    plot: bool = typer.Option(True, "--plot/--no-plot", help="Draw waveforms, phase, Lissajous, tension and FFT plots."),
+):
+    """Damped free vibration about the equilibrium, started with velocities along a linear mode."""
+    import time
+
+    from .analyses.dynamic import run_free_vibration
+    from .case import load_case
+
+    case, text = load_case(case_file)
+    if damping_ratio is not None and not 0 <= damping_ratio < 1:
+        raise CablesimError("--damping-ratio must be in [0, 1).", field="free_vibration.damping_ratio")
+    dur = duration if duration is not None else case.free_vibration.duration
+    if dur <= 0:
+        raise CablesimError("--duration must be a positive number of seconds.", field="free_vibration.duration")
+    k = mode if mode is not None else case.free_vibration.mode
+    stem = f"free-vibration-mode{k}" if k is not None else "free-vibration"
+    out = output if output is not None else Path("runs") / case.name / f"{stem}.h5"
+    bar, update = _progress(dur)
+    t0 = time.perf_counter()
+    with bar:
+        static, hist, integ = run_free_vibration(
+            case, mode, peak_velocity, damping_ratio, dur, output_step,
+            analysis.value if analysis else None, integrator.value if integrator else None, progress=update,
+        )
+    _finish_history(case, hist, integ, out, text, "free-vibration", plot, _channels(channels, case.free_vibration.channels), time.perf_counter() - t0)
+
+
 def main():
     """Entry point of the ``cablesim`` console script."""
     app()

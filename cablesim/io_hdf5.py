@@ -132,3 +132,38 @@ def write_static(path: str | Path, result, case_text: str) -> Path:
         if r.sole_inextensible_omega is not None:
             m.attrs["sole_inextensible_omega"] = r.sole_inextensible_omega
     return path
+
+
+def write_history(path: str | Path, hist, case_text: str, command: str, extra_attrs: dict | None = None) -> Path:
+    """Write a :class:`~cablesim.dynamics.result.HistoryResult` to HDF5.
+
+    Layout: ``/history/{t,z,v,zc,ze,T,residual}`` (time along the first axis, DOF along the
+    second), ``/history/y0``, ``/history/T0``, ``/modal/omega``; attributes ``omega``,
+    ``analysis``, ``integrator``, ``status`` and the integrator's settings on ``/history``.
+    """
+    with atomic_h5(path) as f:
+        stamp(f, case_text, command, analysis=hist.analysis)
+        g = f.create_group("history")
+        put(g, "t", hist.t, "s", "saved instants")
+        put(g, "z", hist.z, "m", "displacement from the static equilibrium, z = y - y(0) (DOF order)")
+        put(g, "v", hist.v, "m/s", "velocity y'")
+        if hist.zc is not None:
+            put(g, "zc", hist.zc, "m", "configurational part x(P(t)) - x(P(0)) (eq. 22)")
+            put(g, "ze", hist.ze, "m", "elastic part of z (eq. 22)")
+        put(g, "T", hist.T, "N", "segment tensions")
+        put(g, "residual", hist.residual, "1", "drift of eq. 15 relative to |F0|")
+        put(g, "y0", hist.y0, "m", "static equilibrium the displacements are measured from")
+        put(g, "T0", hist.T0, "N", "tensions at that equilibrium")
+        g.attrs["omega"] = np.nan if hist.omega is None else hist.omega
+        g.attrs["forced"] = hist.omega is not None
+        g.attrs["analysis"] = hist.analysis
+        g.attrs["integrator"] = hist.integrator
+        g.attrs["status"] = hist.status
+        g.attrs["completed"] = hist.completed
+        for k, v in hist.settings.items():
+            g.attrs[k] = v
+        for k, v in (extra_attrs or {}).items():
+            g.attrs[k] = v
+        m = f.create_group("modal")
+        put(m, "omega", hist.modal_omega, "rad/s", "linear modal frequencies about the equilibrium")
+    return Path(path)

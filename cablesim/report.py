@@ -88,3 +88,38 @@ def static_summary(case, result) -> str:
     if result.exact is not None:
         out.append(f"Static solver residual (closure error): {result.exact.segments.closure_error:.2e} m")
     return "\n".join(out)
+
+
+def history_summary(case, hist, integ, wall: float) -> str:
+    """Summary of a time history: status, peak displacements, response frequencies, drift."""
+    from .plot_history import spectrum_peaks
+
+    forced = f"forcing w = {hist.omega:g} rad/s" if hist.omega is not None else "free vibration"
+    lines = [
+        f"cablesim {__version__}: '{case.name}', {forced}, {hist.analysis} analysis, "
+        f"integrator {integ.name} ({', '.join(f'{k}={v:g}' for k, v in integ.settings().items() if isinstance(v, float))})",
+        f"simulated {hist.t[-1]:.6g} s in {wall:.3g} s wall time; status: {hist.status}",
+        f"linear modes: {', '.join(f'{w:.5g}' for w in hist.modal_omega[:6])} rad/s",
+        "",
+    ]
+    rows = []
+    half = hist.t.size // 2
+    for i in range(hist.n_dof):
+        z = hist.z[:, i]
+        peaks = spectrum_peaks(hist.t, z, 0.5, max_peaks=2) if hist.t.size > 16 else []
+        rows.append(
+            [
+                f"z{i + 1}",
+                _g(np.abs(z).max(), 5),
+                _g(0.5 * np.ptp(z[half:]), 5) if half > 0 else "-",
+                ", ".join(f"{p:.4g}" for p in peaks) or "-",
+            ]
+        )
+    lines.append(_table(["DOF", "max |z| (m)", "half range, 2nd half (m)", "response peaks (rad/s)"], rows))
+    dT = hist.T - hist.T0
+    lines.append(
+        f"tension change: min {dT.min() / 1e3:.4g} kN, max {dT.max() / 1e3:.4g} kN "
+        f"(static {', '.join(f'{t / 1e3:.5g}' for t in hist.T0[:6])} kN)"
+    )
+    lines.append(f"largest drift of eq. 15 (relative to |F0|): {np.max(hist.residual):.2e}")
+    return "\n".join(lines)

@@ -1,0 +1,246 @@
+"""The equations of motion: the vector field every integrator calls.
+
+The paper's third-order equation (17), ``M y''' + C y'' + K y' = F'``, with
+``F(t) = F0 + FL sin(w t)`` and ``K`` the tangent stiffness of the analysis in use:
+
+- exact analysis: ``K = K(y)`` of the deformed configuration;
+- approximate analysis: ``K = N(P)^-1`` with ``P = F - C y' - M y''`` (eq. 15) and ``x(P)`` the
+  inextensible equilibrium (warm-started from the previous evaluation).
+
+The state integrated is ``s = (z, y', y'')`` with ``z = y - y(0)`` measured from the static
+equilibrium (so tolerances act on the displacement, not on absolute coordinates).
+
+Numba functions take the model as a tuple ``prm`` built by :meth:`EquationsOfMotion.params`:
+``(model, S, EA, L, H, m, C, F0, FL, w, y0, x0, u0, K0, tol)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from ..cable import Cable
+from . import kernels as kn
+
+EXACT = 0
+APPROXIMATE = 1
+
+
+@njit(cache=True)
+def load(prm, t):
+    """``F(t) = F0 + FL sin(w t)``."""
+    return prm[7] + prm[8] * np.sin(prm[9] * t)
+
+
+@njit(cache=True)
+def load_rate(prm, t):
+    """``F'(t) = w FL cos(w t)``."""
+    return prm[8] * (prm[9] * np.cos(prm[9] * t))
+
+
+@njit(cache=True)
+def approximate_stiffness(prm, P, warm, Q, x, u, T, N):
+    """Solve the inextensible closure at loads P (warm start ``warm``) and build ``N``.
+
+    Returns ``kn.OK`` or ``kn.INNER_SOLVE``; ``N`` then holds ``D + f``.
+    """
+    S, EA, L, H, tol = prm[1], prm[2], prm[3], prm[4], prm[14]
+    kn.cumulative_loads(P, Q)
+    if kn.closure_solve(S, Q, 0.0, L, H, warm, tol, 60) < 0:
+        return kn.INNER_SOLVE
+    kn.approximate_flexibility(S, EA, Q, warm, x, u, T, N)
+    return kn.OK
+
+
+@njit(cache=True)
+def rate(prm, t, s, warm, ds):
+    """Right-hand side of the third-order system: ``ds = (y', y'', y''')``.
+
+    Returns a status code (:data:`cablesim.dynamics.kernels.OK` on success).
+    """
+    model, S, EA, L, H, m, C = prm[0], prm[1], prm[2], prm[3], prm[4], prm[5], prm[6]
+    nd = m.size
+    z = s[:nd]
+    v = s[nd : 2 * nd]
+    a = s[2 * nd :]
+    ds[:nd] = v
+    ds[nd : 2 * nd] = a
+    Kv = np.empty(nd)
+    if model == EXACT:
+        P = np.empty(nd)
+        y = prm[10] + z
+        if kn.exact_force_and_Kv(y, v, S, EA, L, H, P, Kv) >= 0:
+            return kn.SLACK
+    else:
+        n = S.size - 1
+        P = load(prm, t) - C @ v - m * a
+        Q = np.empty((n + 1, 2))
+        x = np.empty(nd)
+        u = np.empty(nd)
+        T = np.empty(n + 1)
+        N = np.empty((nd, nd))
+        st = approximate_stiffness(prm, P, warm, Q, x, u, T, N)
+        if st != kn.OK:
+            return st
+        Kv = np.linalg.solve(N, v)
+    ds[2 * nd :] = (load_rate(prm, t) - C @ a - Kv) / m
+    for i in range(ds.size):
+        if not np.isfinite(ds[i]):
+            return kn.NONFINITE
+    return kn.OK
+
+
+@njit(cache=True)
+def observe(prm, t, s, warm, zc, ze, T, segment_state):
+    """Derived outputs at one instant: ``z_c``, ``z_e``, tensions and the drift of eq. 15.
+
+    ``segment_state`` receives the index of a slack segment (exact) or -1. Returns the drift
+    residual ``|M y'' + C y' + P - F| / |F0|`` (exact analysis) or, for the approximate analysis
+    where eq. 15 defines P, the mismatch between the integrated ``y`` and ``x(P) + u(P)``
+    expressed as a force through ``K0``, also relative to ``|F0|``. NaN if the inner solve fails.
+    """
+    model, S, EA, L, H, m, C = prm[0], prm[1], prm[2], prm[3], prm[4], prm[5], prm[6]
+    nd = m.size
+    n = S.size - 1
+    z = s[:nd]
+    v = s[nd : 2 * nd]
+    a = s[2 * nd :]
+    F = load(prm, t)
+    f0norm = np.sqrt(np.sum(prm[7] ** 2))
+    Q = np.empty((n + 1, 2))
+    x = np.empty(nd)
+    u = np.empty(nd)
+    Tin = np.empty(n + 1)
+    if model == EXACT:
+        y = prm[10] + z
+        P = np.empty(nd)
+        K = np.empty((nd, nd))
+        segment_state[0] = kn.exact_force_and_stiffness(y, S, EA, L, H, P, K)
+        kn.exact_tensions(y, S, EA, L, H, T)
+        kn.cumulative_loads(P, Q)
+        if kn.closure_solve(S, Q, 0.0, L, H, warm, prm[14], 60) < 0:
+            zc[:] = np.nan
+            ze[:] = np.nan
+        else:
+            N = np.empty((nd, nd))
+            kn.approximate_flexibility(S, EA, Q, warm, x, u, Tin, N)
+            zc[:] = x - prm[11]
+            ze[:] = z - zc
+        r = m * a + C @ v + P - F
+        return np.sqrt(np.sum(r * r)) / f0norm
+    P = F - C @ v - m * a
+    N = np.empty((nd, nd))
+    segment_state[0] = -1
+    if approximate_stiffness(prm, P, warm, Q, x, u, Tin, N) != kn.OK:
+        zc[:] = np.nan
+        ze[:] = np.nan
+        T[:] = np.nan
+        return np.nan
+    T[:] = Tin
+    zc[:] = x - prm[11]
+    ze[:] = u - prm[12]
+    d = prm[13] @ (z - zc - ze)
+    return np.sqrt(np.sum(d * d)) / f0norm
+
+
+@dataclass(frozen=True)
+class EquationsOfMotion:
+    """The cable's equations of motion about a static equilibrium (the vector field).
+
+    Attributes
+    ----------
+    cable : Cable
+    analysis : str
+        ``"exact"`` or ``"approximate"``.
+    mass : ndarray, shape (2n,)
+        Diagonal of ``M``, kg.
+    C : ndarray, shape (2n, 2n)
+        Rayleigh damping ``a0 M + a1 K0``, N s/m (constant in time).
+    F0, FL : ndarray, shape (2n,)
+        Sustained and peak harmonic loads, N.
+    omega : float
+        Forcing frequency, rad/s (``FL`` may be zero).
+    y0 : ndarray
+        Static equilibrium under F0 of the chosen analysis, m.
+    x0, u0 : ndarray
+        Natural state ``x(F0)`` and elastic displacement ``y0 - x0`` there, m.
+    K0 : ndarray
+        Tangent stiffness at the equilibrium, N/m.
+    T0 : ndarray
+        Tensions at the equilibrium, N.
+    F1 : ndarray, shape (2,)
+        Force in segment 1 of the inextensible equilibrium (warm start of inner solves), N.
+    a0, a1 : float
+        The Rayleigh coefficients behind ``C`` (1/s, s).
+    """
+
+    cable: Cable
+    analysis: str
+    mass: np.ndarray
+    C: np.ndarray
+    F0: np.ndarray
+    FL: np.ndarray
+    omega: float
+    y0: np.ndarray
+    x0: np.ndarray
+    u0: np.ndarray
+    K0: np.ndarray
+    T0: np.ndarray
+    F1: np.ndarray
+    a0: float = 0.0
+    a1: float = 0.0
+
+    @property
+    def n_dof(self) -> int:
+        """Number of degrees of freedom."""
+        return self.mass.size
+
+    def params(self) -> tuple:
+        """The numba parameter tuple (see the module docstring)."""
+        c = self.cable
+        tol = 1e-13 * max(c.total_length, c.chord_length)
+        return (
+            EXACT if self.analysis == "exact" else APPROXIMATE,
+            np.ascontiguousarray(c.S),
+            float(c.EA),
+            float(c.L),
+            float(c.H),
+            np.ascontiguousarray(self.mass),
+            np.ascontiguousarray(self.C),
+            np.ascontiguousarray(self.F0),
+            np.ascontiguousarray(self.FL),
+            float(self.omega),
+            np.ascontiguousarray(self.y0),
+            np.ascontiguousarray(self.x0),
+            np.ascontiguousarray(self.u0),
+            np.ascontiguousarray(self.K0),
+            float(tol),
+        )
+
+    def initial_state(self, z0: np.ndarray | None = None, v0: np.ndarray | None = None) -> np.ndarray:
+        """``s(0) = (z(0), y'(0), y''(0))`` with ``y''(0)`` from eq. 19.
+
+        Parameters
+        ----------
+        z0 : ndarray, optional
+            Initial displacement from the equilibrium, m (default zero). Only the exact analysis
+            can start displaced: the approximate analysis defines the configuration through P.
+        v0 : ndarray, optional
+            Initial velocities, m/s (default zero).
+        """
+        nd = self.n_dof
+        z0 = np.zeros(nd) if z0 is None else np.asarray(z0, dtype=float)
+        v0 = np.zeros(nd) if v0 is None else np.asarray(v0, dtype=float)
+        F = self.F0  # F(0) = F0 + FL sin 0
+        if self.analysis == "exact":
+            from ..statics import resisting_force
+
+            P = resisting_force(self.cable, self.y0 + z0)
+        else:
+            if np.any(z0 != 0):
+                raise ValueError("the approximate analysis starts from its equilibrium (z0 = 0)")
+            P = self.F0
+        a0 = (F - P - self.C @ v0) / self.mass
+        return np.concatenate([z0, v0, a0])

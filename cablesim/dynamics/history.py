@@ -1,0 +1,267 @@
+"""Time histories: build the equations of motion of a case and integrate them.
+
+:func:`simulate` drives any integrator chunk by chunk: between chunks it reports progress and
+honours Ctrl-C, so an interrupted run returns everything computed so far. A run that fails
+(a segment goes slack, the state blows up, an inner solve fails) also returns everything up to
+the last good instant, with a status that says what happened and what to try.
+"""
+
+from __future__ import annotations
+
+import signal
+import threading
+import time
+from typing import Callable
+
+import numpy as np
+from numba import njit
+
+from ..analyses.static import StaticResult
+from ..case import Case
+from ..modal import modal_analysis, rayleigh_coefficients
+from . import kernels as kn
+from .equations import EquationsOfMotion, observe
+from .integrators import DOPRI5, GeneralizedAlpha, Integrator
+from .result import HistoryResult
+
+
+def build_equations(
+    case: Case,
+    static: StaticResult,
+    omega: float = 0.0,
+    load_scale: float = 1.0,
+    damping_ratio: float | None = None,
+) -> EquationsOfMotion:
+    """The equations of motion of a case about its static equilibrium under F0.
+
+    Parameters
+    ----------
+    case : Case
+    static : StaticResult
+        From :func:`cablesim.analyses.static.run_static` (its ``analysis`` is used).
+    omega : float
+        Forcing frequency, rad/s.
+    load_scale : float
+        Multiplies ``FL`` (``gamma`` of the paper's Fig. 4; 0 for free vibration).
+    damping_ratio : float, optional
+        Overrides the case's damping ratio (same two modes).
+
+    Returns
+    -------
+    EquationsOfMotion
+    """
+    cable = static.cable
+    M = cable.mass_diagonal
+    if damping_ratio is None:
+        a0, a1 = static.a0, static.a1
+    else:
+        i, j = case.damping.modes
+        w = static.modes.omega
+        a0, a1 = rayleigh_coefficients(w[i - 1], w[j - 1], damping_ratio)
+    C = a0 * np.diag(M) + a1 * static.K0
+    inext = static.inextensible
+    if inext is None:
+        raise ValueError("time histories need the inextensible state (sum S > chord)")
+    x0 = inext.x
+    return EquationsOfMotion(
+        cable=cable,
+        analysis=static.analysis,
+        mass=M,
+        C=C,
+        F0=static.P.copy(),
+        FL=case.FL * load_scale,
+        omega=float(omega),
+        y0=static.y0.copy(),
+        x0=x0.copy(),
+        u0=static.y0 - x0,
+        K0=static.K0.copy(),
+        T0=static.T0.copy(),
+        F1=inext.segments.F[0].copy(),
+        a0=float(a0),
+        a1=float(a1),
+    )
+
+
+def default_integrator(eom: EquationsOfMotion, omega_interest: float) -> Integrator:
+    """The scheme cablesim uses when the case names none.
+
+    Non-stiff cables (highest mode within a few hundred times the frequency of interest): the
+    adaptive ``dopri5``. Stiff cables: ``generalized-alpha`` with 100 steps per period of the
+    frequency of interest, which damps the spurious high axial modes.
+    """
+    w = modal_analysis(eom.K0, eom.mass).omega
+    w_int = max(omega_interest, w[0])
+    if w[-1] / w_int > 200.0:
+        return GeneralizedAlpha(dt=2.0 * np.pi / w_int / 100.0, rho_inf=0.8)
+    return DOPRI5(rtol=1e-8, atol=1e-10 * eom.cable.chord_length)
+
+
+@njit(cache=True)
+def _observe_all(prm, t, S, warm, zc, ze, T, residual, slack):
+    seg = np.empty(1, dtype=np.int64)
+    for i in range(t.size):
+        residual[i] = observe(prm, t[i], S[i], warm, zc[i], ze[i], T[i], seg)
+        slack[i] = seg[0]
+
+
+class _Interrupt:
+    """Catch SIGINT between chunks (main thread only) instead of raising mid-assignment."""
+
+    def __init__(self):
+        self.hit = False
+        self._old = None
+
+    def __enter__(self):
+        if threading.current_thread() is threading.main_thread():
+            self._old = signal.signal(signal.SIGINT, self._handle)
+        return self
+
+    def _handle(self, signum, frame):
+        self.hit = True
+
+    def __exit__(self, *exc):
+        if self._old is not None:
+            signal.signal(signal.SIGINT, self._old)
+        return False
+
+
+def _failure_text(code: int, t: float, eom: EquationsOfMotion, integrator: Integrator, state_s) -> str:
+    where = f"at t = {t:.6g} s"
+    if code == kn.SLACK:
+        T = np.empty(eom.cable.n_segments)
+        kn.exact_tensions(eom.y0 + state_s[: eom.n_dof], eom.cable.S, eom.cable.EA, eom.cable.L, eom.cable.H, T)
+        k = int(np.argmin(T)) + 1
+        return (
+            f"stopped {where}: segment {k} went slack (its tension fell to zero; this model does not "
+            "handle slack segments). Reduce the harmonic loads FL, raise the sustained loads F0, or "
+            "check that the response is physical."
+        )
+    if code in (kn.NONFINITE, kn.STEP_UNDERFLOW):
+        w_max = float(modal_analysis(eom.K0, eom.mass).omega[-1])
+        hint = (
+            f"the step dt = {integrator.dt:.3g} s may exceed the explicit stability limit "
+            f"(about 2.8 / omega_max = {2.8 / w_max:.3g} s): use a smaller dt or the newmark or "
+            "generalized-alpha integrator"
+            if getattr(integrator, "dt", None) is not None and integrator.name == "rk4"
+            else "try a smaller step or tolerance, or the generalized-alpha integrator"
+        )
+        return f"stopped {where}: {kn.STATUS_TEXT[code]}; {hint}."
+    if code == kn.INNER_SOLVE:
+        return (
+            f"stopped {where}: the inner equilibrium solve failed (a segment may be close to "
+            "slack); reduce FL or the step size."
+        )
+    return f"stopped {where}: {kn.STATUS_TEXT.get(code, 'unknown failure')}."
+
+
+def simulate(
+    eom: EquationsOfMotion,
+    integrator: Integrator,
+    duration: float,
+    output_step: float,
+    s0: np.ndarray | None = None,
+    progress: Callable[[float], None] | None = None,
+    split: bool = True,
+    chunk_seconds: float = 0.25,
+) -> HistoryResult:
+    """Integrate the equations of motion from ``s0`` (default: equilibrium at rest).
+
+    Parameters
+    ----------
+    eom : EquationsOfMotion
+    integrator : Integrator
+    duration : float
+        Simulated time, s.
+    output_step : float
+        Interval between saved instants, s.
+    s0 : ndarray, optional
+        Initial ``(z, y', y'')`` (see :meth:`EquationsOfMotion.initial_state`).
+    progress : callable, optional
+        Called with the simulated time reached after each chunk.
+    split : bool
+        Compute the configurational/elastic split ``z_c``, ``z_e`` (one inner solve per saved
+        instant).
+    chunk_seconds : float
+        Wall-clock length of a chunk between progress reports and Ctrl-C checks.
+
+    Returns
+    -------
+    HistoryResult
+    """
+    if s0 is None:
+        s0 = eom.initial_state()
+    prm = eom.params()
+    nd = eom.n_dof
+    n_out = int(np.floor(duration / output_step + 1e-9))
+    t_out = np.arange(1, n_out + 1) * output_step
+    out = np.empty((n_out + 1, 3 * nd))
+    out[0] = s0
+    state = integrator.start(eom, s0)
+    written = 0
+    code = state.extra.get("code", kn.OK)
+    chunk = min(duration, 50.0 * output_step, 10.0)
+    status = "completed"
+    with _Interrupt() as stop:
+        while code == kn.OK and state.t < duration - 1e-12 * max(duration, 1.0):
+            if stop.hit:
+                status = f"interrupted at t = {state.t:.6g} s"
+                break
+            t_end = min(state.t + chunk, duration)
+            wall = time.perf_counter()
+            n, code = integrator.advance(prm, state, t_end, t_out[written:], out[1 + written :])
+            written += n
+            if progress is not None:
+                progress(min(state.t, duration))
+            # Keep each chunk near `chunk_seconds` of wall time.
+            spent = time.perf_counter() - wall
+            chunk *= float(np.clip(chunk_seconds / max(spent, 1e-4), 0.5, 4.0))
+    if code != kn.OK:
+        status = _failure_text(code, state.t, eom, integrator, state.s)
+    m = written + 1
+    t = np.concatenate([[0.0], t_out[:written]])
+    S = out[:m]
+    zc = np.empty((m, nd))
+    ze = np.empty((m, nd))
+    T = np.empty((m, eom.cable.n_segments))
+    residual = np.empty(m)
+    slack = np.empty(m, dtype=np.int64)
+    _observe_all(prm, t, S, np.array(eom.F1, dtype=float), zc, ze, T, residual, slack)
+    # Nothing non-finite leaves silently: cut the record at the first bad instant.
+    bad = ~(np.isfinite(S).all(axis=1) & np.isfinite(T).all(axis=1) & np.isfinite(residual))
+    if split:
+        bad |= ~(np.isfinite(zc).all(axis=1) & np.isfinite(ze).all(axis=1))
+    if bad.any():
+        first = int(np.argmax(bad))
+        m = max(first, 1)
+        if status == "completed" or first < written:
+            status = f"stopped at t = {t[first]:.6g} s: derived outputs became non-finite (inner solve failed)"
+    return HistoryResult(
+        t=t[:m],
+        z=S[:m, :nd].copy(),
+        v=S[:m, nd : 2 * nd].copy(),
+        zc=zc[:m] if split else None,
+        ze=ze[:m] if split else None,
+        T=T[:m],
+        residual=residual[:m],
+        y0=eom.y0,
+        T0=eom.T0,
+        omega=eom.omega if np.any(eom.FL != 0) else None,
+        analysis=eom.analysis,
+        integrator=integrator.name,
+        status=status,
+        modal_omega=modal_analysis(eom.K0, eom.mass).omega,
+        settings={
+            **{f"integrator_{k}": v for k, v in integrator.settings().items()},
+            "duration": float(duration),
+            "output_step": float(output_step),
+            "a0": eom.a0,
+            "a1": eom.a1,
+        },
+    )
+
+
+def mode_velocity(static: StaticResult, mode: int, peak_velocity: float) -> np.ndarray:
+    """Initial velocities along linear mode ``mode`` (1-based), largest component = V > 0."""
+    phi = static.modes.shapes[:, mode - 1]
+    k = int(np.argmax(np.abs(phi)))
+    return phi * (peak_velocity / phi[k])

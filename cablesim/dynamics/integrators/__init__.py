@@ -1,0 +1,21 @@
+"""Time-integration schemes, by name.
+
+=====================  =====  =====================================================
+name                   order  kind
+=====================  =====  =====================================================
+``rk4``                4      explicit, fixed step, third-order state (paper)
+``dopri5``             5      explicit, adaptive (rtol, atol), third-order state
+``newmark``            2      implicit, fixed step, average acceleration (paper)
+``generalized-alpha``  2      implicit, fixed step, high-mode dissipation rho_inf
+=====================  =====  =====================================================
+"""
+
+from .base import Integrator, IntegratorState
+from .newmark import GeneralizedAlpha, Newmark
+from .rk import DOPRI5, RK4
+
+INTEGRATORS: dict[str, type[Integrator]] = {
+    cls.name: cls for cls in (RK4, DOPRI5, Newmark, GeneralizedAlpha)
+}
+
+__all__ = ["INTEGRATORS", "Integrator", "IntegratorState", "RK4", "DOPRI5", "Newmark", "GeneralizedAlpha"]

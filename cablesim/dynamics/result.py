@@ -1,0 +1,73 @@
+"""Result of a time history (forced or free vibration)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class HistoryResult:
+    """Time history of the cable about its static equilibrium.
+
+    Time runs along the first axis, degrees of freedom (DOF order ``[x1, x2, x3, x4, ...]``,
+    vertical axis down) along the second.
+
+    Attributes
+    ----------
+    t : ndarray, shape (m,)
+        Saved instants, s.
+    z : ndarray, shape (m, 2n)
+        Displacements from the static equilibrium, ``z = y - y(0)``, m.
+    v : ndarray, shape (m, 2n)
+        Velocities ``y'``, m/s.
+    zc, ze : ndarray, shape (m, 2n), or None
+        Configurational and elastic parts of ``z`` (eq. 22), m; None if not computed.
+    T : ndarray, shape (m, n + 1)
+        Segment tensions, N.
+    residual : ndarray, shape (m,)
+        Drift of the dynamic equilibrium (eq. 15), ``|M y'' + C y' + P - F| / |F0|``.
+    y0 : ndarray, shape (2n,)
+        The static equilibrium the displacements are measured from, m.
+    T0 : ndarray, shape (n + 1,)
+        Tensions at that equilibrium, N.
+    omega : float or None
+        Forcing frequency, rad/s (None for free vibration).
+    analysis : str
+        ``"exact"`` or ``"approximate"``.
+    integrator : str
+        Name of the time-integration scheme.
+    status : str
+        ``"completed"``, or why the run stopped early (the arrays hold everything up to then).
+    modal_omega : ndarray
+        Linear modal frequencies about the equilibrium, rad/s.
+    settings : dict
+        Everything else worth recording (step, tolerances, damping, initial conditions).
+    """
+
+    t: np.ndarray
+    z: np.ndarray
+    v: np.ndarray
+    zc: np.ndarray | None
+    ze: np.ndarray | None
+    T: np.ndarray
+    residual: np.ndarray
+    y0: np.ndarray
+    T0: np.ndarray
+    omega: float | None
+    analysis: str
+    integrator: str
+    status: str
+    modal_omega: np.ndarray
+    settings: dict = field(default_factory=dict)
+
+    @property
+    def completed(self) -> bool:
+        """Whether the run reached its requested duration."""
+        return self.status == "completed"
+
+    @property
+    def n_dof(self) -> int:
+        """Number of degrees of freedom."""
+        return self.z.shape[1]

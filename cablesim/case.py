@@ -59,6 +59,12 @@ class CableSpec(_Strict):
             raise ValueError("give the axial rigidity as EA (N), or as both E (N/m^2) and A (m^2)")
         if self.EA is not None and (self.E is not None or self.A is not None):
             raise ValueError("give either EA or E and A, not both")
+        ea = self.axial_rigidity
+        if not math.isfinite(ea) or ea <= 0 or ea < 1e-300:
+            raise ValueError(
+                f"the axial rigidity E*A = {ea:g} N is out of range; give EA (N) or E and A whose "
+                "product is a positive finite number"
+            )
         if len(self.masses) != len(self.S) - 1:
             raise ValueError(
                 f"cable.masses has {len(self.masses)} values but cable.S has {len(self.S)} "
@@ -318,7 +324,8 @@ def parse_case(text: str, source: str = "<case>", default_name: str = "case") ->
             f"Case file {source} must be a YAML mapping with at least the keys `cable` and `loads` "
             "(`cablesim example` prints a complete one)."
         )
-    data.setdefault("name", default_name)
+    if data.get("name") is None:  # absent, or a blank `name:` (YAML null)
+        data["name"] = default_name
     try:
         return Case.model_validate(data)
     except ValidationError as err:
@@ -344,7 +351,8 @@ def load_case(path: str | Path | None) -> tuple[Case, str]:
         raise CablesimError(f"Case file {p} does not exist. Check the path.") from None
     except (IsADirectoryError, PermissionError, UnicodeDecodeError) as exc:
         raise CablesimError(f"Case file {p} cannot be read ({exc.__class__.__name__}).") from None
-    stem = re.sub(r"[^A-Za-z0-9._-]", "-", p.stem) or "case"
+    # A valid case name starts with a letter or digit; derive one from the file stem.
+    stem = re.sub(r"[^A-Za-z0-9._-]", "-", p.stem).lstrip("._-") or "case"
     return parse_case(text, source=str(p), default_name=stem), text
 
 

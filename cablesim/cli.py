@@ -152,8 +152,8 @@ def _finish_history(case, hist, integ, out: Path, text: str, command: str, plot:
     typer.echo(history_summary(case, hist, integ, wall))
     typer.echo(f"\nWrote {out}" + (" and " + ", ".join(str(p) for p in pngs) if pngs else ""))
     if not hist.completed:
-        _say_error(f"the run did not complete: {hist.status} Results up to that instant were written.")
-        raise typer.Exit(3)
+        _say_error(f"the run did not complete: {hist.status}. Results up to that instant were written.")
+        raise typer.Exit(130 if hist.status.startswith("interrupted") else 3)
 
 
 @app.command()

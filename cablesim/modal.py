@@ -96,7 +96,11 @@ def inextensible_frequencies(D: np.ndarray, mass_diagonal: np.ndarray) -> np.nda
     """
     r = np.sqrt(mass_diagonal)
     mu = np.linalg.eigvalsh(r[:, None] * D * r[None, :])
-    mu = mu[mu > 1e-10 * max(mu.max(), 0.0)] if mu.max() > 0 else mu[:0]
+    # D has rank n - 1 (the mechanism modes), so keep exactly the n - 1 largest eigenvalues:
+    # a relative threshold would promote round-off to a frequency when n = 1.
+    n_finite = mass_diagonal.size // 2 - 1
+    mu = np.sort(mu)[::-1][:n_finite]
+    mu = mu[mu > 0]
     return np.sort(1.0 / np.sqrt(mu))
 
 

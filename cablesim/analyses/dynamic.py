@@ -65,6 +65,7 @@ def make_integrator(
 def _output_step(step: float | None, omega_interest: float, duration: float) -> float:
     if step is None:
         step = 2.0 * np.pi / omega_interest / SAMPLES_PER_PERIOD
+        step = duration / np.ceil(duration / step)  # end exactly at the duration
     if step > duration:
         raise CablesimError(
             f"The output step {step:g} s is longer than the duration {duration:g} s; shorten it.",

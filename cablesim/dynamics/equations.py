@@ -30,70 +30,110 @@ APPROXIMATE = 1
 
 @njit(cache=True)
 def load(prm, t):
-    """``F(t) = F0 + FL sin(w t)``."""
+    """``F(t) = F0 + FL sin(w t)`` (allocates; for code outside the hot loop)."""
     return prm[7] + prm[8] * np.sin(prm[9] * t)
 
 
-@njit(cache=True)
-def load_rate(prm, t):
-    """``F'(t) = w FL cos(w t)``."""
-    return prm[8] * (prm[9] * np.cos(prm[9] * t))
+def workspace(n: int):
+    """Scratch arrays for :func:`rate` (no allocation inside the time loop)."""
+    nd = 2 * n
+    return (np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd))  # y, P, Kv, v
+
+
+def approximate_workspace(n: int):
+    """Scratch arrays of the approximate analysis' inner solves (Q, x, u, T, N, LU, ...)."""
+    nd = 2 * n
+    return (
+        np.empty((n + 1, 2)),
+        np.empty(nd),
+        np.empty(nd),
+        np.empty(n + 1),
+        np.empty((nd, nd)),
+        np.empty((nd, nd)),
+        kn.flexibility_workspace(n),
+    )
 
 
 @njit(cache=True)
-def approximate_stiffness(prm, P, warm, Q, x, u, T, N):
-    """Solve the inextensible closure at loads P (warm start ``warm``) and build ``N``.
+def approximate_stiffness(prm, P, warm, awk):
+    """Solve the inextensible closure at loads P (warm start ``warm``) and build ``N = D + f``.
 
-    Returns ``kn.OK`` or ``kn.INNER_SOLVE``; ``N`` then holds ``D + f``.
+    Fills ``awk`` (:func:`approximate_workspace`): Q, x, u, T and N; returns ``kn.OK`` or
+    ``kn.INNER_SOLVE``.
     """
     S, EA, L, H, tol = prm[1], prm[2], prm[3], prm[4], prm[14]
+    Q, x, u, T, N = awk[0], awk[1], awk[2], awk[3], awk[4]
     kn.cumulative_loads(P, Q)
     if kn.closure_solve(S, Q, 0.0, L, H, warm, tol, 60) < 0:
         return kn.INNER_SOLVE
-    kn.approximate_flexibility(S, EA, Q, warm, x, u, T, N)
+    kn.approximate_flexibility(S, EA, Q, warm, x, u, T, N, awk[6])
     return kn.OK
 
 
 @njit(cache=True)
-def rate(prm, t, s, warm, ds):
-    """Right-hand side of the third-order system: ``ds = (y', y'', y''')``.
+def resisting_from_eq15(prm, t, v, a, P):
+    """``P = F(t) - C y' - M y''`` (eq. 15) into P."""
+    m, C, F0, FL, w = prm[5], prm[6], prm[7], prm[8], prm[9]
+    sw = np.sin(w * t)
+    for i in range(m.size):
+        acc = F0[i] + FL[i] * sw - m[i] * a[i]
+        for j in range(m.size):
+            acc -= C[i, j] * v[j]
+        P[i] = acc
 
-    Returns a status code (:data:`cablesim.dynamics.kernels.OK` on success).
+
+@njit(cache=True)
+def rate(prm, t, s, warm, ds, wk, awk):
+    """Right-hand side of the third-order system: ``ds = (velocity, acceleration, jerk)``.
+
+    ``awk`` is None for the exact analysis (numba then compiles a version without the
+    approximate branch) and :func:`approximate_workspace` for the approximate one. Returns a
+    status code (:data:`cablesim.dynamics.kernels.OK` on success).
     """
-    model, S, EA, L, H, m, C = prm[0], prm[1], prm[2], prm[3], prm[4], prm[5], prm[6]
+    S, EA, L, H, m, C = prm[1], prm[2], prm[3], prm[4], prm[5], prm[6]
+    FL, w, y0 = prm[8], prm[9], prm[10]
+    y, P, Kv, v = wk[0], wk[1], wk[2], wk[3]
     nd = m.size
-    z = s[:nd]
-    v = s[nd : 2 * nd]
-    a = s[2 * nd :]
-    ds[:nd] = v
-    ds[nd : 2 * nd] = a
-    Kv = np.empty(nd)
-    if model == EXACT:
-        P = np.empty(nd)
-        y = prm[10] + z
+    for i in range(nd):
+        ds[i] = s[nd + i]
+        ds[nd + i] = s[2 * nd + i]
+        v[i] = s[nd + i]  # contiguous copy: slicing here costs more than the physics
+    if awk is None:
+        for i in range(nd):
+            y[i] = y0[i] + s[i]
         if kn.exact_force_and_Kv(y, v, S, EA, L, H, P, Kv) >= 0:
             return kn.SLACK
     else:
-        n = S.size - 1
-        P = load(prm, t) - C @ v - m * a
-        Q = np.empty((n + 1, 2))
-        x = np.empty(nd)
-        u = np.empty(nd)
-        T = np.empty(n + 1)
-        N = np.empty((nd, nd))
-        st = approximate_stiffness(prm, P, warm, Q, x, u, T, N)
+        st = _approximate_Kv(prm, t, s, warm, wk, awk)
         if st != kn.OK:
             return st
-        Kv = np.linalg.solve(N, v)
-    ds[2 * nd :] = (load_rate(prm, t) - C @ a - Kv) / m
-    for i in range(ds.size):
-        if not np.isfinite(ds[i]):
+    wc = w * np.cos(w * t)
+    for i in range(nd):
+        acc = FL[i] * wc - Kv[i]
+        for j in range(nd):
+            acc -= C[i, j] * s[2 * nd + j]
+        acc /= m[i]
+        if not np.isfinite(acc):
             return kn.NONFINITE
+        ds[2 * nd + i] = acc
     return kn.OK
 
 
 @njit(cache=True)
-def observe(prm, t, s, warm, zc, ze, T, segment_state):
+def _approximate_Kv(prm, t, s, warm, wk, awk):
+    """``K(P) y'`` of the approximate analysis into ``wk[2]``, with P from eq. 15."""
+    nd = prm[5].size
+    resisting_from_eq15(prm, t, s[nd : 2 * nd], s[2 * nd :], wk[1])
+    st = approximate_stiffness(prm, wk[1], warm, awk)
+    if st != kn.OK:
+        return st
+    if not kn.solve_small(awk[4], wk[3], wk[2], awk[5]):
+        return kn.INNER_SOLVE
+    return kn.OK
+
+
+@njit(cache=True)
+def observe(prm, t, s, warm, zc, ze, T, segment_state, awk):
     """Derived outputs at one instant: ``z_c``, ``z_e``, tensions and the drift of eq. 15.
 
     ``segment_state`` receives the index of a slack segment (exact) or -1. Returns the drift
@@ -103,42 +143,35 @@ def observe(prm, t, s, warm, zc, ze, T, segment_state):
     """
     model, S, EA, L, H, m, C = prm[0], prm[1], prm[2], prm[3], prm[4], prm[5], prm[6]
     nd = m.size
-    n = S.size - 1
     z = s[:nd]
     v = s[nd : 2 * nd]
     a = s[2 * nd :]
     F = load(prm, t)
     f0norm = np.sqrt(np.sum(prm[7] ** 2))
-    Q = np.empty((n + 1, 2))
-    x = np.empty(nd)
-    u = np.empty(nd)
-    Tin = np.empty(n + 1)
+    x, u = awk[1], awk[2]
     if model == EXACT:
         y = prm[10] + z
         P = np.empty(nd)
         K = np.empty((nd, nd))
         segment_state[0] = kn.exact_force_and_stiffness(y, S, EA, L, H, P, K)
         kn.exact_tensions(y, S, EA, L, H, T)
-        kn.cumulative_loads(P, Q)
-        if kn.closure_solve(S, Q, 0.0, L, H, warm, prm[14], 60) < 0:
+        if approximate_stiffness(prm, P, warm, awk) != kn.OK:
             zc[:] = np.nan
             ze[:] = np.nan
         else:
-            N = np.empty((nd, nd))
-            kn.approximate_flexibility(S, EA, Q, warm, x, u, Tin, N)
             zc[:] = x - prm[11]
             ze[:] = z - zc
         r = m * a + C @ v + P - F
         return np.sqrt(np.sum(r * r)) / f0norm
-    P = F - C @ v - m * a
-    N = np.empty((nd, nd))
+    P = np.empty(nd)
+    resisting_from_eq15(prm, t, v, a, P)
     segment_state[0] = -1
-    if approximate_stiffness(prm, P, warm, Q, x, u, Tin, N) != kn.OK:
+    if approximate_stiffness(prm, P, warm, awk) != kn.OK:
         zc[:] = np.nan
         ze[:] = np.nan
         T[:] = np.nan
         return np.nan
-    T[:] = Tin
+    T[:] = awk[3]
     zc[:] = x - prm[11]
     ze[:] = u - prm[12]
     d = prm[13] @ (z - zc - ze)
@@ -196,6 +229,12 @@ class EquationsOfMotion:
     def n_dof(self) -> int:
         """Number of degrees of freedom."""
         return self.mass.size
+
+    def workspaces(self):
+        """``(wk, awk)`` scratch arrays for the compiled kernels; ``awk`` is None for the exact
+        analysis."""
+        n = self.cable.n_nodes
+        return workspace(n), (None if self.analysis == "exact" else approximate_workspace(n))
 
     def params(self) -> tuple:
         """The numba parameter tuple (see the module docstring)."""

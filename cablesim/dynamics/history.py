@@ -20,7 +20,7 @@ from ..analyses.static import StaticResult
 from ..case import Case
 from ..modal import modal_analysis, rayleigh_coefficients
 from . import kernels as kn
-from .equations import EquationsOfMotion, observe
+from .equations import EquationsOfMotion, approximate_workspace, observe
 from .integrators import DOPRI5, GeneralizedAlpha, Integrator
 from .result import HistoryResult
 
@@ -97,10 +97,10 @@ def default_integrator(eom: EquationsOfMotion, omega_interest: float) -> Integra
 
 
 @njit(cache=True)
-def _observe_all(prm, t, S, warm, zc, ze, T, residual, slack):
+def _observe_all(prm, t, S, warm, zc, ze, T, residual, slack, awk):
     seg = np.empty(1, dtype=np.int64)
     for i in range(t.size):
-        residual[i] = observe(prm, t[i], S[i], warm, zc[i], ze[i], T[i], seg)
+        residual[i] = observe(prm, t[i], S[i], warm, zc[i], ze[i], T[i], seg, awk)
         slack[i] = seg[0]
 
 
@@ -216,7 +216,7 @@ def simulate(
             spent = time.perf_counter() - wall
             chunk *= float(np.clip(chunk_seconds / max(spent, 1e-4), 0.5, 4.0))
     if code != kn.OK:
-        status = _failure_text(code, state.t, eom, integrator, state.s)
+        status = _failure_text(code, state.t, eom, integrator, state.s).rstrip(".")
     m = written + 1
     t = np.concatenate([[0.0], t_out[:written]])
     S = out[:m]
@@ -225,7 +225,7 @@ def simulate(
     T = np.empty((m, eom.cable.n_segments))
     residual = np.empty(m)
     slack = np.empty(m, dtype=np.int64)
-    _observe_all(prm, t, S, np.array(eom.F1, dtype=float), zc, ze, T, residual, slack)
+    _observe_all(prm, t, S, np.array(eom.F1, dtype=float), zc, ze, T, residual, slack, approximate_workspace(eom.cable.n_nodes))
     # Nothing non-finite leaves silently: cut the record at the first bad instant.
     bad = ~(np.isfinite(S).all(axis=1) & np.isfinite(T).all(axis=1) & np.isfinite(residual))
     if split:

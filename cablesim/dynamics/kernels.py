@@ -227,15 +227,14 @@ def cumulative_loads(P, Q):
 
 
 @njit(cache=True)
-def inextensible_tangents(S, Q, F, x, T, a, b):
+def inextensible_tangents(S, Q, F, x, T, a, b, e, gt, W):
     """Positions, tensions and force derivatives of the inextensible cable at its solution.
 
     Fills ``x`` (2n), ``T`` (n+1) and the rows ``a_k = t_k . dF_k/dP``, ``b_k = e_k . dF_k/dP``
-    (both (n+1, 2n)); returns ``H^-1`` entries (h00, h01, h11) of the closure Hessian's inverse.
+    (both (n+1, 2n)), using the scratch arrays ``e`` (n+1, 2), ``gt`` (n+1) and ``W`` (2, 2n);
+    returns the entries (h00, h01, h11) of the inverse closure Hessian.
     """
     n = S.size - 1
-    e = np.empty((n + 1, 2))
-    gt = np.empty(n + 1)
     H00 = 0.0
     H01 = 0.0
     H11 = 0.0
@@ -265,7 +264,6 @@ def inextensible_tangents(S, Q, F, x, T, a, b):
     s00 = 0.0
     s01 = 0.0
     s11 = 0.0
-    W = np.empty((2, 2 * n))
     for j in range(n - 1, -1, -1):
         k = j + 1
         s00 += gt[k] * e[k, 1] * e[k, 1]
@@ -290,19 +288,19 @@ def inextensible_tangents(S, Q, F, x, T, a, b):
 
 
 @njit(cache=True)
-def approximate_flexibility(S, EA, Q, F, x, u, T, N):
+def approximate_flexibility(S, EA, Q, F, x, u, T, N, wk):
     """Natural state ``x``, elastic displacement ``u``, tensions and ``N = D + f`` at loads Q.
 
-    The inextensible closure must already be solved (``F`` its segment-1 force).
+    The inextensible closure must already be solved (``F`` its segment-1 force). ``wk`` is a
+    :func:`flexibility_workspace`.
     """
     n = S.size - 1
     m = 2 * n
-    a = np.empty((n + 1, m))
-    b = np.empty((n + 1, m))
-    i00, i01, i11 = inextensible_tangents(S, Q, F, x, T, a, b)
+    a, b, e, gt, W, acc = wk
+    i00, i01, i11 = inextensible_tangents(S, Q, F, x, T, a, b, e, gt, W)
     # D rows: node r = sum_{k<=r} (S_k/T_k) t_k a_k
     N[:, :] = 0.0
-    acc = np.zeros((2, m))
+    acc[:, :] = 0.0
     for r in range(n):
         f0 = F[0] - Q[r, 0]
         f1 = F[1] - Q[r, 1]
@@ -347,3 +345,68 @@ def approximate_flexibility(S, EA, Q, F, x, u, T, N):
             s = 0.5 * (N[i, j] + N[j, i])
             N[i, j] = s
             N[j, i] = s
+
+
+def flexibility_workspace(n: int):
+    """Scratch arrays for :func:`approximate_flexibility` of an n-node cable."""
+    m = 2 * n
+    return (
+        np.empty((n + 1, m)),
+        np.empty((n + 1, m)),
+        np.empty((n + 1, 2)),
+        np.empty(n + 1),
+        np.empty((2, m)),
+        np.empty((2, m)),
+    )
+
+
+@njit(cache=True)
+def matvec(A, x, out):
+    """``out = A x`` without temporaries (small matrices)."""
+    for i in range(A.shape[0]):
+        acc = 0.0
+        for j in range(A.shape[1]):
+            acc += A[i, j] * x[j]
+        out[i] = acc
+
+
+@njit(cache=True)
+def solve_small(A, b, out, LU):
+    """Solve ``A out = b`` by Gaussian elimination with partial pivoting into scratch ``LU``.
+
+    For the small dense systems of the time loop, where a LAPACK call costs more than the
+    arithmetic. Returns False if ``A`` is singular.
+    """
+    m = b.size
+    LU[:, :] = A
+    out[:] = b
+    for k in range(m):
+        p = k
+        big = abs(LU[k, k])
+        for i in range(k + 1, m):
+            if abs(LU[i, k]) > big:
+                big = abs(LU[i, k])
+                p = i
+        if big == 0.0:
+            return False
+        if p != k:
+            for j in range(m):
+                tmp = LU[k, j]
+                LU[k, j] = LU[p, j]
+                LU[p, j] = tmp
+            tmp = out[k]
+            out[k] = out[p]
+            out[p] = tmp
+        piv = LU[k, k]
+        for i in range(k + 1, m):
+            f = LU[i, k] / piv
+            if f != 0.0:
+                for j in range(k + 1, m):
+                    LU[i, j] -= f * LU[k, j]
+                out[i] -= f * out[k]
+    for i in range(m - 1, -1, -1):
+        acc = out[i]
+        for j in range(i + 1, m):
+            acc -= LU[i, j] * out[j]
+        out[i] = acc / LU[i, i]
+    return True

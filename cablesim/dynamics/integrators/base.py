@@ -32,12 +32,15 @@ class IntegratorState:
         Warm start of the inner inextensible solves.
     extra : dict
         Scheme-specific data (current step size, step counter, stage rates, internal force).
+    wk : tuple
+        Scratch arrays of the compiled kernels (:func:`cablesim.dynamics.equations.workspace`).
     """
 
     t: float
     s: np.ndarray
     warm: np.ndarray
     extra: dict = field(default_factory=dict)
+    wk: tuple = ()
 
 
 class Integrator(ABC):

@@ -25,50 +25,63 @@ import numpy as np
 from numba import njit
 
 from .. import kernels as kn
-from ..equations import APPROXIMATE, EXACT, approximate_stiffness, load
+from ..equations import approximate_stiffness
 from .base import Integrator, IntegratorState, hermite
 
 
 @njit(cache=True)
-def _internal(prm, z, P_n, z_n, warm, P1, K, first):
+def _internal(prm, z, P_n, z_n, warm, P1, K, first, wk, awk):
     """Internal force at the step end and its tangent; returns a status code."""
-    model, S, EA, L, H = prm[0], prm[1], prm[2], prm[3], prm[4]
+    S, EA, L, H = prm[1], prm[2], prm[3], prm[4]
     nd = z.size
-    if model == EXACT:
-        if kn.exact_force_and_stiffness(prm[10] + z, S, EA, L, H, P1, K) >= 0:
+    y, Pm = wk[0], wk[3]
+    if awk is None:
+        for i in range(nd):
+            y[i] = prm[10][i] + z[i]
+        if kn.exact_force_and_stiffness(y, S, EA, L, H, P1, K) >= 0:
             return kn.SLACK
         return kn.OK
-    n = S.size - 1
-    Q = np.empty((n + 1, 2))
-    x = np.empty(nd)
-    u = np.empty(nd)
-    T = np.empty(n + 1)
-    N = np.empty((nd, nd))
-    # Implicit midpoint for the rate law: a few fixed-point sweeps on P_{n+1}.
-    Pm = P_n.copy() if first else 0.5 * (P_n + P1)
-    for _ in range(3):
-        st = approximate_stiffness(prm, Pm, warm, Q, x, u, T, N)
+    # Implicit midpoint for the rate law P' = K(P) y': a few fixed-point sweeps on P_{n+1}.
+    for i in range(nd):
+        Pm[i] = P_n[i] if first else 0.5 * (P_n[i] + P1[i])
+    scale = 0.0
+    for i in range(nd):
+        scale = max(scale, abs(P_n[i]))
+    for _ in range(4):
+        st = approximate_stiffness(prm, Pm, warm, awk)
         if st != kn.OK:
             return st
-        K[:, :] = np.linalg.inv(N)
-        P1[:] = P_n + K @ (z - z_n)
-        Pm_new = 0.5 * (P_n + P1)
-        if np.max(np.abs(Pm_new - Pm)) <= 1e-13 * np.max(np.abs(P_n)):
+        K[:, :] = np.linalg.inv(awk[4])
+        change = 0.0
+        for i in range(nd):
+            acc = P_n[i]
+            for j in range(nd):
+                acc += K[i, j] * (z[j] - z_n[j])
+            P1[i] = acc
+            new = 0.5 * (P_n[i] + acc)
+            change = max(change, abs(new - Pm[i]))
+            Pm[i] = new
+        if change <= 1e-13 * scale:
             break
-        Pm = Pm_new
     return kn.OK
 
 
 @njit(cache=True)
-def _galpha_advance(prm, s, P_n, warm, t0, h, i0, nsteps, am, af, beta, gamma, t_out, out, ztol, maxit):
-    m, C = prm[5], prm[6]
+def _galpha_advance(prm, s, P_n, warm, wk, awk, t0, h, i0, nsteps, am, af, beta, gamma, t_out, out, ztol, maxit):
+    m, C, F0, FL, w = prm[5], prm[6], prm[7], prm[8], prm[9]
     nd = m.size
     z = s[:nd].copy()
     v = s[nd : 2 * nd].copy()
     a = s[2 * nd :].copy()
+    z1 = np.empty(nd)
+    v1 = np.empty(nd)
+    a1 = np.empty(nd)
     P1 = np.empty(nd)
+    R = np.empty(nd)
+    dz = np.empty(nd)
     K = np.empty((nd, nd))
     J = np.empty((nd, nd))
+    LU = np.empty((nd, nd))
     sa = np.empty(3 * nd)
     sb = np.empty(3 * nd)
     da = np.empty(3 * nd)
@@ -79,61 +92,79 @@ def _galpha_advance(prm, s, P_n, warm, t0, h, i0, nsteps, am, af, beta, gamma, t
     for i in range(i0, i0 + nsteps):
         ta = t0 + i * h
         tb = t0 + (i + 1) * h
-        Ff = load(prm, tb - af * h)
-        z1 = z + h * v + 0.5 * h * h * a  # predictor: constant acceleration
-        P1[:] = P_n
+        sf = np.sin(w * (tb - af * h))
+        for q in range(nd):
+            z1[q] = z[q] + h * v[q] + 0.5 * h * h * a[q]  # predictor: constant acceleration
+            P1[q] = P_n[q]
         converged = False
         for it in range(maxit):
-            a1 = (z1 - z - h * v) / (beta * h * h) - (0.5 / beta - 1.0) * a
-            v1 = v + h * ((1.0 - gamma) * a + gamma * a1)
-            st = _internal(prm, z1, P_n, z, warm, P1, K, it == 0)
+            for q in range(nd):
+                a1[q] = (z1[q] - z[q] - h * v[q]) / (beta * h * h) - (0.5 / beta - 1.0) * a[q]
+                v1[q] = v[q] + h * ((1.0 - gamma) * a[q] + gamma * a1[q])
+            st = _internal(prm, z1, P_n, z, warm, P1, K, it == 0, wk, awk)
             if st != kn.OK:
                 s[:nd] = z
                 s[nd : 2 * nd] = v
                 s[2 * nd :] = a
                 return i, j, st
-            R = m * ((1.0 - am) * a1 + am * a) + C @ ((1.0 - af) * v1 + af * v) + (1.0 - af) * P1 + af * P_n - Ff
-            J[:, :] = (1.0 - af) * K + c_c * C
+            big = 0.0
             for q in range(nd):
+                acc = m[q] * ((1.0 - am) * a1[q] + am * a[q]) + (1.0 - af) * P1[q] + af * P_n[q]
+                acc -= F0[q] + FL[q] * sf
+                for r in range(nd):
+                    acc += C[q, r] * ((1.0 - af) * v1[r] + af * v[r])
+                    J[q, r] = (1.0 - af) * K[q, r] + c_c * C[q, r]
                 J[q, q] += c_m * m[q]
-            dz = np.linalg.solve(J, -R)
-            z1 += dz
-            if np.max(np.abs(dz)) <= ztol + 1e-10 * np.max(np.abs(z1 - z)):
+                R[q] = -acc
+            if not kn.solve_small(J, R, dz, LU):
+                break
+            step = 0.0
+            for q in range(nd):
+                z1[q] += dz[q]
+                big = max(big, abs(dz[q]))
+                step = max(step, abs(z1[q] - z[q]))
+            if not np.isfinite(big):
+                break
+            if big <= ztol + 1e-10 * step:
                 converged = True
                 break
-        if not converged or not np.all(np.isfinite(z1)):
+        if not converged:
             s[:nd] = z
             s[nd : 2 * nd] = v
             s[2 * nd :] = a
-            if not converged:
-                return i, j, kn.INNER_SOLVE
-            return i, j, kn.NONFINITE
-        a1 = (z1 - z - h * v) / (beta * h * h) - (0.5 / beta - 1.0) * a
-        v1 = v + h * ((1.0 - gamma) * a + gamma * a1)
-        st = _internal(prm, z1, P_n, z, warm, P1, K, False)
+            for q in range(nd):
+                if not np.isfinite(z1[q]):
+                    return i, j, kn.NONFINITE
+            return i, j, kn.INNER_SOLVE
+        for q in range(nd):
+            a1[q] = (z1[q] - z[q] - h * v[q]) / (beta * h * h) - (0.5 / beta - 1.0) * a[q]
+            v1[q] = v[q] + h * ((1.0 - gamma) * a[q] + gamma * a1[q])
+        st = _internal(prm, z1, P_n, z, warm, P1, K, False, wk, awk)
         if st != kn.OK:
             return i, j, st
         if j < t_out.size and t_out[j] <= tb + 1e-9 * h:
-            sa[:nd] = z
-            sa[nd : 2 * nd] = v
-            sa[2 * nd :] = a
-            sb[:nd] = z1
-            sb[nd : 2 * nd] = v1
-            sb[2 * nd :] = a1
-            jerk = (a1 - a) / h
-            da[:nd] = v
-            da[nd : 2 * nd] = a
-            da[2 * nd :] = jerk
-            db[:nd] = v1
-            db[nd : 2 * nd] = a1
-            db[2 * nd :] = jerk
+            for q in range(nd):
+                sa[q] = z[q]
+                sa[nd + q] = v[q]
+                sa[2 * nd + q] = a[q]
+                sb[q] = z1[q]
+                sb[nd + q] = v1[q]
+                sb[2 * nd + q] = a1[q]
+                jerk = (a1[q] - a[q]) / h
+                da[q] = v[q]
+                da[nd + q] = a[q]
+                da[2 * nd + q] = jerk
+                db[q] = v1[q]
+                db[nd + q] = a1[q]
+                db[2 * nd + q] = jerk
             while j < t_out.size and t_out[j] <= tb + 1e-9 * h:
                 hermite(ta, tb, sa, sb, da, db, t_out[j], out[j])
                 j += 1
-        z[:] = z1
-        v[:] = v1
-        a[:] = a1
-        P_n[:] = P1
+        for q in range(nd):
+            z[q] = z1[q]
+            v[q] = v1[q]
+            a[q] = a1[q]
+            P_n[q] = P1[q]
     s[:nd] = z
     s[nd : 2 * nd] = v
     s[2 * nd :] = a
@@ -172,6 +203,7 @@ class GeneralizedAlpha(Integrator):
             P = eom.F0 + eom.FL * np.sin(eom.omega * t0) - eom.C @ st.s[nd : 2 * nd] - eom.mass * st.s[2 * nd :]
         c = eom.cable
         st.extra.update(P=np.array(P, dtype=float), t0=t0, i=0, ztol=1e-12 * max(c.chord_length, 1.0))
+        st.wk = eom.workspaces()
         return st
 
     def advance(self, prm, state, t_end, t_out, out):
@@ -179,7 +211,7 @@ class GeneralizedAlpha(Integrator):
         t0, i = state.extra["t0"], state.extra["i"]
         nsteps = max(int(np.ceil((t_end - t0) / self.dt - 1e-9)) - i, 0)
         i_new, j, code = _galpha_advance(
-            prm, state.s, state.extra["P"], state.warm, t0, self.dt, i, nsteps,
+            prm, state.s, state.extra["P"], state.warm, *state.wk, t0, self.dt, i, nsteps,
             am, af, beta, gamma, t_out, out, state.extra["ztol"], 25,
         )
         state.extra["i"] = i_new

@@ -21,7 +21,7 @@ from .base import Integrator, IntegratorState, hermite
 
 
 @njit(cache=True)
-def _rk4_advance(prm, s, fa, warm, t0, h, i0, nsteps, t_out, out):
+def _rk4_advance(prm, s, fa, warm, wk, awk, t0, h, i0, nsteps, t_out, out):
     n = s.size
     k2 = np.empty(n)
     k3 = np.empty(n)
@@ -35,22 +35,22 @@ def _rk4_advance(prm, s, fa, warm, t0, h, i0, nsteps, t_out, out):
         tb = t0 + (i + 1) * h
         for q in range(n):
             tmp[q] = s[q] + 0.5 * h * fa[q]
-        st = rate(prm, ta + 0.5 * h, tmp, warm, k2)
+        st = rate(prm, ta + 0.5 * h, tmp, warm, k2, wk, awk)
         if st != kn.OK:
             return i, j, st
         for q in range(n):
             tmp[q] = s[q] + 0.5 * h * k2[q]
-        st = rate(prm, ta + 0.5 * h, tmp, warm, k3)
+        st = rate(prm, ta + 0.5 * h, tmp, warm, k3, wk, awk)
         if st != kn.OK:
             return i, j, st
         for q in range(n):
             tmp[q] = s[q] + h * k3[q]
-        st = rate(prm, tb, tmp, warm, k4)
+        st = rate(prm, tb, tmp, warm, k4, wk, awk)
         if st != kn.OK:
             return i, j, st
         for q in range(n):
             snew[q] = s[q] + h / 6.0 * (fa[q] + 2.0 * k2[q] + 2.0 * k3[q] + k4[q])
-        st = rate(prm, tb, snew, warm, fb)
+        st = rate(prm, tb, snew, warm, fb, wk, awk)
         if st != kn.OK:
             return i, j, st
         while j < t_out.size and t_out[j] <= tb + 1e-9 * h:
@@ -74,8 +74,9 @@ class RK4(Integrator):
 
     def start(self, eom, s0, t0=0.0):
         st = IntegratorState(t=t0, s=np.array(s0, dtype=float), warm=np.array(eom.F1, dtype=float))
+        st.wk = eom.workspaces()
         fa = np.empty_like(st.s)
-        code = rate(eom.params(), t0, st.s, st.warm, fa)
+        code = rate(eom.params(), t0, st.s, st.warm, fa, *st.wk)
         st.extra.update(fa=fa, t0=t0, i=0, code=code)
         return st
 
@@ -84,7 +85,7 @@ class RK4(Integrator):
             return 0, state.extra["code"]
         t0, i = state.extra["t0"], state.extra["i"]
         nsteps = max(int(np.ceil((t_end - t0) / self.dt - 1e-9)) - i, 0)
-        i_new, j, code = _rk4_advance(prm, state.s, state.extra["fa"], state.warm, t0, self.dt, i, nsteps, t_out, out)
+        i_new, j, code = _rk4_advance(prm, state.s, state.extra["fa"], state.warm, *state.wk, t0, self.dt, i, nsteps, t_out, out)
         state.extra["i"] = i_new
         state.t = t0 + i_new * self.dt
         return j, code
@@ -103,7 +104,7 @@ _E = np.array([71 / 57600, 0.0, -71 / 16695, 71 / 1920, -17253 / 339200, 22 / 52
 
 
 @njit(cache=True)
-def _dopri_advance(prm, s, fa, warm, t, h, t_end, rtol, atol, h_max, t_out, out, A, Cc, E):
+def _dopri_advance(prm, s, fa, warm, wk, awk, t, h, t_end, rtol, atol, h_max, t_out, out, A, Cc, E):
     n = s.size
     K = np.empty((7, n))
     tmp = np.empty(n)
@@ -124,7 +125,7 @@ def _dopri_advance(prm, s, fa, warm, t, h, t_end, rtol, atol, h_max, t_out, out,
                 for r in range(st_i):
                     acc += A[st_i, r] * K[r, q]
                 tmp[q] = s[q] + h * acc
-            code = rate(prm, t + Cc[st_i] * h, tmp, warm_try, K[st_i])
+            code = rate(prm, t + Cc[st_i] * h, tmp, warm_try, K[st_i], wk, awk)
             if code != kn.OK:
                 failed = code
                 break
@@ -188,8 +189,9 @@ class DOPRI5(Integrator):
 
     def start(self, eom, s0, t0=0.0):
         st = IntegratorState(t=t0, s=np.array(s0, dtype=float), warm=np.array(eom.F1, dtype=float))
+        st.wk = eom.workspaces()
         fa = np.empty_like(st.s)
-        code = rate(eom.params(), t0, st.s, st.warm, fa)
+        code = rate(eom.params(), t0, st.s, st.warm, fa, *st.wk)
         nd = eom.n_dof
         from ...modal import modal_analysis
 
@@ -205,7 +207,7 @@ class DOPRI5(Integrator):
         if state.extra["code"] != kn.OK:
             return 0, state.extra["code"]
         t, h, j, code = _dopri_advance(
-            prm, state.s, state.extra["fa"], state.warm, state.t, state.extra["h"], t_end,
+            prm, state.s, state.extra["fa"], state.warm, *state.wk, state.t, state.extra["h"], t_end,
             self.rtol, state.extra["atol"], self.dt_max, t_out, out, _A, _C, _E,
         )
         state.t = t

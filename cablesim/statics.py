@@ -221,9 +221,35 @@ def solve_segment_forces(
     else:
         F = np.asarray(F_start, dtype=float) / p
 
+    zero_tol = 1e-13 * max(1.0, np.abs(Qh).max())
+
+    def escape_kink(F):
+        # Near F = Q_k (segment k carrying almost nothing) Newton's quadratic model is useless.
+        # At the kink itself the steepest-descent direction is exactly -g_rest (the gradient of
+        # the other terms), a descent direction because the segment is not slack
+        # (|g_rest| > S_k): minimise Phi along that ray, a 1-D convex problem.
+        k = int(np.argmin(state(F)[0]))
+        diff = Qh[k] - Qh
+        Tm = np.hypot(diff[:, 0], diff[:, 1])
+        zero = Tm <= zero_tol
+        coef = np.where(zero, 0.0, S * (1.0 / np.where(zero, 1.0, Tm) + eps))
+        g_rest = coef @ diff - c
+        u = -g_rest / np.hypot(*g_rest)
+
+        def slope(a):
+            return state(Qh[k] + a * u)[3] @ u
+
+        hi = 1e-6
+        while slope(hi) < 0.0:
+            hi *= 4.0
+            if hi > 1e30:
+                raise ConvergenceError("could not bracket the tension of the cable")
+        return Qh[k] + brentq(slope, 0.0, hi, xtol=1e-15, rtol=1e-13) * u
+
     T, e, lk, g, phi = state(F)
     gnorm = float(np.hypot(*g))
     it = 0
+    escapes = 0
     while gnorm > tol:
         if it >= _MAX_NEWTON:
             raise ConvergenceError(
@@ -238,6 +264,10 @@ def solve_segment_forces(
         Hm = (wt[:, None, None] * tn[:, :, None] * tn[:, None, :]).sum(0) + (
             we[:, None, None] * e[:, :, None] * e[:, None, :]
         ).sum(0)
+        tr = np.trace(Hm)
+        if np.linalg.det(Hm) <= 1e-12 * tr * tr:
+            # All segments (nearly) parallel: the inextensible Hessian is singular there.
+            Hm = Hm + 1e-6 * tr * np.eye(2)
         d = -np.linalg.solve(Hm, g)
         slope0 = float(g @ d)
         step = 1.0
@@ -248,12 +278,20 @@ def solve_segment_forces(
             if phin <= phi + 1e-4 * step * slope0 or gnn < 0.5 * gnorm:
                 break
             step *= 0.5
-            if step < 1e-14:
-                raise ConvergenceError(
-                    "The static solver's line search stalled (closure error "
-                    f"{gnorm * ell:.3g} m); the loads may nearly slacken a segment "
-                    f"(smallest tension {T.min() * p:.3g} N)."
-                )
+            if step < 1e-10:
+                break
+        near_kink = Tn.min() < 1e-9 * max(1.0, np.hypot(*Fn))
+        if (step < 1e-10 or near_kink) and escapes < 50:
+            escapes += 1
+            Fn = escape_kink(Fn if near_kink else F)
+            Tn, en, lkn, gn, phin = state(Fn)
+            gnn = float(np.hypot(*gn))
+        elif step < 1e-10:
+            raise ConvergenceError(
+                "The static solver's line search stalled (closure error "
+                f"{gnorm * ell:.3g} m); the loads may nearly slacken a segment "
+                f"(smallest tension {T.min() * p:.3g} N)."
+            )
         F, T, e, lk, g, phi, gnorm = Fn, Tn, en, lkn, gn, phin, gnn
 
     Fk = (F - Qh) * p

@@ -12,7 +12,7 @@ import math
 import re
 from importlib import resources
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 import yaml
@@ -174,6 +174,89 @@ class FreeVibrationSpec(_Strict):
         return self
 
 
+class OmegaGrid(_Strict):
+    """An evenly spaced frequency grid, rad/s: ``num`` points from ``start`` to ``stop``."""
+
+    start: float = Field(gt=0, description="first frequency, rad/s")
+    stop: float = Field(gt=0, description="last frequency, rad/s")
+    num: int = Field(ge=1, le=1_000_000, description="number of points")
+
+    @model_validator(mode="after")
+    def _order(self):
+        if self.num > 1 and self.stop <= self.start:
+            raise ValueError("sweep.omega.stop must be greater than start")
+        return self
+
+
+class SweepSpec(_Strict):
+    """Frequency-domain response sweep (section ``sweep:``)."""
+
+    omega: Any = Field(description="grid {start, stop, num} or a list, rad/s")
+    duration: float = Field(default=3000.0, gt=0, description="cap on simulated seconds per point")
+    window: float = Field(default=200.0, gt=0, description="seconds at the end used when not steady")
+    direction: Literal["independent", "up", "down", "both"] = "independent"
+    channels: tuple[str, ...] | None = Field(default=None, description="DOF reported, e.g. [z2, z4]")
+    gamma: tuple[float, ...] | None = Field(default=None, description="scales of FL, one curve each")
+    tol: float = Field(default=1e-5, gt=0, lt=0.1, description="relative periodicity tolerance")
+    max_period: int = Field(default=6, ge=1, le=50, description="largest response period sought")
+    floquet: bool = Field(default=True, description="check the stability of periodic responses")
+
+    @field_validator("omega", mode="before")
+    @classmethod
+    def _grid(cls, v):
+        # One of two forms; parse it here so that an error speaks of the form the user wrote.
+        if isinstance(v, dict):
+            try:
+                return OmegaGrid.model_validate(v)
+            except ValidationError as err:
+                e = err.errors()[0]
+                where = ".".join(str(x) for x in e["loc"])
+                msg = _HINTS.get(e["type"], e["msg"].removeprefix("Value error, "))
+                raise ValueError(f"{where + ': ' if where else ''}{msg}") from None
+        if isinstance(v, (list, tuple)):
+            if len(v) == 0:
+                raise ValueError("the frequency list is empty; give at least one frequency")
+            out = []
+            for i, w in enumerate(v):
+                try:
+                    w = float(w)
+                except (TypeError, ValueError):
+                    raise ValueError(f"item {i + 1} ({w!r}) is not a number") from None
+                if not math.isfinite(w) or w <= 0:
+                    raise ValueError(f"frequencies must be positive (rad/s); item {i + 1} is {w}")
+                out.append(w)
+            return tuple(out)
+        raise ValueError("give a grid {start: .., stop: .., num: ..} or a list of frequencies in rad/s")
+
+    @field_validator("gamma")
+    @classmethod
+    def _gamma(cls, v):
+        if v is not None:
+            if len(v) == 0:
+                raise ValueError("gamma is empty; omit it or give at least one scale")
+            for i, g in enumerate(v):
+                if not math.isfinite(g) or g <= 0:
+                    raise ValueError(f"gamma values scale FL and must be positive; item {i + 1} is {g}")
+        return v
+
+    @model_validator(mode="after")
+    def _window(self):
+        if self.window > self.duration:
+            raise ValueError(
+                f"sweep.window ({self.window:g} s) is longer than sweep.duration ({self.duration:g} s); "
+                "the window is the final part of each point's run, so shorten it"
+            )
+        return self
+
+    def frequencies(self) -> np.ndarray:
+        """The frequency grid, rad/s (ascending for up/down sweeps)."""
+        if isinstance(self.omega, OmegaGrid):
+            g = self.omega
+            return np.linspace(g.start, g.stop, g.num)
+        w = np.array(self.omega, dtype=float)
+        return np.sort(w) if self.direction != "independent" else w
+
+
 class Case(_Strict):
     """One analysis case, as read from a YAML case file."""
 
@@ -185,6 +268,7 @@ class Case(_Strict):
     integrator: IntegratorSpec = IntegratorSpec()
     history: HistorySpec = HistorySpec()
     free_vibration: FreeVibrationSpec = FreeVibrationSpec()
+    sweep: SweepSpec | None = None
 
     @field_validator("name")
     @classmethod

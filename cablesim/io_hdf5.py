@@ -167,3 +167,53 @@ def write_history(path: str | Path, hist, case_text: str, command: str, extra_at
         m = f.create_group("modal")
         put(m, "omega", hist.modal_omega, "rad/s", "linear modal frequencies about the equilibrium")
     return Path(path)
+
+
+def write_sweep(path: str | Path, res, static, case_name: str, case_text: str, sweep) -> Path:
+    """Write a (possibly incomplete) :class:`~cablesim.analyses.sweep.SweepResult` atomically.
+
+    Layout: ``/sweep/omega``, optional ``/sweep/gamma`` (then every result dataset has a
+    leading gamma axis); for ``independent`` sweeps ``/sweep/{amplitude, halfrange, period,
+    steady, response_frequency, t_end, floquet, done}``, for up/down sweeps the same under
+    ``/sweep/up/`` and ``/sweep/down/``; ``/modal/omega``. Points not yet computed have
+    ``done = False`` and NaN in the float datasets (the only NaN cablesim ever writes).
+    """
+    units = {
+        "amplitude": ("m", "peak |z| from the static equilibrium"),
+        "halfrange": ("m", "half the peak-to-peak range"),
+        "response_frequency": ("rad/s", "dominant response frequency"),
+        "period": ("forcing periods", "response period p (0: no periodic response found)"),
+        "steady": ("1", "whether a stable periodic response was found before the cap"),
+        "t_end": ("s", "simulated time used"),
+        "floquet": ("1", "largest Floquet multiplier modulus of the last periodic orbit checked"),
+        "done": ("1", "whether the point has been computed"),
+        "wall": ("s", "wall-clock time of the point"),
+    }
+    with atomic_h5(path) as f:
+        stamp(f, case_text, "sweep", analysis=static.analysis)
+        g = f.create_group("sweep")
+        put(g, "omega", res.omega, "rad/s", "forcing frequencies")
+        if res.gamma is not None:
+            put(g, "gamma", res.gamma, "1", "scale of the harmonic loads FL")
+        g.attrs["direction"] = res.direction
+        g.attrs["channels"] = np.array(res.channels, dtype="S")
+        g.attrs["case_name"] = case_name
+        g.attrs["cap"] = sweep.duration
+        g.attrs["window"] = sweep.window
+        g.attrs["tol"] = sweep.tol
+        g.attrs["max_period"] = sweep.max_period
+        g.attrs["floquet_check"] = sweep.floquet
+        g.attrs["complete"] = res.complete
+        g.attrs["points_done"] = res.n_done
+        g.attrs["points_total"] = res.n_total
+        dirs = sorted({c.direction for c in res.curves}, key=["independent", "up", "down"].index)
+        for d in dirs:
+            target = g if d == "independent" else g.create_group(d)
+            cs = [k for k, c in enumerate(res.curves) if c.direction == d]
+            for name, (u, desc) in units.items():
+                arrs = [res.data[k][name] for k in cs]
+                arr = np.stack(arrs) if res.gamma is not None else arrs[0]
+                put(target, name, arr, u, desc, allow_nan=True)
+        m = f.create_group("modal")
+        put(m, "omega", static.modes.omega, "rad/s", "linear modal frequencies about the equilibrium")
+    return Path(path)

@@ -1,0 +1,378 @@
+"""Steady-state response at one forcing frequency.
+
+The state is sampled stroboscopically, once per forcing period ``T = 2 pi / w``, at the phase
+where the forcing is ``F0`` (``sin w t = 0``). The response is declared steady with period
+``p`` forcing periods (``p = 1`` harmonic, ``p = 2`` the 1/2 subharmonic, ...) when
+
+1. **periodicity**: the stroboscopic samples ``q_k = (z, y'/w)`` repeat with period ``p``,
+   ``max |q_k - q_{k-p}| <= tol * scale`` for each of the last ``hold`` samples (``scale`` is
+   the largest ``|q|`` over those samples), for the smallest such ``p <= max_period``; and
+2. **stability**: the periodic orbit so found is stable: every Floquet multiplier (eigenvalue
+   of the monodromy matrix of the stroboscopic map over ``p`` periods, by finite differences on
+   the reduced state) has modulus at most ``1 + 1e-3``.
+
+The second test is what keeps an early stop from hiding a late jump: a small-amplitude response
+that is itself an *unstable* periodic orbit repeats to many digits for hundreds of seconds
+before it jumps (the paper's Figs. 3b and 8c). Such a point is integrated on, and reported as
+not steady if the cap is reached first.
+
+When steady, ``p`` more periods are sampled finely for the peak ``|z_i|`` from the equilibrium,
+the half peak-to-peak range and the dominant response frequency. When the cap is reached first,
+the same quantities come from the last ``window`` seconds and the point is flagged not steady.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import kernels as kn
+from .equations import EquationsOfMotion
+from .integrators import DOPRI5, Integrator
+
+#: Floquet multipliers above this modulus mark an unstable periodic orbit.
+UNSTABLE_MULTIPLIER = 1.0 + 1e-3
+
+
+@dataclass(frozen=True)
+class SteadyCriterion:
+    """How a sweep point decides that the response is steady.
+
+    Attributes
+    ----------
+    cap : float
+        Most simulated seconds per point.
+    window : float
+        Seconds at the end used for the amplitude when no steady state is found.
+    tol : float
+        Relative periodicity tolerance.
+    hold : int
+        Consecutive stroboscopic samples the periodicity must hold for.
+    max_period : int
+        Largest response period looked for, in forcing periods.
+    floquet : bool
+        Check the stability of the periodic orbit found (recommended; see module docstring).
+    samples_per_period : int
+        Fine samples per forcing period for amplitudes and spectra.
+    """
+
+    cap: float = 3000.0
+    window: float = 200.0
+    tol: float = 1e-5
+    hold: int = 12
+    max_period: int = 6
+    floquet: bool = True
+    samples_per_period: int = 128
+
+
+@dataclass
+class PointResult:
+    """Steady (or last-window) response at one forcing frequency.
+
+    Attributes
+    ----------
+    omega : float
+        Forcing frequency, rad/s.
+    amplitude : ndarray (C,)
+        Peak ``|z_i|`` from the equilibrium, m.
+    halfrange : ndarray (C,)
+        Half the peak-to-peak range, m.
+    period : int
+        Response period in forcing periods (0: no periodic response found).
+    steady : bool
+    response_frequency : ndarray (C,)
+        Dominant frequency of each channel's response, rad/s.
+    t_end : float
+        Simulated time used, s.
+    floquet : float
+        Largest Floquet multiplier modulus of the last orbit checked (NaN if none).
+    final_state : ndarray
+        ``(z, y', y'')`` at the end, at forcing phase 0 (start of a continuation sweep).
+    status : str
+        ``"steady"``, ``"cap reached"`` or why the run stopped.
+    """
+
+    omega: float
+    amplitude: np.ndarray
+    halfrange: np.ndarray
+    period: int
+    steady: bool
+    response_frequency: np.ndarray
+    t_end: float
+    floquet: float
+    final_state: np.ndarray
+    status: str
+
+
+def _refined_extreme(x: np.ndarray, sign: float) -> float:
+    """Largest value of ``sign * x`` refined by a parabola through the best sample."""
+    y = sign * x
+    i = int(np.argmax(y))
+    if 0 < i < y.size - 1:
+        a, b, c = y[i - 1], y[i], y[i + 1]
+        den = a - 2.0 * b + c
+        if den < 0:
+            return sign * (b - 0.25 * (a - c) ** 2 / den)
+    return sign * y[i]
+
+
+def _amplitudes(z: np.ndarray, periodic: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Peak |z| and half range per channel (columns), refined between samples."""
+    if periodic:  # wrap around so an extreme at the record's end is refined too
+        z = np.concatenate([z[-2:], z, z[:2]])
+    zmax = np.array([_refined_extreme(z[:, c], 1.0) for c in range(z.shape[1])])
+    zmin = np.array([_refined_extreme(z[:, c], -1.0) for c in range(z.shape[1])])
+    return np.maximum(np.abs(zmax), np.abs(zmin)), 0.5 * (zmax - zmin)
+
+
+def _dominant_frequency(z: np.ndarray, dt: float) -> np.ndarray:
+    """Dominant nonzero frequency (rad/s) of each column of a uniformly sampled record."""
+    zc = z - z.mean(axis=0)
+    spec = np.abs(np.fft.rfft(zc, axis=0))
+    spec[0] = 0.0
+    k = np.argmax(spec, axis=0)
+    return 2.0 * np.pi * k / (z.shape[0] * dt)
+
+
+def monodromy_multipliers(
+    eom: EquationsOfMotion, integrator: Integrator, s_star: np.ndarray, p: int
+) -> np.ndarray:
+    """Floquet multipliers of the periodic orbit through ``s_star`` (forcing phase 0).
+
+    The monodromy matrix of the map over ``p`` forcing periods is built by finite differences
+    on the reduced state: ``(z, y')`` for the exact analysis (``y''`` follows from eq. 15), and
+    ``(y', y'')`` for the approximate one (``z`` is a neutral direction there: the configuration
+    follows from P).
+
+    Returns
+    -------
+    ndarray
+        Multipliers sorted by decreasing modulus.
+    """
+    nd = eom.n_dof
+    T = 2.0 * np.pi / eom.omega
+    prm = eom.params()
+    exact = eom.analysis == "exact"
+    lo = 0 if exact else nd  # first component of the reduced state
+    idx = np.arange(lo, lo + 2 * nd)
+    scale = max(np.abs(s_star[idx]).max(), 1e-9 * eom.cable.chord_length)
+
+    def flow(s0: np.ndarray) -> np.ndarray:
+        st = integrator.start(eom, s0)
+        out = np.empty((1, s0.size))
+        n, code = integrator.advance(prm, st, p * T, np.array([p * T]), out)
+        if code != kn.OK or n != 1:
+            raise FloatingPointError("flow failed")
+        return out[0]
+
+    def consistent(s: np.ndarray) -> np.ndarray:
+        if exact:  # y'' from eq. 15 at phase 0, where F = F0
+            return eom.initial_state(z0=s[:nd], v0=s[nd : 2 * nd])
+        return s
+
+    base = flow(consistent(s_star.copy()))
+    J = np.empty((2 * nd, 2 * nd))
+    for j, comp in enumerate(idx):
+        d = 1e-6 * scale
+        s = s_star.copy()
+        s[comp] += d
+        J[:, j] = (flow(consistent(s))[idx] - base[idx]) / d
+    mu = np.linalg.eigvals(J)
+    return mu[np.argsort(-np.abs(mu))]
+
+
+def _floquet_integrator(integrator: Integrator) -> Integrator:
+    # An adaptive scheme chooses different steps for nearby starts; tighten it so that the
+    # finite differences see the dynamics, not the step-size controller.
+    if isinstance(integrator, DOPRI5):
+        return DOPRI5(rtol=1e-11, atol=integrator.atol * 1e-3, dt_max=integrator.dt_max)
+    return integrator
+
+
+def steady_response(
+    eom: EquationsOfMotion,
+    integrator: Integrator,
+    channels: np.ndarray,
+    criterion: SteadyCriterion,
+    s0: np.ndarray | None = None,
+) -> PointResult:
+    """Integrate from ``s0`` until the response is steady (see module docstring) or the cap.
+
+    Parameters
+    ----------
+    eom : EquationsOfMotion
+        With ``omega > 0``.
+    integrator : Integrator
+    channels : ndarray of int
+        0-based DOF indices to report.
+    criterion : SteadyCriterion
+    s0 : ndarray, optional
+        Initial ``(z, y', y'')`` at forcing phase 0 (default: the equilibrium at rest).
+
+    Returns
+    -------
+    PointResult
+    """
+    nd = eom.n_dof
+    w = eom.omega
+    T = 2.0 * np.pi / w
+    crit = criterion
+    spp = crit.samples_per_period
+    prm = eom.params()
+    s0 = eom.initial_state() if s0 is None else np.array(s0, dtype=float)
+    state = integrator.start(eom, s0)
+    n_cap = max(int(np.floor(crit.cap / T + 1e-9)), 1)
+    k_window = max(0, n_cap - int(np.ceil(crit.window / T)))
+    strobes = np.empty((n_cap + 1, 2 * nd))
+    strobes[0, :nd] = s0[:nd]
+    strobes[0, nd:] = s0[nd : 2 * nd] / w
+    fine: list[np.ndarray] = []
+    k = 0
+    chunk = 20
+    floquet = np.nan
+    recheck_after = 0
+    hold = max(crit.hold, 3)
+    ftol = crit.tol
+    f_integ = _floquet_integrator(integrator) if crit.floquet else None
+
+    while k < n_cap:
+        kk = min(k + chunk, n_cap)
+        in_window = kk > k_window
+        if in_window:
+            k0 = max(k, k_window)
+            if k0 > k:  # reach the window first with strobes only
+                kk = k0
+                in_window = False
+        if in_window:
+            t_out = T * (k + np.arange(1, (kk - k) * spp + 1) / spp)
+        else:
+            t_out = T * np.arange(k + 1, kk + 1)
+        out = np.empty((t_out.size, 3 * nd))
+        n, code = integrator.advance(prm, state, t_out[-1], t_out, out)
+        if code != kn.OK:
+            return _failed(eom, channels, w, out[:n], t_out[:n], state, code, fine, spp, T)
+        if in_window:
+            fine.append(out)
+            sel = out[spp - 1 :: spp]
+        else:
+            sel = out
+        strobes[k + 1 : kk + 1, :nd] = sel[:, :nd]
+        strobes[k + 1 : kk + 1, nd:] = sel[:, nd : 2 * nd] / w
+        k = kk
+        chunk = min(chunk * 2, 200)
+
+        p = _periodic(strobes[: k + 1], hold, crit.max_period, ftol, 1e-9 * eom.cable.chord_length)
+        if p == 0 or k < recheck_after:
+            continue
+        s_star = state.s.copy()
+        if crit.floquet and 2 * nd <= 80:
+            try:
+                mu = monodromy_multipliers(eom, f_integ, s_star, p)
+                floquet = float(np.abs(mu[0]))
+            except FloatingPointError:
+                floquet = np.inf
+            if floquet > UNSTABLE_MULTIPLIER:
+                # An unstable orbit: keep integrating; look again after it has had time to leave.
+                recheck_after = k + max(50, 10 * p)
+                continue
+        return _finish_steady(eom, integrator, prm, state, channels, p, k, T, spp, floquet)
+
+    # Cap reached: amplitudes over the last window.
+    rec = np.concatenate(fine) if fine else state.s[None, :]
+    z = rec[:, :nd][:, channels]
+    amp, half = _amplitudes(z, periodic=False)
+    freq = _dominant_frequency(z, T / spp) if z.shape[0] > 8 else np.full(channels.size, np.nan)
+    return PointResult(
+        omega=w,
+        amplitude=amp,
+        halfrange=half,
+        period=0,
+        steady=False,
+        response_frequency=freq,
+        t_end=state.t,
+        floquet=floquet,
+        final_state=state.s.copy(),
+        status="cap reached",
+    )
+
+
+def _periodic(strobes: np.ndarray, hold: int, max_period: int, tol: float, floor: float) -> int:
+    """Smallest p whose periodicity holds over the last ``hold`` strobes (0 if none).
+
+    A period p > 1 also needs the differences over every shorter lag q < p to persist over a
+    long baseline (five hold windows) rather than decay: a slowly decaying transient whose phase
+    advance nearly closes after p periods (a mode near w/2, say) would otherwise pass for a 1/p
+    subharmonic.
+    """
+    k = strobes.shape[0] - 1
+    for p in range(1, max_period + 1):
+        h = max(hold, 3 * p)
+        if k < h + p:
+            return 0
+        scale = max(np.abs(strobes[k - h + 1 - p : k + 1]).max(), floor)
+        if _lag_diff(strobes, k, h, p).max() > tol * scale:
+            continue
+        if p == 1:
+            return 1
+        if k < 5 * h + p:
+            return 0  # too early to tell a subharmonic from a slow transient
+        if all(_persists(strobes, k, h, q, tol * scale) for q in range(1, p)):
+            return p
+    return 0
+
+
+def _lag_diff(strobes: np.ndarray, k: int, h: int, q: int) -> np.ndarray:
+    """``max_i |q_j - q_{j-q}|`` for the ``h`` strobes j ending at k."""
+    return np.abs(strobes[k - h + 1 : k + 1] - strobes[k - h + 1 - q : k + 1 - q]).max(axis=1)
+
+
+def _persists(strobes: np.ndarray, k: int, h: int, q: int, tol_abs: float) -> bool:
+    """Whether the lag-q difference is a lasting feature: well above tolerance, and as large
+    now as four hold windows ago."""
+    now = _lag_diff(strobes, k, h, q).mean()
+    before = _lag_diff(strobes, k - 4 * h, h, q).mean()
+    return now > 10.0 * tol_abs and now >= 0.9 * before
+
+
+def _finish_steady(eom, integrator, prm, state, channels, p, k, T, spp, floquet) -> PointResult:
+    nd = eom.n_dof
+    t_out = T * (k + np.arange(1, p * spp + 1) / spp)
+    out = np.empty((t_out.size, 3 * nd))
+    n, code = integrator.advance(prm, state, t_out[-1], t_out, out)
+    if code != kn.OK:
+        return _failed(eom, channels, eom.omega, out[:n], t_out[:n], state, code, [], spp, T)
+    z = out[:, :nd][:, channels]
+    amp, half = _amplitudes(z, periodic=True)
+    return PointResult(
+        omega=eom.omega,
+        amplitude=amp,
+        halfrange=half,
+        period=p,
+        steady=True,
+        response_frequency=_dominant_frequency(z, T / spp),
+        t_end=float(t_out[-1]),
+        floquet=floquet,
+        final_state=out[-1].copy(),
+        status="steady",
+    )
+
+
+def _failed(eom, channels, w, out, t_out, state, code, fine, spp, T) -> PointResult:
+    nd = eom.n_dof
+    pieces = [f for f in fine] + ([out] if out.shape[0] else [])
+    rec = np.concatenate(pieces) if pieces else state.s[None, :]
+    z = rec[:, :nd][:, channels]
+    amp, half = _amplitudes(z, periodic=False)
+    return PointResult(
+        omega=w,
+        amplitude=amp,
+        halfrange=half,
+        period=0,
+        steady=False,
+        response_frequency=np.full(channels.size, np.nan),
+        t_end=state.t,
+        floquet=np.nan,
+        final_state=state.s.copy(),
+        status=f"stopped at t = {state.t:.6g} s: {kn.STATUS_TEXT.get(code, 'failure')}",
+    )

@@ -18,7 +18,7 @@ $(STAMP): pyproject.toml
 install: $(STAMP)
 
 run: $(STAMP)
-	$(CLI) static configs/paper-example.yaml
+	$(CLI) sweep configs/paper-example.yaml
 
 test: $(STAMP)
 	$(PY) -m pytest -q

@@ -231,6 +231,68 @@ def free_vibration(
     _finish_history(case, hist, integ, out, text, "free-vibration", plot, _channels(channels, case.free_vibration.channels), time.perf_counter() - t0)
 
 
+class Backend(str, Enum):
+    loky = "loky"
+    dask = "dask"
+
+
+@app.command()
+@user_errors
+def sweep(
+    case_file: Optional[Path] = CASE_ARG,
+    jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel worker processes (-1: all cores)."),
+    resume: bool = typer.Option(False, "--resume", help="Finish an interrupted sweep (same case, same -o)."),
+    output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file [default: runs/<name>/sweep.h5]"),
+    analysis: Optional[Analysis] = typer.Option(None, "--analysis", help="Override the case file's analysis."),
+    integrator: Optional[IntegratorName] = typer.Option(None, "--integrator", help="Time-integration scheme."),
+    backend: Backend = typer.Option(Backend.loky, "--backend", help="Run points locally (loky) or on a Dask cluster."),
+    scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Dask scheduler address, with --backend dask."),
+    plot: bool = typer.Option(True, "--plot/--no-plot", help="Draw the frequency-response plot."),
+):
+    """Frequency-domain response: steady amplitude of each channel against forcing frequency."""
+    import time
+
+    from .analyses.sweep import run_sweep
+    from .case import load_case
+    from .report import sweep_summary
+
+    case, text = load_case(case_file)
+    if jobs == 0 or jobs < -1:
+        raise CablesimError("--jobs must be a positive number of processes, or -1 for all cores.")
+    out = output if output is not None else Path("runs") / case.name / "sweep.h5"
+    bar = typer.progressbar(length=1, label="sweeping", file=sys.stderr, show_pos=True, show_eta=True)
+    seen = {"n": 0}
+
+    def update(done: int, total: int):
+        bar.length = total
+        bar.update(done - seen["n"])
+        seen["n"] = done
+
+    t0 = time.perf_counter()
+    try:
+        with bar:
+            res = run_sweep(
+                case, text, out, analysis.value if analysis else None, integrator.value if integrator else None,
+                n_jobs=jobs, resume=resume, backend=None if backend == Backend.loky else "dask",
+                scheduler=scheduler, progress=update,
+            )
+    except KeyboardInterrupt:
+        where = f" {case_file}" if case_file else ""
+        _say_error(
+            f"interrupted; every completed point is kept in {out} and its journal. Finish the sweep "
+            f"with: cablesim sweep{where} -o {out} --resume"
+        )
+        raise typer.Exit(130)
+    typer.echo(sweep_summary(case, res, time.perf_counter() - t0))
+    msg = f"\nWrote {out}"
+    if plot:
+        from .plot_sweep import plot_sweep
+
+        png = plot_sweep(out)
+        msg += f" and {png}"
+    typer.echo(msg)
+
+
 def main():
     """Entry point of the ``cablesim`` console script."""
     app()

@@ -123,3 +123,32 @@ def history_summary(case, hist, integ, wall: float) -> str:
     )
     lines.append(f"largest drift of eq. 15 (relative to |F0|): {np.max(hist.residual):.2e}")
     return "\n".join(lines)
+
+
+def sweep_summary(case, res, wall: float) -> str:
+    """Summary of a sweep: points, steady fraction, resonance peaks per curve and channel."""
+    lines = [
+        f"cablesim {__version__}: sweep of '{case.name}', {res.omega.size} frequencies from "
+        f"{res.omega.min():.4g} to {res.omega.max():.4g} rad/s, {len(res.curves)} curve(s), "
+        f"{res.n_done} of {res.n_total} points in {wall:.3g} s wall time",
+    ]
+    rows = []
+    for k, c in enumerate(res.curves):
+        d = res.data[k]
+        label = c.direction + ("" if res.gamma is None else f", gamma = {res.gamma[c.gamma_index]:g}")
+        done = d["done"]
+        if not done.any():
+            continue
+        for j, name in enumerate(res.channels):
+            a = np.where(done, d["amplitude"][:, j], -np.inf)
+            i = int(np.argmax(a))
+            rows.append([label, name, f"{res.omega[i]:.4g}", _g(d["amplitude"][i, j], 5)])
+        steady = d["steady"][done]
+        sub = d["period"][done] >= 2
+        lines.append(
+            f"  {label}: {steady.sum()} of {done.sum()} points steady"
+            + (f", {sub.sum()} subharmonic (period >= 2)" if sub.any() else "")
+            + (f", {(~steady).sum()} reached the cap" if (~steady).any() else "")
+        )
+    lines.append(_table(["curve", "channel", "peak at (rad/s)", "peak amplitude (m)"], rows))
+    return "\n".join(lines)

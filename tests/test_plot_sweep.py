@@ -1,0 +1,335 @@
+"""Tests of the frequency-response plot of a sweep file (synthetic HDF5 files)."""
+
+from __future__ import annotations
+
+import h5py
+import numpy as np
+import pytest
+
+import cablesim.plot_sweep as ps
+from cablesim.errors import CablesimError
+from cablesim.plot_sweep import plot_sweep, sweep_summary_rows
+
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+MODAL = [2.524, 4.1, 7.9, 30.0]  # 30 rad/s lies outside every sweep below
+W0, ZETA = 2.524, 0.03
+
+
+def resonance(omega, w0=W0, zeta=ZETA, scale=0.01):
+    """Amplitude of a linear oscillator; its peak lies at w0 sqrt(1 - 2 zeta^2)."""
+    return scale * w0**2 / np.sqrt((w0**2 - omega**2) ** 2 + (2 * zeta * w0 * omega) ** 2)
+
+
+def _results(omega, amp, *, steady=None, period=None, done=None):
+    """Result datasets of one curve; amp has shape ([G,] P, C)."""
+    amp = np.array(amp, dtype=float)
+    lead = amp.shape[:-1]
+    done = np.ones(lead, bool) if done is None else np.asarray(done, bool)
+    amp[~done] = np.nan
+    hr = 0.9 * amp
+    rf = np.where(done, 1.0, np.nan)[..., None] * omega[:, None] * np.ones(amp.shape)
+    return dict(
+        amplitude=amp,
+        halfrange=hr,
+        response_frequency=rf,
+        period=np.where(done, 1, 0) if period is None else np.asarray(period),
+        steady=done.copy() if steady is None else np.asarray(steady, bool),
+        done=done,
+    )
+
+
+def write_sweep(path, omega, groups, *, direction="independent", channels=("z2", "z4"), gamma=None,
+                case_name="demo", analysis="exact", channel_dtype=None):
+    """Write a sweep file; ``groups`` maps None (independent) or "up"/"down" to result dicts."""
+    with h5py.File(path, "w") as f:
+        f.attrs["case_yaml"] = "name: demo\n"
+        f.attrs["cablesim_version"] = "0.1.0"
+        f.attrs["command"] = "sweep"
+        f.attrs["analysis"] = analysis
+        g = f.create_group("sweep")
+        g.attrs["direction"] = direction
+        g.attrs["channels"] = np.array(channels, dtype=channel_dtype or h5py.string_dtype())
+        g.attrs["case_name"] = case_name
+        g.attrs["integrator"] = "newmark"
+        g.attrs["cap"] = 600.0
+        g.attrs["window"] = 60.0
+        g.create_dataset("omega", data=omega)
+        if gamma is not None:
+            g.create_dataset("gamma", data=np.asarray(gamma, float))
+        for sub, data in groups.items():
+            where = g if sub is None else g.create_group(sub)
+            for k, v in data.items():
+                where.create_dataset(k, data=v)
+        f.create_group("modal").create_dataset("omega", data=np.asarray(MODAL))
+    return path
+
+
+def two_channel(omega, scale=0.01):
+    return np.stack([resonance(omega, scale=scale), 0.5 * resonance(omega, w0=4.1, scale=scale)], axis=-1)
+
+
+@pytest.fixture
+def figures(monkeypatch):
+    """Record what every figure holds just before it is saved."""
+    seen = []
+    real = ps.save_atomic
+
+    def spy(fig, path, *a, **k):
+        axes = [ax for ax in fig.axes if ax.get_visible()]
+        legend_texts = [t.get_text() for ax in axes if ax.get_legend() for t in ax.get_legend().get_texts()]
+        texts = [t.get_text() for ax in axes for t in ax.texts] + [t.get_text() for t in fig.texts]
+        seen.append(dict(
+            n_axes=len(axes),
+            ylabels=[ax.get_ylabel() for ax in axes],
+            legend=legend_texts,
+            texts=texts,
+            title=fig._suptitle.get_text() if fig._suptitle else "",
+            n_lines=[len(ax.lines) for ax in axes],
+        ))
+        return real(fig, path, *a, **k)
+
+    monkeypatch.setattr(ps, "save_atomic", spy)
+    return seen
+
+
+def _is_png(path):
+    return path.is_file() and path.stat().st_size > 1000 and path.read_bytes()[:8] == PNG_MAGIC
+
+
+# --------------------------------------------------------------------------------------------
+# Files of each kind
+# --------------------------------------------------------------------------------------------
+
+
+def test_independent_without_gamma_default_path(tmp_path, figures):
+    omega = np.linspace(1.0, 6.0, 121)
+    h5 = write_sweep(tmp_path / "fdr.h5", omega, {None: _results(omega, two_channel(omega))})
+    out = plot_sweep(h5)
+    assert out == tmp_path / "fdr.png"
+    assert _is_png(out)
+    (fig,) = figures
+    assert fig["n_axes"] == 2
+    assert fig["ylabels"][0].startswith("z2 peak |z| (m)")
+    assert "vertical" in fig["ylabels"][0]
+    assert fig["title"].splitlines()[0] == "demo: frequency response (exact analysis)"
+    sub = fig["title"].splitlines()[1]
+    assert "z2, z4" in sub and "independent" in sub and "cap 600 s" in sub
+    assert "independent sweep" in fig["legend"]
+    # Modal frequencies in range are named; 30 rad/s is out of range.
+    assert {"w1 = 2.524", "w2 = 4.1"} <= set(fig["texts"])
+    assert not any(t.startswith("w4") for t in fig["texts"])
+    assert not any("incomplete" in t for t in fig["texts"])
+    assert "not steady (cap reached)" not in fig["legend"]  # nothing to mark
+
+
+def test_independent_with_gamma_and_halfrange(tmp_path, figures):
+    omega = np.linspace(1.0, 6.0, 60)
+    gamma = [0.5, 1.0, 2.0]
+    amp = np.stack([two_channel(omega, scale=0.01 * g) for g in gamma])  # (3, P, 2)
+    h5 = write_sweep(tmp_path / "g.h5", omega, {None: _results(omega, amp)}, gamma=gamma)
+    out = plot_sweep(h5, tmp_path / "sub" / "g-half.png", quantity="halfrange", title="My title")
+    assert out == tmp_path / "sub" / "g-half.png" and _is_png(out)
+    (fig,) = figures
+    assert [t for t in fig["legend"] if t.startswith("gamma")] == ["gamma = 0.5", "gamma = 1", "gamma = 2"]
+    assert fig["title"].splitlines()[0] == "My title"
+    assert "3 gamma values" in fig["title"]
+    assert "half range" in fig["ylabels"][0]
+    rows = sweep_summary_rows(h5)
+    assert len(rows) == 3 * 2
+    assert [r["gamma"] for r in rows] == [0.5, 0.5, 1.0, 1.0, 2.0, 2.0]
+    assert all(r["direction"] == "independent" for r in rows)
+    # The amplitude scales with gamma, the peak frequency does not.
+    z2 = [r for r in rows if r["channel"] == "z2"]
+    assert [r["value"] for r in z2] == pytest.approx([0.5 * z2[1]["value"], z2[1]["value"], 2 * z2[1]["value"]])
+    assert len({r["omega"] for r in z2}) == 1
+
+
+def test_both_directions_with_jump(tmp_path, figures):
+    """Hardening-like hysteresis: the up sweep stays on the large branch up to 3.2 rad/s, the
+    down sweep jumps up only at 2.8 rad/s; non-steady points at the jumps, a 1/2 subharmonic
+    window on the up sweep."""
+    omega = np.linspace(1.5, 5.0, 71)
+    base = 0.2 * two_channel(omega)
+    big = 0.08 * np.exp(-(((omega - 3.0) / 0.6) ** 2))[:, None] * np.array([1.0, 0.6])
+    up_amp = base + np.where(omega[:, None] <= 3.2, big, 0.0)
+    down_amp = base + np.where(omega[:, None] <= 2.8, big, 0.0)
+    up_period = np.where((omega > 2.0) & (omega < 2.3), 2, 1)
+    up_steady = np.abs(omega - 3.25) > 0.04
+    down_steady = np.abs(omega - 2.75) > 0.04
+    groups = {
+        "up": _results(omega, up_amp, steady=up_steady, period=up_period),
+        "down": _results(omega, down_amp, steady=down_steady),
+    }
+    h5 = write_sweep(tmp_path / "both.h5", omega, groups, direction="both", case_name="jumpy")
+    out = plot_sweep(h5, tmp_path / "both.png")
+    assert _is_png(out)
+    (fig,) = figures
+    legend = fig["legend"]
+    for label in ("up sweep", "down sweep", "not steady (cap reached)", "linear modal frequencies"):
+        assert label in legend
+    assert any(t.startswith("subharmonic response (period p >= 2)") for t in legend)
+    assert "1/2" in fig["texts"]
+    assert "up and down sweeps" in fig["title"]
+    rows = sweep_summary_rows(h5)
+    assert [(r["direction"], r["channel"]) for r in rows] == [("up", "z2"), ("up", "z4"), ("down", "z2"), ("down", "z4")]
+    up_z2, down_z2 = rows[0], rows[2]
+    # Where the branches differ, the up sweep is higher.
+    jump = (omega > 2.8) & (omega <= 3.2)
+    assert np.all(up_amp[jump, 0] > down_amp[jump, 0] + 0.01)
+    assert up_z2["value"] >= down_z2["value"]
+    assert up_z2["steady"] and up_z2["period"] == 1
+
+
+def test_incomplete_sweep_note_and_summary(tmp_path, figures):
+    omega = np.linspace(1.0, 6.0, 50)
+    done = np.ones(50, bool)
+    done[:20] = False  # a down sweep interrupted after 30 points (it starts at the top)
+    groups = {"down": _results(omega, two_channel(omega), done=done)}
+    h5 = write_sweep(tmp_path / "part.h5", omega, groups, direction="down")
+    assert _is_png(plot_sweep(h5))
+    (fig,) = figures
+    assert "incomplete sweep: 30 of 50 points" in fig["texts"]
+    assert "down sweep" in fig["legend"]
+    rows = sweep_summary_rows(h5)
+    assert all(r["points_done"] == 30 and r["points"] == 50 for r in rows)
+    assert all(np.isfinite(r["value"]) for r in rows)
+    # The z2 resonance (2.524 rad/s) lies below the computed points: its peak is the lowest
+    # computed point; the z4 resonance (4.1 rad/s) was reached.
+    assert rows[0]["omega"] == pytest.approx(omega[20])
+    assert abs(rows[1]["omega"] - 4.1) < 0.06
+
+
+def test_incomplete_with_several_curves_lists_the_short_ones(tmp_path, figures):
+    omega = np.linspace(1.0, 6.0, 20)
+    done = np.ones((2, 20), bool)
+    done[1, 12:] = False
+    amp = np.stack([two_channel(omega), two_channel(omega)])
+    h5 = write_sweep(tmp_path / "p2.h5", omega, {None: _results(omega, amp, done=done)}, gamma=[1.0, 2.0])
+    plot_sweep(h5)
+    note = [t for t in figures[0]["texts"] if t.startswith("incomplete")]
+    assert note == ["incomplete sweep: 32 of 40 points (gamma = 2, independent: 12 of 20)"]
+
+
+def test_nothing_computed_still_plots(tmp_path, figures):
+    omega = np.linspace(1.0, 6.0, 10)
+    h5 = write_sweep(tmp_path / "none.h5", omega, {None: _results(omega, two_channel(omega), done=np.zeros(10, bool))})
+    assert _is_png(plot_sweep(h5))
+    assert "incomplete sweep: 0 of 10 points" in figures[0]["texts"]
+    rows = sweep_summary_rows(h5)
+    assert all(np.isnan(r["omega"]) and r["points_done"] == 0 for r in rows)
+
+
+# --------------------------------------------------------------------------------------------
+# Channels and errors
+# --------------------------------------------------------------------------------------------
+
+
+@pytest.fixture
+def simple(tmp_path):
+    omega = np.linspace(1.0, 6.0, 30)
+    return write_sweep(tmp_path / "s.h5", omega, {None: _results(omega, two_channel(omega))})
+
+
+@pytest.mark.parametrize("chosen", ["z4", ("Z4", 4, " z4")])
+def test_channel_selection_by_name(simple, tmp_path, figures, chosen):
+    out = plot_sweep(simple, tmp_path / "z4.png", channels=chosen)
+    assert _is_png(out)
+    (fig,) = figures
+    assert fig["n_axes"] == 1
+    assert fig["ylabels"][0].startswith("z4 ")
+    assert "channels z4," in fig["title"]
+
+
+def test_fixed_length_byte_channel_names(tmp_path, figures):
+    omega = np.linspace(1.0, 6.0, 20)
+    h5 = write_sweep(tmp_path / "b.h5", omega, {None: _results(omega, two_channel(omega))}, channel_dtype="S")
+    plot_sweep(h5, channels="z4")
+    assert figures[0]["ylabels"][0].startswith("z4 ")
+    assert [r["channel"] for r in sweep_summary_rows(h5)] == ["z2", "z4"]
+
+
+def test_channel_order_follows_the_request(simple, figures):
+    plot_sweep(simple, channels=["z4", "z2"])
+    assert [y.split()[0] for y in figures[0]["ylabels"]] == ["z4", "z2"]
+
+
+def test_unknown_channel_is_a_clear_error(simple, tmp_path):
+    with pytest.raises(CablesimError) as err:
+        plot_sweep(simple, channels=["z2", "z3"])
+    msg = str(err.value)
+    assert "'z3'" in msg and "z2, z4" in msg and "s.h5" in msg
+    with pytest.raises(CablesimError, match="malformed"):
+        plot_sweep(simple, channels=["node2"])
+    with pytest.raises(CablesimError, match="No channels"):
+        plot_sweep(simple, channels=[])
+    assert not (tmp_path / "s.png").exists()
+
+
+def test_unknown_quantity(simple):
+    with pytest.raises(CablesimError, match="amplitude, halfrange"):
+        plot_sweep(simple, quantity="velocity")
+    with pytest.raises(CablesimError, match="quantity"):
+        sweep_summary_rows(simple, quantity="phase")
+
+
+def test_not_a_sweep_file_names_the_file(tmp_path):
+    path = tmp_path / "history.h5"
+    with h5py.File(path, "w") as f:
+        f.attrs["command"] = "history"
+        f.create_group("history")
+    with pytest.raises(CablesimError) as err:
+        plot_sweep(path)
+    assert str(path) in str(err.value) and "no /sweep group" in str(err.value) and "'history'" in str(err.value)
+    with pytest.raises(CablesimError, match="no /sweep group"):
+        sweep_summary_rows(path)
+
+
+def test_missing_and_non_hdf5_files(tmp_path):
+    with pytest.raises(CablesimError, match="does not exist"):
+        plot_sweep(tmp_path / "nope.h5")
+    junk = tmp_path / "junk.h5"
+    junk.write_text("not hdf5")
+    with pytest.raises(CablesimError, match="not an HDF5 file") as err:
+        plot_sweep(junk)
+    assert str(junk) in str(err.value)
+
+
+def test_malformed_shapes_are_reported(tmp_path):
+    omega = np.linspace(1.0, 6.0, 10)
+    res = _results(omega, two_channel(omega))
+    res["period"] = res["period"][:5]
+    h5 = write_sweep(tmp_path / "bad.h5", omega, {None: res})
+    with pytest.raises(CablesimError, match="period has shape"):
+        plot_sweep(h5)
+    h5 = write_sweep(tmp_path / "bad2.h5", omega, {None: _results(omega, two_channel(omega))}, direction="both")
+    with pytest.raises(CablesimError, match="/sweep/up is missing"):
+        plot_sweep(h5)
+
+
+# --------------------------------------------------------------------------------------------
+# sweep_summary_rows
+# --------------------------------------------------------------------------------------------
+
+
+def test_summary_peak_of_a_resonance_curve(tmp_path):
+    omega = np.linspace(1.0, 4.0, 301)  # step 0.01 rad/s
+    amp = np.stack([resonance(omega), resonance(omega, w0=3.3)], axis=-1)
+    h5 = write_sweep(tmp_path / "res.h5", omega, {None: _results(omega, amp)})
+    rows = sweep_summary_rows(h5)
+    assert [r["channel"] for r in rows] == ["z2", "z4"]
+    for r, w0 in zip(rows, (W0, 3.3)):
+        w_peak = w0 * np.sqrt(1 - 2 * ZETA**2)
+        assert abs(r["omega"] - w_peak) <= 0.005 + 1e-12  # nearest grid point
+        assert r["value"] == pytest.approx(resonance(r["omega"], w0=w0))
+        assert r["value"] == pytest.approx(0.01 / (2 * ZETA * np.sqrt(1 - ZETA**2)), rel=2e-3)
+        assert r["gamma"] is None and r["direction"] == "independent"
+        assert r["points_done"] == r["points"] == 301
+
+
+def test_summary_unsorted_omega_is_sorted(tmp_path):
+    omega = np.linspace(1.0, 4.0, 31)
+    perm = np.random.default_rng(0).permutation(31)
+    amp = np.stack([resonance(omega), resonance(omega)], axis=-1)
+    h5 = write_sweep(tmp_path / "perm.h5", omega[perm], {None: _results(omega[perm], amp[perm])})
+    rows = sweep_summary_rows(h5)
+    assert rows[0]["omega"] == pytest.approx(omega[np.argmax(amp[:, 0])])

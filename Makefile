@@ -23,5 +23,9 @@ run: $(STAMP)
 test: $(STAMP)
 	$(PY) -m pytest -q
 
+bench: $(STAMP)
+	$(PY) benchmarks/bench_dynamics.py
+	$(PY) benchmarks/bench_sweep.py
+
 clean:
 	rm -rf runs/*/ .pytest_cache .hypothesis

@@ -257,6 +257,34 @@ class SweepSpec(_Strict):
         return np.sort(w) if self.direction != "independent" else w
 
 
+class OutputsSpec(_Strict):
+    """What time-history files keep (section ``outputs:``): a scene saves only what it draws."""
+
+    channels: tuple[str, ...] | None = Field(default=None, description="DOF saved (default: all)")
+    split: bool = Field(default=True, description="compute and save the configurational/elastic split")
+
+
+FIGURE_KINDS = ("fdr", "waveform", "waveform_phase", "waveform_fft", "split", "lissajous_tension")
+
+
+class FigureSpec(_Strict):
+    """A composite figure drawn from stored results by ``cablesim plot`` (section ``figure:``).
+
+    Kinds: ``fdr`` (frequency response from sweep files), ``waveform`` (z(t) of the channels),
+    ``waveform_phase`` (z(t) beside the phase plot z vs z'), ``waveform_fft`` (z(t) beside its
+    spectrum), ``split`` (z with its configurational and elastic parts), ``lissajous_tension``
+    (z_i vs z_j beside tension waveforms). Several result files make one column each.
+    """
+
+    kind: Literal["fdr", "waveform", "waveform_phase", "waveform_fft", "split", "lissajous_tension"]
+    title: str | None = Field(default=None, description="figure title")
+    channels: tuple[str, ...] | None = Field(default=None, description="DOF drawn, e.g. [z2]")
+    pair: tuple[str, str] | None = Field(default=None, description="Lissajous pair, e.g. [z2, z4]")
+    segments: tuple[int, ...] | None = Field(default=None, description="tension segments drawn (1-based)")
+    time_window: tuple[float, float] | None = Field(default=None, description="time axis limits, s")
+    labels: tuple[str, ...] | None = Field(default=None, description="one caption per result file")
+
+
 class Case(_Strict):
     """One analysis case, as read from a YAML case file."""
 
@@ -269,6 +297,8 @@ class Case(_Strict):
     history: HistorySpec = HistorySpec()
     free_vibration: FreeVibrationSpec = FreeVibrationSpec()
     sweep: SweepSpec | None = None
+    outputs: OutputsSpec = OutputsSpec()
+    figure: FigureSpec | None = None
 
     @field_validator("name")
     @classmethod

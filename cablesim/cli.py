@@ -142,6 +142,11 @@ def _finish_history(case, hist, integ, out: Path, text: str, command: str, plot:
     from .io_hdf5 import write_history
     from .report import history_summary
 
+    if case.outputs.channels:  # a scene keeps only the channels it draws
+        from .plot_history import channel_index
+
+        keep = [channel_index(c, hist.n_dof) + 1 for c in case.outputs.channels]
+        hist = hist.keep(keep)
     write_history(out, hist, text, command)
     pngs = []
     if plot and hist.t.size > 1:

@@ -152,6 +152,7 @@ def write_history(path: str | Path, hist, case_text: str, command: str, extra_at
             put(g, "ze", hist.ze, "m", "elastic part of z (eq. 22)")
         put(g, "T", hist.T, "N", "segment tensions")
         put(g, "residual", hist.residual, "1", "drift of eq. 15 relative to |F0|")
+        put(g, "dof", np.array(hist.dof_numbers), "1", "1-based DOF number of each column of z, v, zc, ze")
         put(g, "y0", hist.y0, "m", "static equilibrium the displacements are measured from")
         put(g, "T0", hist.T0, "N", "tensions at that equilibrium")
         g.attrs["omega"] = np.nan if hist.omega is None else hist.omega
@@ -176,7 +177,8 @@ def write_sweep(path: str | Path, res, static, case_name: str, case_text: str, s
     leading gamma axis); for ``independent`` sweeps ``/sweep/{amplitude, halfrange, period,
     steady, response_frequency, t_end, floquet, done}``, for up/down sweeps the same under
     ``/sweep/up/`` and ``/sweep/down/``; ``/modal/omega``. Points not yet computed have
-    ``done = False`` and NaN in the float datasets (the only NaN cablesim ever writes).
+    ``done = False`` and NaN in the float datasets; a point that stopped early (``failed``) may
+    have NaN response frequencies. These marked gaps are the only NaN cablesim writes.
     """
     units = {
         "amplitude": ("m", "peak |z| from the static equilibrium"),
@@ -184,6 +186,7 @@ def write_sweep(path: str | Path, res, static, case_name: str, case_text: str, s
         "response_frequency": ("rad/s", "dominant response frequency"),
         "period": ("forcing periods", "response period p (0: no periodic response found)"),
         "steady": ("1", "whether a stable periodic response was found before the cap"),
+        "failed": ("1", "whether the run stopped early (slack segment, blow-up); its values are partial"),
         "t_end": ("s", "simulated time used"),
         "floquet": ("1", "largest Floquet multiplier modulus of the last periodic orbit checked"),
         "done": ("1", "whether the point has been computed"),

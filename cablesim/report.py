@@ -104,12 +104,12 @@ def history_summary(case, hist, integ, wall: float) -> str:
     ]
     rows = []
     half = hist.t.size // 2
-    for i in range(hist.n_dof):
+    for i, dof in enumerate(hist.dof_numbers):
         z = hist.z[:, i]
         peaks = spectrum_peaks(hist.t, z, 0.5, max_peaks=2) if hist.t.size > 16 else []
         rows.append(
             [
-                f"z{i + 1}",
+                f"z{dof}",
                 _g(np.abs(z).max(), 5),
                 _g(0.5 * np.ptp(z[half:]), 5) if half > 0 else "-",
                 ", ".join(f"{p:.4g}" for p in peaks) or "-",
@@ -144,11 +144,14 @@ def sweep_summary(case, res, wall: float) -> str:
             i = int(np.argmax(a))
             rows.append([label, name, f"{res.omega[i]:.4g}", _g(d["amplitude"][i, j], 5)])
         steady = d["steady"][done]
+        failed = d["failed"][done]
+        capped = ~steady & ~failed
         sub = d["period"][done] >= 2
         lines.append(
             f"  {label}: {steady.sum()} of {done.sum()} points steady"
             + (f", {sub.sum()} subharmonic (period >= 2)" if sub.any() else "")
-            + (f", {(~steady).sum()} reached the cap" if (~steady).any() else "")
+            + (f", {capped.sum()} reached the cap" if capped.any() else "")
+            + (f", {failed.sum()} stopped early (e.g. a slack segment; values partial)" if failed.any() else "")
         )
     lines.append(_table(["curve", "channel", "peak at (rad/s)", "peak amplitude (m)"], rows))
     return "\n".join(lines)

@@ -82,7 +82,7 @@ def run_history(
     analysis: str | None = None,
     integrator: str | None = None,
     progress: Callable[[float], None] | None = None,
-    split: bool = True,
+    split: bool | None = None,
 ) -> tuple[StaticResult, HistoryResult, Integrator]:
     """Forced response at one frequency from the static equilibrium under F0, at rest.
 
@@ -113,6 +113,7 @@ def run_history(
     w_int = max(omega, float(static.modes.omega[0]))
     step = _output_step(output_step or case.history.output_step, w_int, duration)
     integ = make_integrator(case.integrator, eom, w_int, integrator)
+    split = case.outputs.split if split is None else split
     hist = simulate(eom, integ, duration, step, progress=progress, split=split)
     return static, hist, integ
 
@@ -127,7 +128,7 @@ def run_free_vibration(
     analysis: str | None = None,
     integrator: str | None = None,
     progress: Callable[[float], None] | None = None,
-    split: bool = True,
+    split: bool | None = None,
 ) -> tuple[StaticResult, HistoryResult, Integrator]:
     """Free vibration about the equilibrium under F0 (no harmonic load).
 
@@ -171,6 +172,7 @@ def run_free_vibration(
     s0 = eom.initial_state(z0=z0, v0=v0)
     step = _output_step(output_step or fv.output_step, w_int, duration)
     integ = make_integrator(case.integrator, eom, w_int, integrator)
+    split = case.outputs.split if split is None else split
     hist = simulate(eom, integ, duration, step, s0=s0, progress=progress, split=split)
     return static, hist, integ
 

@@ -174,6 +174,7 @@ def _empty_result(omega, gamma, direction, channels, curves) -> SweepResult:
             "response_frequency": np.full((P, C), np.nan),
             "period": np.zeros(P, dtype=np.int64),
             "steady": np.zeros(P, dtype=bool),
+            "failed": np.zeros(P, dtype=bool),
             "t_end": np.full(P, np.nan),
             "floquet": np.full(P, np.nan),
             "wall": np.full(P, np.nan),
@@ -189,11 +190,13 @@ def _record(res: SweepResult, rec: dict) -> None:
         d[f][i] = [np.nan if x is None else x for x in rec[f]]
     d["period"][i] = rec["period"]
     d["steady"][i] = rec["steady"]
+    d["failed"][i] = rec["status"] not in ("steady", "cap reached")
     d["t_end"][i] = rec["t_end"]
     d["floquet"][i] = np.nan if rec["floquet"] is None else rec["floquet"]
     d["wall"][i] = rec.get("wall", np.nan)
     d["done"][i] = True
-    res.states[(rec["curve"], i)] = rec["final_state"]
+    # Only a point that ran to its end (at forcing phase 0) can start the next one of a chain.
+    res.states[(rec["curve"], i)] = None if d["failed"][i] else rec["final_state"]
 
 
 def _read_journal(path: Path, fingerprint: str) -> list[dict]:
@@ -210,13 +213,19 @@ def _read_journal(path: Path, fingerprint: str) -> list[dict]:
             "or give another output file with -o.",
             field="sweep",
         )
+    good = len(lines[0]) + 1
     for line in lines[1:]:
         if not line.strip():
+            good += len(line) + 1
             continue
         try:
             records.append(json.loads(line))
         except json.JSONDecodeError:
             break  # a record torn by a kill: everything before it is intact
+        good += len(line) + 1
+    # Cut a torn tail off, so that new records start on a line of their own.
+    with open(path, "r+b") as f:
+        f.truncate(min(good, os.path.getsize(path)))
     return records
 
 
@@ -246,6 +255,9 @@ class _Journal:
 # The driver
 # ----------------------------------------------------------------------------------------------
 def _parallel(n_jobs: int, backend: str | None, scheduler: str | None):
+    """``(config context, Parallel, client)``; the context selects joblib's backend."""
+    import contextlib
+
     import joblib
 
     if backend == "dask":
@@ -262,8 +274,9 @@ def _parallel(n_jobs: int, backend: str | None, scheduler: str | None):
             client = Client(scheduler, timeout=10)
         except OSError as exc:
             raise CablesimError(f"Could not reach the Dask scheduler at {scheduler}: {exc}.") from None
-        return joblib.Parallel(backend="dask", return_as="generator_unordered"), client
-    return joblib.Parallel(n_jobs=n_jobs, return_as="generator_unordered"), None
+        # joblib registers its Dask backend through parallel_config, not by name in Parallel.
+        return joblib.parallel_config(backend="dask"), joblib.Parallel(return_as="generator_unordered"), client
+    return contextlib.nullcontext(), joblib.Parallel(n_jobs=n_jobs, return_as="generator_unordered"), None
 
 
 def run_sweep(
@@ -310,8 +323,9 @@ def run_sweep(
 
     if case.sweep is None:
         raise CablesimError(
-            "This case has no `sweep:` section. Add one, e.g.\n"
-            "sweep:\n  omega: {start: 0.5, stop: 6.0, num: 111}\n  channels: [z2, z4]",
+            "This case has no `sweep:` section. Add one, for example "
+            "`sweep: {omega: {start: 0.5, stop: 6.0, num: 111}, channels: [z2, z4]}` "
+            "(`cablesim example` shows a complete one).",
             field="sweep",
         )
     static = run_static(case, analysis, all_models=False)
@@ -331,7 +345,6 @@ def run_sweep(
             raise CablesimError(f"There is no interrupted sweep to resume at {out} (no {jpath.name}).")
         for rec in _read_journal(jpath, fp):
             _record(res, rec)
-    journal = _Journal(jpath, fp, fresh=not resume)
     meta = dict(static=static, case_name=case.name, case_text=case_text, sweep=case.sweep)
     last = [time.monotonic()]
 
@@ -345,8 +358,9 @@ def run_sweep(
         return PointJob(case_text, analysis, integrator, g, float(omega[i]), tuple(int(x) for x in idx), c, i,
                         None if start is None else tuple(start))
 
+    config, parallel, client = _parallel(n_jobs, backend, scheduler)  # settings errors first
     _warm_up(case_text, analysis, integrator, idx)
-    parallel, client = _parallel(n_jobs, backend, scheduler)
+    journal = _Journal(jpath, fp, fresh=not resume)
     import joblib
 
     def done(rec):
@@ -358,7 +372,7 @@ def run_sweep(
 
     completed = False
     try:
-        with parallel:
+        with config, parallel:
             if case.sweep.direction == "independent":
                 todo = [job(c, i, None) for c in range(len(curves)) for i in range(omega.size) if not res.data[c]["done"][i]]
                 for rec in parallel(joblib.delayed(solve_point)(j) for j in todo):

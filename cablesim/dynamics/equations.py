@@ -133,13 +133,14 @@ def _approximate_Kv(prm, t, s, warm, wk, awk):
 
 
 @njit(cache=True)
-def observe(prm, t, s, warm, zc, ze, T, segment_state, awk):
+def observe(prm, t, s, warm, zc, ze, T, segment_state, awk, split):
     """Derived outputs at one instant: ``z_c``, ``z_e``, tensions and the drift of eq. 15.
 
     ``segment_state`` receives the index of a slack segment (exact) or -1. Returns the drift
     residual ``|M y'' + C y' + P - F| / |F0|`` (exact analysis) or, for the approximate analysis
     where eq. 15 defines P, the mismatch between the integrated ``y`` and ``x(P) + u(P)``
     expressed as a force through ``K0``, also relative to ``|F0|``. NaN if the inner solve fails.
+    Without ``split`` the exact analysis skips the inner solve (``zc``, ``ze`` set to zero).
     """
     model, S, EA, L, H, m, C = prm[0], prm[1], prm[2], prm[3], prm[4], prm[5], prm[6]
     nd = m.size
@@ -155,7 +156,10 @@ def observe(prm, t, s, warm, zc, ze, T, segment_state, awk):
         K = np.empty((nd, nd))
         segment_state[0] = kn.exact_force_and_stiffness(y, S, EA, L, H, P, K)
         kn.exact_tensions(y, S, EA, L, H, T)
-        if approximate_stiffness(prm, P, warm, awk) != kn.OK:
+        if not split:
+            zc[:] = 0.0
+            ze[:] = 0.0
+        elif approximate_stiffness(prm, P, warm, awk) != kn.OK:
             zc[:] = np.nan
             ze[:] = np.nan
         else:

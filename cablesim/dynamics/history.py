@@ -97,10 +97,10 @@ def default_integrator(eom: EquationsOfMotion, omega_interest: float) -> Integra
 
 
 @njit(cache=True)
-def _observe_all(prm, t, S, warm, zc, ze, T, residual, slack, awk):
+def _observe_all(prm, t, S, warm, zc, ze, T, residual, slack, awk, split):
     seg = np.empty(1, dtype=np.int64)
     for i in range(t.size):
-        residual[i] = observe(prm, t[i], S[i], warm, zc[i], ze[i], T[i], seg, awk)
+        residual[i] = observe(prm, t[i], S[i], warm, zc[i], ze[i], T[i], seg, awk, split)
         slack[i] = seg[0]
 
 
@@ -225,7 +225,7 @@ def simulate(
     T = np.empty((m, eom.cable.n_segments))
     residual = np.empty(m)
     slack = np.empty(m, dtype=np.int64)
-    _observe_all(prm, t, S, np.array(eom.F1, dtype=float), zc, ze, T, residual, slack, approximate_workspace(eom.cable.n_nodes))
+    _observe_all(prm, t, S, np.array(eom.F1, dtype=float), zc, ze, T, residual, slack, approximate_workspace(eom.cable.n_nodes), split)
     # Nothing non-finite leaves silently: cut the record at the first bad instant.
     bad = ~(np.isfinite(S).all(axis=1) & np.isfinite(T).all(axis=1) & np.isfinite(residual))
     if split:

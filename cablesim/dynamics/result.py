@@ -44,6 +44,9 @@ class HistoryResult:
         Linear modal frequencies about the equilibrium, rad/s.
     settings : dict
         Everything else worth recording (step, tolerances, damping, initial conditions).
+    dof : tuple of int, optional
+        1-based DOF numbers of the columns of ``z``, ``v``, ``zc``, ``ze`` when only some
+        channels were kept (None: all, in order).
     """
 
     t: np.ndarray
@@ -61,6 +64,21 @@ class HistoryResult:
     status: str
     modal_omega: np.ndarray
     settings: dict = field(default_factory=dict)
+    dof: tuple | None = None
+
+    @property
+    def dof_numbers(self) -> tuple:
+        """1-based DOF number of each stored column."""
+        return self.dof if self.dof is not None else tuple(range(1, self.z.shape[1] + 1))
+
+    def keep(self, dof_numbers) -> "HistoryResult":
+        """The same history with only the given DOF (1-based numbers) kept."""
+        from dataclasses import replace
+
+        cols = [self.dof_numbers.index(d) for d in dof_numbers]
+        pick = lambda a: None if a is None else a[:, cols]  # noqa: E731
+        return replace(self, z=self.z[:, cols], v=self.v[:, cols], zc=pick(self.zc), ze=pick(self.ze),
+                       dof=tuple(int(d) for d in dof_numbers))
 
     @property
     def completed(self) -> bool:

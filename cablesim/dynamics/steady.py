@@ -235,6 +235,10 @@ def steady_response(
     hold = max(crit.hold, 3)
     ftol = crit.tol
     f_integ = _floquet_integrator(integrator) if crit.floquet else None
+    # Differences below what the integrator resolves are noise: for a tiny response the
+    # periodicity test is relative to the integrator's absolute tolerance, not to zero.
+    # (``floor`` bounds the scale from below, so the absolute threshold is at least tol * floor.)
+    floor = max(1e-9 * eom.cable.chord_length, 3.0 * getattr(integrator, "atol", 0.0) / ftol)
 
     while k < n_cap:
         kk = min(k + chunk, n_cap)
@@ -262,7 +266,7 @@ def steady_response(
         k = kk
         chunk = min(chunk * 2, 200)
 
-        p = _periodic(strobes[: k + 1], hold, crit.max_period, ftol, 1e-9 * eom.cable.chord_length)
+        p = _periodic(strobes[: k + 1], hold, crit.max_period, ftol, floor)
         if p == 0 or k < recheck_after:
             continue
         s_star = state.s.copy()

@@ -400,7 +400,29 @@ def format_validation_error(err: ValidationError, source: str) -> str:
     return f"Case file {source} is not valid: " + "; ".join(items) + "."
 
 
-def parse_case(text: str, source: str = "<case>", default_name: str = "case") -> Case:
+def apply_overrides(data: dict, overrides, source: str) -> dict:
+    """Set dotted keys (``sweep.omega.num=56``) in a parsed case, values read as YAML."""
+    for item in overrides or ():
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise CablesimError(f"--set takes KEY=VALUE with a dotted key (e.g. sweep.duration=1000); got {item!r}.")
+        parts = key.strip().split(".")
+        node = data
+        for part in parts[:-1]:
+            child = node.get(part) if isinstance(node, dict) else None
+            if child is None:
+                child = node[part] = {}
+            if not isinstance(child, dict):
+                raise CablesimError(f"--set {key}: `{part}` in {source} is not a section.")
+            node = child
+        try:
+            node[parts[-1]] = yaml.load(value, Loader=_Loader)
+        except yaml.YAMLError:
+            raise CablesimError(f"--set {key}: the value {value!r} is not valid YAML.") from None
+    return data
+
+
+def parse_case(text: str, source: str = "<case>", default_name: str = "case", overrides=None) -> Case:
     """Parse and validate the YAML text of a case file.
 
     Parameters
@@ -411,6 +433,8 @@ def parse_case(text: str, source: str = "<case>", default_name: str = "case") ->
         How to name the file in messages.
     default_name : str
         The case name if the file gives none.
+    overrides : list of str, optional
+        ``KEY=VALUE`` settings applied over the file (command-line ``--set``).
 
     Returns
     -------
@@ -438,6 +462,9 @@ def parse_case(text: str, source: str = "<case>", default_name: str = "case") ->
             f"Case file {source} must be a YAML mapping with at least the keys `cable` and `loads` "
             "(`cablesim example` prints a complete one)."
         )
+    # Overrides recorded in a stored case text apply too, so a result file's case re-parses
+    # to exactly what was run.
+    apply_overrides(data, [*stored_overrides(text), *(overrides or ())], source)
     if data.get("name") is None:  # absent, or a blank `name:` (YAML null)
         data["name"] = default_name
     try:
@@ -446,8 +473,11 @@ def parse_case(text: str, source: str = "<case>", default_name: str = "case") ->
         raise CablesimError(format_validation_error(err, source)) from None
 
 
-def load_case(path: str | Path | None) -> tuple[Case, str]:
+def load_case(path: str | Path | None, overrides=None) -> tuple[Case, str]:
     """Read a case file, or the embedded paper example if ``path`` is None.
+
+    ``overrides`` (``KEY=VALUE`` strings) are applied over the file and appended to the
+    returned text as a comment, so that a result file records exactly what was run.
 
     Returns
     -------
@@ -457,7 +487,8 @@ def load_case(path: str | Path | None) -> tuple[Case, str]:
     """
     if path is None:
         text = example_text()
-        return parse_case(text, source="(embedded paper example)", default_name="paper-example"), text
+        case = parse_case(text, source="(embedded paper example)", default_name="paper-example", overrides=overrides)
+        return case, _with_overrides(text, overrides)
     p = Path(path)
     try:
         text = p.read_text()
@@ -467,7 +498,21 @@ def load_case(path: str | Path | None) -> tuple[Case, str]:
         raise CablesimError(f"Case file {p} cannot be read ({exc.__class__.__name__}).") from None
     # A valid case name starts with a letter or digit; derive one from the file stem.
     stem = re.sub(r"[^A-Za-z0-9._-]", "-", p.stem).lstrip("._-") or "case"
-    return parse_case(text, source=str(p), default_name=stem), text
+    return parse_case(text, source=str(p), default_name=stem, overrides=overrides), _with_overrides(text, overrides)
+
+
+OVERRIDES_MARK = "# cablesim --set:"
+
+
+def _with_overrides(text: str, overrides) -> str:
+    if not overrides:
+        return text
+    return text.rstrip("\n") + "\n" + "".join(f"{OVERRIDES_MARK} {o}\n" for o in overrides)
+
+
+def stored_overrides(text: str) -> list[str]:
+    """The ``--set`` overrides recorded in a stored case text (see :func:`load_case`)."""
+    return [line[len(OVERRIDES_MARK):].strip() for line in text.splitlines() if line.startswith(OVERRIDES_MARK)]
 
 
 def example_text() -> str:

@@ -136,7 +136,7 @@ def _dominant_frequency(z: np.ndarray, dt: float) -> np.ndarray:
 
 
 def monodromy_multipliers(
-    eom: EquationsOfMotion, integrator: Integrator, s_star: np.ndarray, p: int
+    eom: EquationsOfMotion, integrator: Integrator, s_star: np.ndarray, p: int, rel_step: float = 1e-6
 ) -> np.ndarray:
     """Floquet multipliers of the periodic orbit through ``s_star`` (forcing phase 0).
 
@@ -174,7 +174,7 @@ def monodromy_multipliers(
     base = flow(consistent(s_star.copy()))
     J = np.empty((2 * nd, 2 * nd))
     for j, comp in enumerate(idx):
-        d = 1e-6 * scale
+        d = rel_step * scale
         s = s_star.copy()
         s[comp] += d
         J[:, j] = (flow(consistent(s))[idx] - base[idx]) / d
@@ -271,11 +271,13 @@ def steady_response(
             continue
         s_star = state.s.copy()
         if crit.floquet and 2 * nd <= 80:
-            try:
-                mu = monodromy_multipliers(eom, f_integ, s_star, p)
-                floquet = float(np.abs(mu[0]))
-            except FloatingPointError:
-                floquet = np.inf
+            floquet = np.nan  # stays NaN only if no perturbed flow can be integrated
+            for rel_step in (1e-6, 1e-8):
+                try:
+                    floquet = float(np.abs(monodromy_multipliers(eom, f_integ, s_star, p, rel_step)[0]))
+                    break
+                except FloatingPointError:
+                    continue
             if floquet > UNSTABLE_MULTIPLIER:
                 # An unstable orbit: keep integrating; look again after it has had time to leave.
                 recheck_after = k + max(50, 10 * p)

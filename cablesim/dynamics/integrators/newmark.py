@@ -30,15 +30,20 @@ from .base import Integrator, IntegratorState, hermite
 
 
 @njit(cache=True)
-def _internal(prm, z, P_n, z_n, warm, P1, K, first, wk, awk):
-    """Internal force at the step end and its tangent; returns a status code."""
+def _internal(prm, z, P_n, z_n, warm, P1, K, first, wk, awk, check_slack):
+    """Internal force at the step end and its tangent; returns a status code.
+
+    Newton iterates may pass through configurations with a segment shorter than its natural
+    length (for a stiff cable the margin is microns): only the converged state is checked
+    (``check_slack``); during the iteration such a segment acts as a linear spring.
+    """
     S, EA, L, H = prm[1], prm[2], prm[3], prm[4]
     nd = z.size
     y, Pm = wk[0], wk[3]
     if awk is None:
         for i in range(nd):
             y[i] = prm[10][i] + z[i]
-        if kn.exact_force_and_stiffness(y, S, EA, L, H, P1, K) >= 0:
+        if kn.exact_force_and_stiffness(y, S, EA, L, H, P1, K) >= 0 and check_slack:
             return kn.SLACK
         return kn.OK
     # Implicit midpoint for the rate law P' = K(P) y': a few fixed-point sweeps on P_{n+1}.
@@ -101,7 +106,7 @@ def _galpha_advance(prm, s, P_n, warm, wk, awk, t0, h, i0, nsteps, am, af, beta,
             for q in range(nd):
                 a1[q] = (z1[q] - z[q] - h * v[q]) / (beta * h * h) - (0.5 / beta - 1.0) * a[q]
                 v1[q] = v[q] + h * ((1.0 - gamma) * a[q] + gamma * a1[q])
-            st = _internal(prm, z1, P_n, z, warm, P1, K, it == 0, wk, awk)
+            st = _internal(prm, z1, P_n, z, warm, P1, K, it == 0, wk, awk, False)
             if st != kn.OK:
                 s[:nd] = z
                 s[nd : 2 * nd] = v
@@ -139,7 +144,7 @@ def _galpha_advance(prm, s, P_n, warm, wk, awk, t0, h, i0, nsteps, am, af, beta,
         for q in range(nd):
             a1[q] = (z1[q] - z[q] - h * v[q]) / (beta * h * h) - (0.5 / beta - 1.0) * a[q]
             v1[q] = v[q] + h * ((1.0 - gamma) * a[q] + gamma * a1[q])
-        st = _internal(prm, z1, P_n, z, warm, P1, K, False, wk, awk)
+        st = _internal(prm, z1, P_n, z, warm, P1, K, False, wk, awk, True)
         if st != kn.OK:
             return i, j, st
         if j < t_out.size and t_out[j] <= tb + 1e-9 * h:

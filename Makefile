@@ -29,3 +29,60 @@ bench: $(STAMP)
 
 clean:
 	rm -rf runs/*/ .pytest_cache .hypothesis
+
+# ---------------------------------------------------------------------------------------------
+# Paper figures: `make fig3a`, ..., `make figures`. Each scene runs cablesim on its case file in
+# configs/paper/ and writes runs/paper/<fig>.h5 and .png; make reruns a scene only when its case
+# file changed. FAST=1 runs the same targets on coarser grids with shorter caps, into
+# runs/paper-fast/.
+# ---------------------------------------------------------------------------------------------
+FIGS := fig2 fig3a fig3b fig4 fig5a fig5b fig6 fig7a fig7b fig7c fig8a fig8b fig8c
+CFG  := configs/paper
+ifdef FAST
+OUTD := runs/paper-fast
+SWEEP_FAST = --set sweep.omega.num=$(1) --set sweep.duration=$(2) --set sweep.window=$(3)
+HIST_FAST  = --set history.duration=$(1)
+FV_FAST    = --set free_vibration.duration=$(1)
+else
+OUTD := runs/paper
+SWEEP_FAST =
+HIST_FAST  =
+FV_FAST    =
+endif
+RUN := $(CLI)
+
+.PHONY: figures $(FIGS)
+figures: $(FIGS)
+$(FIGS): %: $(OUTD)/%.png
+
+$(OUTD)/%.png: $(OUTD)/%.h5
+	$(RUN) plot $< -o $@
+
+$(OUTD)/fig2.h5: $(CFG)/fig2.yaml | $(STAMP)
+	$(RUN) free-vibration $< -o $@ --no-plot $(call FV_FAST,4)
+$(OUTD)/fig3a.h5: $(CFG)/fig3a.yaml | $(STAMP)
+	$(RUN) sweep $< -o $@ --no-plot $(call SWEEP_FAST,23,1000,100)
+$(OUTD)/fig3b.h5: $(CFG)/fig3b.yaml | $(STAMP)
+	$(RUN) history $< -o $@ --no-plot $(call HIST_FAST,600)
+$(OUTD)/fig4.h5: $(CFG)/fig4.yaml | $(STAMP)
+	$(RUN) sweep $< -o $@ --no-plot $(call SWEEP_FAST,11,800,100)
+$(OUTD)/fig5a.h5: $(CFG)/fig5a.yaml | $(STAMP)
+	$(RUN) sweep $< -o $@ --no-plot $(call SWEEP_FAST,11,400,50)
+$(OUTD)/fig5b.h5: $(CFG)/fig5b.yaml | $(STAMP)
+	$(RUN) history $< -o $@ --no-plot $(call HIST_FAST,150)
+$(OUTD)/fig6.h5: $(CFG)/fig6.yaml | $(STAMP)
+	$(RUN) sweep $< -o $@ --no-plot $(call SWEEP_FAST,16,800,100)
+$(OUTD)/fig7a.h5: $(CFG)/fig7a.yaml | $(STAMP)
+	$(RUN) sweep $< -o $@ --no-plot $(call SWEEP_FAST,16,800,100)
+$(OUTD)/fig7-mode%.h5: $(CFG)/fig7-mode%.yaml | $(STAMP)
+	$(RUN) history $< -o $@ --no-plot $(call HIST_FAST,200)
+$(OUTD)/fig7b.png: $(OUTD)/fig7-mode1.h5 $(OUTD)/fig7-mode2.h5 $(CFG)/fig7b.figure.yaml
+	$(RUN) plot $(OUTD)/fig7-mode1.h5 $(OUTD)/fig7-mode2.h5 --figure $(CFG)/fig7b.figure.yaml -o $@
+$(OUTD)/fig7c.png: $(OUTD)/fig7-mode1.h5 $(OUTD)/fig7-mode2.h5 $(CFG)/fig7c.figure.yaml
+	$(RUN) plot $(OUTD)/fig7-mode1.h5 $(OUTD)/fig7-mode2.h5 --figure $(CFG)/fig7c.figure.yaml -o $@
+$(OUTD)/fig8a.h5: $(CFG)/fig8a.yaml | $(STAMP)
+	$(RUN) sweep $< -o $@ --no-plot $(call SWEEP_FAST,13,1000,100)
+$(OUTD)/fig8b.h5: $(CFG)/fig8b.yaml | $(STAMP)
+	$(RUN) history $< -o $@ --no-plot $(call HIST_FAST,300)
+$(OUTD)/fig8c.h5: $(CFG)/fig8c.yaml | $(STAMP)
+	$(RUN) history $< -o $@ --no-plot $(call HIST_FAST,600)

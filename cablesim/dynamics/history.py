@@ -127,6 +127,17 @@ class _Interrupt:
 
 def _failure_text(code: int, t: float, eom: EquationsOfMotion, integrator: Integrator, state_s) -> str:
     where = f"at t = {t:.6g} s"
+    w_max = float(modal_analysis(eom.K0, eom.mass).omega[-1])
+    dt = getattr(integrator, "dt", None)
+    if integrator.name == "rk4" and dt is not None and dt * w_max > 2.0:
+        # An explicit step beyond its stability limit grows without bound; a segment usually
+        # compresses (reads as slack) before anything turns non-finite, so say so first.
+        return (
+            f"stopped {where}: {kn.STATUS_TEXT[code]}, but the step dt = {dt:.3g} s exceeds rk4's "
+            f"stability limit (about 2.8 / omega_max = {2.8 / w_max:.3g} s for omega_max = "
+            f"{w_max:.4g} rad/s), which is the likely cause: use a smaller dt, dopri5, or the "
+            "newmark or generalized-alpha integrator"
+        )
     if code == kn.SLACK:
         T = np.empty(eom.cable.n_segments)
         kn.exact_tensions(eom.y0 + state_s[: eom.n_dof], eom.cable.S, eom.cable.EA, eom.cable.L, eom.cable.H, T)
@@ -137,15 +148,10 @@ def _failure_text(code: int, t: float, eom: EquationsOfMotion, integrator: Integ
             "check that the response is physical."
         )
     if code in (kn.NONFINITE, kn.STEP_UNDERFLOW):
-        w_max = float(modal_analysis(eom.K0, eom.mass).omega[-1])
-        hint = (
-            f"the step dt = {integrator.dt:.3g} s may exceed the explicit stability limit "
-            f"(about 2.8 / omega_max = {2.8 / w_max:.3g} s): use a smaller dt or the newmark or "
-            "generalized-alpha integrator"
-            if getattr(integrator, "dt", None) is not None and integrator.name == "rk4"
-            else "try a smaller step or tolerance, or the generalized-alpha integrator"
+        return (
+            f"stopped {where}: {kn.STATUS_TEXT[code]}; try a smaller step or tolerance, or the "
+            "generalized-alpha integrator."
         )
-        return f"stopped {where}: {kn.STATUS_TEXT[code]}; {hint}."
     if code == kn.INNER_SOLVE:
         return (
             f"stopped {where}: the inner equilibrium solve failed (a segment may be close to "

@@ -87,6 +87,7 @@ def example():
 @user_errors
 def static(
     case_file: Optional[Path] = CASE_ARG,
+    overrides: Optional[list[str]] = typer.Option(None, "--set", help="Override a case-file value, KEY=VALUE with a dotted key (e.g. sweep.duration=1000); repeatable."),
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file [default: runs/<name>/static.h5]"),
     analysis: Optional[Analysis] = typer.Option(None, "--analysis", help="Override the case file's analysis."),
     plot: bool = typer.Option(True, "--plot/--no-plot", help="Also draw the cable as a PNG beside the HDF5 file."),
@@ -97,7 +98,7 @@ def static(
     from .io_hdf5 import write_static
     from .report import static_summary
 
-    case, text = load_case(case_file)
+    case, text = load_case(case_file, overrides)
     result = run_static(case, analysis.value if analysis else None)
     typer.echo(static_summary(case, result))
     out = _output(case, output, "static")
@@ -118,18 +119,39 @@ class IntegratorName(str, Enum):
     generalized_alpha = "generalized-alpha"
 
 
+class _LazyBar:
+    """A progress bar on standard error that appears only once there is progress to show
+    (so that an input error is never preceded by a bar's label)."""
+
+    def __init__(self, length: int, label: str, **kw):
+        self._args = dict(length=length, label=label, file=sys.stderr, **kw)
+        self._bar = None
+        self.done = 0
+
+    def __enter__(self):
+        return self
+
+    def set(self, done: int, length: int | None = None):
+        if self._bar is None:
+            if length is not None:
+                self._args["length"] = length
+            self._bar = typer.progressbar(**self._args).__enter__()
+        if length is not None:
+            self._bar.length = length
+        if done > self.done:
+            self._bar.update(done - self.done)
+            self.done = done
+
+    def __exit__(self, *exc):
+        if self._bar is not None:
+            self._bar.__exit__(*exc)
+        return False
+
+
 def _progress(duration: float):
-    """A progress bar on standard error for a run of ``duration`` simulated seconds."""
-    bar = typer.progressbar(length=1000, label="simulating", file=sys.stderr, show_eta=True)
-    state = {"done": 0}
-
-    def update(t: float):
-        target = int(1000 * t / duration)
-        if target > state["done"]:
-            bar.update(target - state["done"])
-            state["done"] = target
-
-    return bar, update
+    """A progress bar for a run of ``duration`` simulated seconds, and its update function."""
+    bar = _LazyBar(1000, "simulating", show_eta=True)
+    return bar, lambda t: bar.set(int(1000 * t / duration))
 
 
 def _channels(spec: Optional[str], fallback) -> Optional[list[str]]:
@@ -165,6 +187,7 @@ def _finish_history(case, hist, integ, out: Path, text: str, command: str, plot:
 @user_errors
 def history(
     case_file: Optional[Path] = CASE_ARG,
+    overrides: Optional[list[str]] = typer.Option(None, "--set", help="Override a case-file value, KEY=VALUE with a dotted key (e.g. sweep.duration=1000); repeatable."),
     omega: Optional[float] = typer.Option(None, "--omega", help="Forcing frequency w, rad/s [default: history.omega]."),
     duration: Optional[float] = typer.Option(None, "--duration", help="Simulated time, s [default: history.duration]."),
     output_step: Optional[float] = typer.Option(None, "--output-step", help="Interval between saved instants, s."),
@@ -180,7 +203,7 @@ def history(
     from .analyses.dynamic import run_history
     from .case import load_case
 
-    case, text = load_case(case_file)
+    case, text = load_case(case_file, overrides)
     dur = duration if duration is not None else case.history.duration
     if dur <= 0:
         raise CablesimError("--duration must be a positive number of seconds.", field="history.duration")
@@ -200,6 +223,7 @@ def history(
 @user_errors
 def free_vibration(
     case_file: Optional[Path] = CASE_ARG,
+    overrides: Optional[list[str]] = typer.Option(None, "--set", help="Override a case-file value, KEY=VALUE with a dotted key (e.g. sweep.duration=1000); repeatable."),
     mode: Optional[int] = typer.Option(None, "--mode", help="Linear mode K giving the initial velocities."),
     peak_velocity: Optional[float] = typer.Option(None, "--peak-velocity", help="Largest initial velocity V, m/s."),
     damping_ratio: Optional[float] = typer.Option(None, "--damping-ratio", help="Override damping.ratio (same two modes)."),
@@ -217,7 +241,7 @@ def free_vibration(
     from .analyses.dynamic import run_free_vibration
     from .case import load_case
 
-    case, text = load_case(case_file)
+    case, text = load_case(case_file, overrides)
     if damping_ratio is not None and not 0 <= damping_ratio < 1:
         raise CablesimError("--damping-ratio must be in [0, 1).", field="free_vibration.damping_ratio")
     dur = duration if duration is not None else case.free_vibration.duration
@@ -245,6 +269,7 @@ class Backend(str, Enum):
 @user_errors
 def sweep(
     case_file: Optional[Path] = CASE_ARG,
+    overrides: Optional[list[str]] = typer.Option(None, "--set", help="Override a case-file value, KEY=VALUE with a dotted key (e.g. sweep.duration=1000); repeatable."),
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel worker processes (-1: all cores)."),
     resume: bool = typer.Option(False, "--resume", help="Finish an interrupted sweep (same case, same -o)."),
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file [default: runs/<name>/sweep.h5]"),
@@ -261,17 +286,14 @@ def sweep(
     from .case import load_case
     from .report import sweep_summary
 
-    case, text = load_case(case_file)
+    case, text = load_case(case_file, overrides)
     if jobs == 0 or jobs < -1:
         raise CablesimError("--jobs must be a positive number of processes, or -1 for all cores.")
     out = output if output is not None else Path("runs") / case.name / "sweep.h5"
-    bar = typer.progressbar(length=1, label="sweeping", file=sys.stderr, show_pos=True, show_eta=True)
-    seen = {"n": 0}
+    bar = _LazyBar(1, "sweeping", show_pos=True, show_eta=True)
 
     def update(done: int, total: int):
-        bar.length = total
-        bar.update(done - seen["n"])
-        seen["n"] = done
+        bar.set(done, total)
 
     t0 = time.perf_counter()
     try:
@@ -296,6 +318,25 @@ def sweep(
         png = plot_sweep(out)
         msg += f" and {png}"
     typer.echo(msg)
+
+
+@app.command()
+@user_errors
+def plot(
+    results: list[Path] = typer.Argument(..., metavar="RESULT.h5", show_default=False,
+                                         help="HDF5 result files of cablesim static, history, free-vibration "
+                                         "or sweep (one type at a time)."),
+    output: Optional[Path] = typer.Option(None, "-o", "--output", metavar="PNG",
+                                          help="PNG file (default: the first file with suffix .png)."),
+    figure: Optional[Path] = typer.Option(None, "--figure", metavar="FIGURE.yaml",
+                                          help="YAML file with a figure: section to draw instead of the stored case's."),
+):
+    """Redraw figures from stored results, recomputing nothing: the figure: section of the stored
+    case (or of --figure) as one PNG from all the files, or else each file's standard plots."""
+    from .figures import redraw
+
+    paths = redraw(results, output, figure=figure)
+    typer.echo("Wrote " + ", ".join(str(p) for p in paths))
 
 
 def main():

@@ -113,6 +113,90 @@ def _resolve_channels(channels, n_dof: int) -> list[int]:
 
 
 # --------------------------------------------------------------------------------------------
+# Stored columns: a history may keep only some DOF (``result.dof``)
+# --------------------------------------------------------------------------------------------
+
+
+def cable_dof(result) -> int:
+    """Number of degrees of freedom of the cable (``2 n``), even if fewer columns were kept."""
+    dofs = result.dof_numbers
+    return max(int(np.asarray(result.y0).size), max(dofs) if len(dofs) else 0, int(result.z.shape[1]))
+
+
+def stored_names(result) -> str:
+    """The stored channels, for messages: ``"z2, z4"``."""
+    return ", ".join(f"z{d}" for d in result.dof_numbers)
+
+
+def column_of(result, channel) -> int:
+    """Column of ``result.z`` (``v``, ``zc``, ``ze``) holding a channel.
+
+    Raises
+    ------
+    CablesimError
+        If the name is malformed or out of range for the cable, or the history did not keep
+        that channel (the message names the stored ones).
+    """
+    i = channel_index(channel, cable_dof(result))
+    dofs = list(result.dof_numbers)
+    if i + 1 not in dofs:
+        raise CablesimError(
+            f"Channel {channel!r} (z{i + 1}) was not stored in this history: it kept only "
+            f"{stored_names(result)} (outputs.channels). Choose among those, or rerun with the channel "
+            "listed in outputs.channels."
+        )
+    return dofs.index(i + 1)
+
+
+def resolve_columns(result, channels=None) -> list[int]:
+    """Columns of ``result.z`` for the channels; default: the default channels that were stored.
+
+    The default is the vertical DOF of every node (n <= 3) or of three spread nodes, among the
+    stored channels; if none of those was kept, every stored channel.
+    """
+    if channels is None:
+        dofs = list(result.dof_numbers)
+        cols = [dofs.index(i + 1) for i in default_channels(cable_dof(result)) if i + 1 in dofs]
+        return cols or list(range(len(dofs)))
+    if isinstance(channels, (str, numbers.Integral)):
+        channels = [channels]
+    out: list[int] = []
+    for c in channels:
+        col = column_of(result, c)
+        if col not in out:
+            out.append(col)
+    if not out:
+        raise CablesimError(f"No channels were chosen to plot; name at least one of {stored_names(result)}.")
+    return out
+
+
+def default_pair(result):
+    """Default Lissajous pair (columns): vertical DOF of the first and last node if stored.
+
+    Otherwise the first two default (or stored) columns; None if fewer than two were kept.
+    """
+    n_dof = cable_dof(result)
+    dofs = list(result.dof_numbers)
+    want = (1, 2) if n_dof <= 2 else (2, n_dof)
+    if all(d in dofs for d in want):
+        return dofs.index(want[0]), dofs.index(want[1])
+    cols = resolve_columns(result)
+    if len(cols) < 2:
+        cols = list(range(len(dofs)))
+    return (cols[0], cols[1]) if len(cols) >= 2 else None
+
+
+def col_name(result, col: int) -> str:
+    """Channel name of a stored column, e.g. ``"z4"``."""
+    return f"z{result.dof_numbers[col]}"
+
+
+def col_desc(result, col: int) -> str:
+    """What a stored column is, e.g. ``"node 2, vertical (down +)"``."""
+    return _channel_desc(result.dof_numbers[col] - 1)
+
+
+# --------------------------------------------------------------------------------------------
 # Spectra
 # --------------------------------------------------------------------------------------------
 
@@ -350,7 +434,7 @@ def _plot_waveforms(result, chans, title, path, notes):
             ax.plot(t[::s], result.zc[::s, i], "--", color="C1", lw=0.9, label="configurational part z_c")
         if result.ze is not None:
             ax.plot(t[::s], result.ze[::s, i], "-", color="C2", lw=0.8, alpha=0.8, label="elastic part z_e")
-        ax.set_ylabel(f"{_channel_name(i)} (m)\n{_channel_desc(i)}", fontsize=9)
+        ax.set_ylabel(f"{col_name(result, i)} (m)\n{col_desc(result, i)}", fontsize=9)
         ax.grid(True, alpha=0.3)
     axes[0, 0].legend(loc="lower right", bbox_to_anchor=(1.0, 1.0), ncol=3, fontsize=8, frameon=False)
     axes[-1, 0].set_xlabel("time t (s)")
@@ -365,11 +449,11 @@ def _plot_phase(result, chans, title, path, notes):
     k = len(chans)
     fig, axes = _figure(1, k, 3.8, 3.8, top=1.0, wspace=0.95)
     for ax, i in zip(axes[0], chans):
-        name = _channel_name(i)
+        name = col_name(result, i)
         _two_tone(ax, result.z[:, i], result.v[:, i], i0, f"t < {t_s:.4g} s", f"t >= {t_s:.4g} s (last half)")
         ax.set_xlabel(f"{name} (m)")
         ax.set_ylabel(f"{name}' (m/s)")
-        ax.set_title(f"{name}: {_channel_desc(i)}", fontsize=9)
+        ax.set_title(f"{name}: {col_desc(result, i)}", fontsize=9)
         ax.grid(True, alpha=0.3)
     axes[0, -1].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, framealpha=0.9)
     return _finish(fig, result, title, "phase plots (velocity against displacement)", path, notes)
@@ -384,8 +468,8 @@ def _plot_lissajous(result, pair, title, path, notes):
     ax = axes[0, 0]
     x, y = result.z[:, i], result.z[:, j]
     _two_tone(ax, x, y, i0, f"t < {t_s:.4g} s", f"t >= {t_s:.4g} s (last half)")
-    ax.set_xlabel(f"{_channel_name(i)} (m): {_channel_desc(i)}")
-    ax.set_ylabel(f"{_channel_name(j)} (m): {_channel_desc(j)}")
+    ax.set_xlabel(f"{col_name(result, i)} (m): {col_desc(result, i)}")
+    ax.set_ylabel(f"{col_name(result, j)} (m): {col_desc(result, j)}")
     rx = np.ptp(x[np.isfinite(x)]) if np.isfinite(x).any() else 0.0
     ry = np.ptp(y[np.isfinite(y)]) if np.isfinite(y).any() else 0.0
     if rx > 0 and ry > 0 and 0.2 <= rx / ry <= 5.0:
@@ -394,7 +478,7 @@ def _plot_lissajous(result, pair, title, path, notes):
         ax.set_box_aspect(1.0)
     ax.grid(True, alpha=0.3)
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, framealpha=0.9)
-    what = f"Lissajous figure {_channel_name(j)} against {_channel_name(i)}"
+    what = f"Lissajous figure {col_name(result, j)} against {col_name(result, i)}"
     return _finish(fig, result, title, what, path, notes)
 
 
@@ -450,9 +534,9 @@ def _plot_fft(result, chans, title, path, notes):
     k = len(chans)
     fig, axes = _figure(k, 1, 8.6, 2.4, sharex=True, top=1.0, hspace=0.45, left=0.9)
     for ax, i in zip(axes[:, 0], chans):
-        name = _channel_name(i)
+        name = col_name(result, i)
         ax.set_ylabel(f"amplitude of {name} (m)", fontsize=9)
-        ax.set_title(f"{name}: {_channel_desc(i)}", fontsize=9, loc="left")
+        ax.set_title(f"{name}: {col_desc(result, i)}", fontsize=9, loc="left")
         ax.grid(True, alpha=0.25)
         if isinstance(spectra[i], CablesimError):
             ax.text(0.5, 0.5, f"no spectrum: {spectra[i]}", transform=ax.transAxes, ha="center", va="center",
@@ -505,7 +589,8 @@ def plot_history(result, prefix, title: str, channels=None, pair=None) -> list[P
     Parameters
     ----------
     result : cablesim.dynamics.result.HistoryResult
-        The time history.
+        The time history. If it kept only some DOF (``result.dof``), channels are looked up
+        among the stored ones.
     prefix : str or Path
         Path prefix without suffix; the files are ``{prefix}-waveforms.png``,
         ``{prefix}-phase.png``, ``{prefix}-lissajous.png``, ``{prefix}-tensions.png`` and
@@ -515,38 +600,44 @@ def plot_history(result, prefix, title: str, channels=None, pair=None) -> list[P
     channels : sequence of str or int, optional
         Channels for the waveform, phase (first 3) and spectrum figures, e.g. ``["z2", "z4"]``.
         Default: the vertical DOF of every node if n <= 3, else of 3 nodes spread along the
-        cable. At most 8 are drawn.
+        cable, among the stored channels (every stored channel if none of those was kept). At
+        most 8 are drawn.
     pair : (str or int, str or int), optional
         The two channels of the Lissajous figure (x axis, y axis). Default: the vertical DOF
-        of the first and the last node (``("z2", "z4")`` for n = 2); ``("z1", "z2")`` if n = 1.
+        of the first and the last node (``("z2", "z4")`` for n = 2); ``("z1", "z2")`` if n = 1;
+        if those were not stored, the first two stored default channels.
 
     Returns
     -------
     list of Path
-        The five files written, in the order above.
+        The files written, in the order above. The Lissajous figure is left out when the
+        history kept fewer than two channels (then four files).
 
     Raises
     ------
     CablesimError
-        If a channel name is malformed or out of range.
+        If a channel name is malformed or out of range, or names a channel the history did
+        not store.
     """
-    n_dof = int(result.n_dof)
-    chans = _resolve_channels(channels, n_dof)
+    chans = resolve_columns(result, channels)
     notes = []
     if len(chans) > MAX_CHANNELS:
         notes.append(f"showing the first {MAX_CHANNELS} of {len(chans)} chosen channels")
         chans = chans[:MAX_CHANNELS]
     if pair is None:
-        pair_idx = (0, 1) if n_dof <= 2 else (1, n_dof - 1)
+        pair_idx = default_pair(result)
     else:
         if isinstance(pair, (str, numbers.Integral)) or len(pair) != 2:
             raise CablesimError(f"The Lissajous pair must name two channels, e.g. ('z2', 'z4'); got {pair!r}.")
-        pair_idx = (channel_index(pair[0], n_dof), channel_index(pair[1], n_dof))
+        pair_idx = (column_of(result, pair[0]), column_of(result, pair[1]))
     prefix = str(prefix)
     paths = [
         _plot_waveforms(result, chans, title, Path(f"{prefix}-waveforms.png"), notes),
         _plot_phase(result, chans, title, Path(f"{prefix}-phase.png"), notes),
-        _plot_lissajous(result, pair_idx, title, Path(f"{prefix}-lissajous.png"), []),
+    ]
+    if pair_idx is not None:
+        paths.append(_plot_lissajous(result, pair_idx, title, Path(f"{prefix}-lissajous.png"), []))
+    paths += [
         _plot_tensions(result, title, Path(f"{prefix}-tensions.png"), []),
         _plot_fft(result, chans, title, Path(f"{prefix}-fft.png"), notes),
     ]

@@ -215,21 +215,15 @@ def test_bad_input_exit_2(tmp_path, paper_case, make_args, words):
     assert result_files(tmp_path) == []
 
 
-_LABEL_FIRST = pytest.mark.xfail(
-    strict=True,
-    reason="BUG (cosmetic): the progress-bar label 'simulating' is written to stderr before "
-    "run_history/run_free_vibration validate their inputs, so an invalid run prints "
-    "'simulating' and then the error paragraph",
-)
 
 
 @pytest.mark.parametrize(
     "make_args",
     [
-        pytest.param(BAD[0].values[0], id="no-omega", marks=_LABEL_FIRST),
+        pytest.param(BAD[0].values[0], id="no-omega"),
         pytest.param(BAD[1].values[0], id="negative-duration"),
-        pytest.param(BAD[2].values[0], id="mode-9", marks=_LABEL_FIRST),
-        pytest.param(BAD[3].values[0], id="FL-zero", marks=_LABEL_FIRST),
+        pytest.param(BAD[2].values[0], id="mode-9"),
+        pytest.param(BAD[3].values[0], id="FL-zero"),
     ],
 )
 def test_bad_input_stderr_is_only_the_message(tmp_path, paper_case, make_args):

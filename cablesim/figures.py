@@ -413,7 +413,7 @@ def _stride(m: int) -> int:
 def _xlim(ax, t, win, tw=None):
     i0, i1 = win
     lo, hi = t[i0], t[i1 - 1]
-    if tw is not None:
+    if tw is not None and float(tw[0]) < t[-1]:
         lo, hi = max(float(tw[0]), t[0]), min(float(tw[1]), t[-1])
     ax.set_xlim(lo, hi)
 
@@ -425,6 +425,10 @@ def _window(t: np.ndarray, tw, path: Path):
     lo, hi = float(tw[0]), float(tw[1])
     if not hi > lo:
         raise CablesimError(f"figure.time_window [{lo:g}, {hi:g}] s must be increasing: give [start, end] in seconds.")
+    if lo >= t[-1]:
+        # The run ended before the window (a shorter run, or one that stopped early): show a
+        # window of the same length at its end.
+        lo, hi = t[-1] - (hi - lo), t[-1]
     inside = np.flatnonzero((t >= lo) & (t <= hi))
     if inside.size < 2:
         raise CablesimError(

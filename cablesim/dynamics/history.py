@@ -153,11 +153,31 @@ def _failure_text(code: int, t: float, eom: EquationsOfMotion, integrator: Integ
             "generalized-alpha integrator."
         )
     if code == kn.INNER_SOLVE:
-        return (
-            f"stopped {where}: the inner equilibrium solve failed (a segment may be close to "
-            "slack); reduce FL or the step size."
-        )
+        return f"stopped {where}: the inner equilibrium solve failed ({_inner_diagnosis(eom, t, state_s)}); reduce FL or the step size."
     return f"stopped {where}: {kn.STATUS_TEXT.get(code, 'unknown failure')}."
+
+
+def _inner_diagnosis(eom: EquationsOfMotion, t: float, s) -> str:
+    """Why the inextensible state x(P) was not found at the last good state."""
+    from ..errors import CablesimError, SlackSegmentError
+    from ..statics import inextensible_equilibrium, resisting_force
+
+    nd = eom.n_dof
+    if eom.analysis == "exact":
+        P = resisting_force(eom.cable, eom.y0 + s[:nd])
+    else:
+        P = eom.F0 + eom.FL * np.sin(eom.omega * t) - eom.C @ s[nd : 2 * nd] - eom.mass * s[2 * nd :]
+    try:
+        inext = inextensible_equilibrium(eom.cable, P)
+    except SlackSegmentError as exc:
+        return f"under the current internal forces segment {exc.segment} of the inextensible cable goes slack"
+    except CablesimError:
+        return "the inextensible equilibrium under the current internal forces does not converge"
+    k = int(np.argmin(inext.T))
+    return (
+        f"segment {k + 1} of the inextensible cable is nearly slack: tension {inext.T[k]:.3g} N "
+        f"against {eom.T0[k]:.3g} N at equilibrium"
+    )
 
 
 def simulate(

@@ -30,8 +30,11 @@ bench: $(STAMP)
 paper-numbers: $(STAMP)
 	$(PY) benchmarks/paper_numbers.py $(OUTD)
 
+# numba caches compiled kernels beside the sources but does not notice when a kernel called
+# from another module changes: after editing cablesim/dynamics/, clear the cache.
 clean:
 	rm -rf runs/*/ .pytest_cache .hypothesis
+	find cablesim -name '*.nbi' -delete -o -name '*.nbc' -delete
 
 # ---------------------------------------------------------------------------------------------
 # Paper figures: `make fig3a`, ..., `make figures`. Each scene runs cablesim on its case file in

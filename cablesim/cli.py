@@ -339,6 +339,45 @@ def plot(
     typer.echo("Wrote " + ", ".join(str(p) for p in paths))
 
 
+@app.command()
+@user_errors
+def stress(
+    reduced: bool = typer.Option(False, "--reduced", help="Fewer values per axis and short runs (~15 s; the test suite's version)."),
+    md: Path = typer.Option(Path("docs/stability.md"), "--md", help="Markdown table to write."),
+    png: Path = typer.Option(Path("docs/stability.png"), "--png", help="PNG map to write."),
+    jobs: int = typer.Option(2, "--jobs", "-j", help="Parallel worker processes (cases are independent)."),
+):
+    """Stability under stress: sweep EA, sag, load scale, n, step size, duration and slackening
+    loads; check every run for success, drift of eq. 15, agreement with a second scheme and
+    clean failure. Exit status 0 if no run FAILED, else 1."""
+    import time
+
+    from .stress import FAILED, build_cases, format_summary, format_table, run_stress, write_report
+
+    if jobs == 0 or jobs < -1:
+        raise CablesimError("--jobs must be a positive number of processes, or -1 for all cores.")
+    total = len(build_cases(reduced))
+    done = {"n": 0}
+
+    def progress(rows):
+        done["n"] += 1
+        r = rows[0]
+        outcomes = ", ".join(x["outcome"] for x in rows)
+        sys.stderr.write(f"[{done['n']}/{total}] {r['axis']}: {r['label']} -> {outcomes}\n")
+
+    t0 = time.perf_counter()
+    rows = run_stress(reduced, jobs=jobs, progress=progress)
+    wall = time.perf_counter() - t0
+    md_path, png_path = write_report(rows, md, png, wall)
+    typer.echo(format_table(rows))
+    typer.echo(format_summary(rows, wall))
+    typer.echo(f"\nWrote {md_path} and {png_path}")
+    failed = sum(r["outcome"] == FAILED for r in rows)
+    if failed:
+        _say_error(f"{failed} stress run(s) FAILED (listed above and in {md_path}); each is a bug to fix.")
+        raise typer.Exit(1)
+
+
 def main():
     """Entry point of the ``cablesim`` console script."""
     app()

@@ -188,3 +188,29 @@ def modal_damping_ratios(omega: np.ndarray, a0: float, a1: float) -> np.ndarray:
     """Damping ratio of each mode under Rayleigh damping: ``a0 / (2 w) + a1 w / 2``."""
     omega = np.asarray(omega, dtype=float)
     return a0 / (2.0 * omega) + a1 * omega / 2.0
+
+
+def fastest_rate(omega: np.ndarray, a0: float, a1: float) -> float:
+    """Largest ``|lambda|`` of the damped linear system ``M q'' + C q' + K0 q = 0``, 1/s.
+
+    With Rayleigh damping each mode obeys ``lambda^2 + 2 xi w lambda + w^2 = 0``. A lightly
+    damped mode has ``|lambda| = w``; an overdamped one (``xi > 1``: stiffness-proportional
+    damping does this to the high modes of a finely divided cable) has a fast real root
+    ``w (xi + sqrt(xi^2 - 1))``, roughly ``a1 w^2``, which can exceed ``omega_max`` several times.
+    An explicit scheme's step must resolve this rate (rk4: ``dt < 2.8 / rate``).
+
+    Parameters
+    ----------
+    omega : ndarray
+        Modal frequencies, rad/s.
+    a0, a1 : float
+        Rayleigh coefficients.
+
+    Returns
+    -------
+    float
+    """
+    w = np.asarray(omega, dtype=float)
+    xi = modal_damping_ratios(w, a0, a1)
+    lam = np.where(xi > 1.0, w * (xi + np.sqrt(np.maximum(xi * xi - 1.0, 0.0))), w)
+    return float(lam.max())

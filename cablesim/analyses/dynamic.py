@@ -12,7 +12,7 @@ from ..dynamics.history import build_equations, default_integrator, mode_velocit
 from ..dynamics.integrators import INTEGRATORS, DOPRI5, GeneralizedAlpha, Integrator, Newmark, RK4
 from ..dynamics.result import HistoryResult
 from ..errors import CablesimError
-from ..modal import modal_analysis
+from ..modal import fastest_rate, modal_analysis
 from .static import StaticResult, run_static
 
 #: Saved instants per period of the highest frequency of interest, by default.
@@ -52,8 +52,8 @@ def make_integrator(
     if name not in INTEGRATORS:
         raise CablesimError(f"integrator.name must be one of {', '.join(INTEGRATORS)}; got {name!r}.")
     if name == "rk4":
-        if spec.dt is None:
-            dt = min(dt, 2.0 / float(w[-1]))  # inside RK4's stability limit 2.8 / omega_max
+        if spec.dt is None:  # inside RK4's stability limit 2.8 / (fastest rate of the damped system)
+            dt = min(dt, 2.0 / fastest_rate(w, eom.a0, eom.a1))
         return RK4(dt=dt)
     if name == "dopri5":
         return DOPRI5(rtol=spec.rtol or 1e-8, atol=spec.atol or 1e-10 * eom.cable.chord_length)

@@ -18,7 +18,7 @@ from numba import njit
 
 from ..analyses.static import StaticResult
 from ..case import Case
-from ..modal import modal_analysis, rayleigh_coefficients
+from ..modal import fastest_rate, modal_analysis, rayleigh_coefficients
 from . import kernels as kn
 from .equations import EquationsOfMotion, approximate_workspace, observe
 from .integrators import DOPRI5, GeneralizedAlpha, Integrator
@@ -127,16 +127,16 @@ class _Interrupt:
 
 def _failure_text(code: int, t: float, eom: EquationsOfMotion, integrator: Integrator, state_s) -> str:
     where = f"at t = {t:.6g} s"
-    w_max = float(modal_analysis(eom.K0, eom.mass).omega[-1])
+    rate = fastest_rate(modal_analysis(eom.K0, eom.mass).omega, eom.a0, eom.a1)
     dt = getattr(integrator, "dt", None)
-    if integrator.name == "rk4" and dt is not None and dt * w_max > 2.0:
+    if integrator.name == "rk4" and dt is not None and dt * rate > 2.0:
         # An explicit step beyond its stability limit grows without bound; a segment usually
         # compresses (reads as slack) before anything turns non-finite, so say so first.
         return (
             f"stopped {where}: {kn.STATUS_TEXT[code]}, but the step dt = {dt:.3g} s exceeds rk4's "
-            f"stability limit (about 2.8 / omega_max = {2.8 / w_max:.3g} s for omega_max = "
-            f"{w_max:.4g} rad/s), which is the likely cause: use a smaller dt, dopri5, or the "
-            "newmark or generalized-alpha integrator"
+            f"stability limit (about 2.8 / {rate:.4g} 1/s = {2.8 / rate:.3g} s, set by the fastest "
+            "mode or, with stiffness-proportional damping, the fastest overdamped mode), which is "
+            "the likely cause: use a smaller dt, dopri5, or the newmark or generalized-alpha integrator"
         )
     if code == kn.SLACK:
         T = np.empty(eom.cable.n_segments)

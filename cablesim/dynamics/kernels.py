@@ -184,32 +184,113 @@ def _phi(S, Q, eps, L, H, F0, F1):
 
 
 @njit(cache=True)
+def _escape_kink(S, Q, eps, L, H, F):
+    """Move F out of the kink ``F = Q_k`` nearest to it, along the exact descent ray.
+
+    At the kink the steepest-descent direction of Phi is ``-g_rest`` (the gradient of the other
+    terms); if the segment is not slack Phi decreases along it, and the 1-D problem is convex:
+    bisect its slope. Returns False if no descent exists (the segment is slack).
+    """
+    n1 = S.size
+    k = 0
+    tmin = np.inf
+    qmax = 0.0
+    for m in range(n1):
+        T = np.sqrt((F[0] - Q[m, 0]) ** 2 + (F[1] - Q[m, 1]) ** 2)
+        if T < tmin:
+            tmin = T
+            k = m
+        qmax = max(qmax, abs(Q[m, 0]), abs(Q[m, 1]))
+    ztol = 1e-13 * max(qmax, 1e-300)
+    g0 = -L
+    g1 = -H
+    radius = 0.0
+    for m in range(n1):
+        d0 = Q[k, 0] - Q[m, 0]
+        d1 = Q[k, 1] - Q[m, 1]
+        T = np.sqrt(d0 * d0 + d1 * d1)
+        if T <= ztol:
+            radius += S[m]
+        else:
+            c = S[m] * (1.0 / T + eps)
+            g0 += c * d0
+            g1 += c * d1
+    gn = np.sqrt(g0 * g0 + g1 * g1)
+    if gn <= radius:
+        return False
+    u0 = -g0 / gn
+    u1 = -g1 / gn
+    hi = 1e-9 * max(qmax, abs(F[0]), abs(F[1]), 1e-300)
+    for _ in range(200):
+        r = _phi(S, Q, eps, L, H, Q[k, 0] + hi * u0, Q[k, 1] + hi * u1)
+        if r[1] * u0 + r[2] * u1 >= 0.0:
+            break
+        hi *= 4.0
+    lo = 0.0
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        r = _phi(S, Q, eps, L, H, Q[k, 0] + mid * u0, Q[k, 1] + mid * u1)
+        if r[1] * u0 + r[2] * u1 < 0.0:
+            lo = mid
+        else:
+            hi = mid
+        if hi - lo <= 1e-15 * hi:
+            break
+    F[0] = Q[k, 0] + 0.5 * (lo + hi) * u0
+    F[1] = Q[k, 1] + 0.5 * (lo + hi) * u1
+    return True
+
+
+@njit(cache=True)
 def closure_solve(S, Q, eps, L, H, F, tol, maxit):
     """Damped Newton on the complementary energy from the start ``F`` (updated in place).
 
-    Returns the number of iterations, or -1 if it failed (a segment near slack, or no
-    convergence).
+    Near a kink of Phi (a segment force passing through zero) Newton's model is useless; there
+    the iterate escapes along the exact descent ray (see :func:`_escape_kink`), as in
+    :func:`cablesim.statics.solve_segment_forces`. Returns the number of iterations, or -1 if
+    it failed (a slack segment, or no convergence).
     """
     phi, g0, g1, h00, h01, h11, tmin = _phi(S, Q, eps, L, H, F[0], F[1])
     gn = np.sqrt(g0 * g0 + g1 * g1)
     it = 0
+    escapes = 0
     while gn > tol:
-        if it >= maxit or tmin <= 0.0:
+        if it >= maxit:
             return -1
         it += 1
+        tr = h00 + h11
         det = h00 * h11 - h01 * h01
+        if det <= 1e-12 * tr * tr:  # (nearly) parallel segments: regularise
+            h00 += 1e-6 * tr
+            h11 += 1e-6 * tr
+            det = h00 * h11 - h01 * h01
         d0 = -(h11 * g0 - h01 * g1) / det
         d1 = -(h00 * g1 - h01 * g0) / det
         slope = g0 * d0 + g1 * d1
         step = 1.0
+        stalled = False
         while True:
             phin, gn0, gn1, hn00, hn01, hn11, tminn = _phi(S, Q, eps, L, H, F[0] + step * d0, F[1] + step * d1)
             gnn = np.sqrt(gn0 * gn0 + gn1 * gn1)
             if phin <= phi + 1e-4 * step * slope or gnn < 0.5 * gn:
                 break
             step *= 0.5
-            if step < 1e-14:
+            if step < 1e-10:
+                stalled = True
+                break
+        fnorm = np.sqrt((F[0] + step * d0) ** 2 + (F[1] + step * d1) ** 2)
+        if stalled or tminn < 1e-9 * max(fnorm, 1e-300):
+            if escapes >= 50:
                 return -1
+            escapes += 1
+            if not stalled:
+                F[0] += step * d0
+                F[1] += step * d1
+            if not _escape_kink(S, Q, eps, L, H, F):
+                return -1
+            phi, g0, g1, h00, h01, h11, tmin = _phi(S, Q, eps, L, H, F[0], F[1])
+            gn = np.sqrt(g0 * g0 + g1 * g1)
+            continue
         F[0] += step * d0
         F[1] += step * d1
         phi, g0, g1, h00, h01, h11, tmin, gn = phin, gn0, gn1, hn00, hn01, hn11, tminn, gnn

@@ -332,8 +332,8 @@ def _waveform_on_sweep(work, results):
 
 
 def _window(work, results):
-    a = with_figure(results, "full.h5", work / "a.h5", "  kind: waveform\n  time_window: [100, 200]\n")
-    return [a], ("time_window", "0 to 30 s")
+    a = with_figure(results, "full.h5", work / "a.h5", "  kind: waveform\n  time_window: [20, 10]\n")
+    return [a], ("time_window", "increasing")
 
 
 def _segments(work, results):
@@ -371,3 +371,12 @@ def test_bad_input_exit_2(work, results, make):
 def test_plot_needs_a_file(work):
     code, out, err, exc = _invoke("plot")
     assert code == 2 and "Missing argument" in err
+
+
+def test_window_beyond_the_run_moves_to_its_end(work, results):
+    """A window past the end of a (shorter, or stopped) run shows the same length at its end."""
+    a = with_figure(results, "full.h5", work / "late.h5", "  kind: waveform\n  time_window: [100, 110]\n")
+    from cablesim.figures import redraw
+
+    (png,) = redraw([a], work / "late.png")
+    check_png(png)

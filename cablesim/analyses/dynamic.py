@@ -43,7 +43,16 @@ def make_integrator(
     name = name or spec.name
     w = modal_analysis(eom.K0, eom.mass).omega
     w_int = max(omega_interest, float(w[0]))
-    dt = spec.dt if spec.dt is not None else 2.0 * np.pi / w_int / STEPS_PER_PERIOD
+    if spec.dt is not None:
+        dt = spec.dt
+    else:
+        dt = 2.0 * np.pi / w_int / STEPS_PER_PERIOD
+        if eom.omega > 0:
+            # Make the default step divide the forcing period, so that the once-per-period samples
+            # of the steady-state test fall on steps rather than between them (interpolating a
+            # second-order scheme would add O(dt^2) jitter that masks periodicity).
+            period = 2.0 * np.pi / eom.omega
+            dt = period / np.ceil(period / dt - 1e-9)
     if name is None:
         chosen = default_integrator(eom, w_int)
         if isinstance(chosen, DOPRI5):
@@ -53,7 +62,12 @@ def make_integrator(
         raise CablesimError(f"integrator.name must be one of {', '.join(INTEGRATORS)}; got {name!r}.")
     if name == "rk4":
         if spec.dt is None:  # inside RK4's stability limit 2.8 / (fastest rate of the damped system)
-            dt = min(dt, 2.0 / fastest_rate(w, eom.a0, eom.a1))
+            limit = 2.0 / fastest_rate(w, eom.a0, eom.a1)
+            if dt > limit:
+                dt = limit
+                if eom.omega > 0:
+                    period = 2.0 * np.pi / eom.omega
+                    dt = period / np.ceil(period / dt)
         return RK4(dt=dt)
     if name == "dopri5":
         return DOPRI5(rtol=spec.rtol or 1e-8, atol=spec.atol or 1e-10 * eom.cable.chord_length)

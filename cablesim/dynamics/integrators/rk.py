@@ -20,6 +20,16 @@ from ..equations import rate
 from .base import Integrator, IntegratorState, hermite
 
 
+def _start(eom, s0, t0) -> IntegratorState:
+    """State of an explicit scheme at ``t0``, with the rate there (``extra['fa']``, ``['code']``)."""
+    st = IntegratorState(t=t0, s=np.array(s0, dtype=float), warm=np.array(eom.F1, dtype=float))
+    st.wk = eom.workspaces()
+    fa = np.empty_like(st.s)
+    code = rate(eom.params(), t0, st.s, st.warm, fa, *st.wk)
+    st.extra.update(fa=fa, code=code)
+    return st
+
+
 @njit(cache=True)
 def _rk4_advance(prm, s, fa, warm, wk, awk, t0, h, i0, nsteps, t_out, out):
     n = s.size
@@ -73,11 +83,8 @@ class RK4(Integrator):
     description = "classical Runge-Kutta, fixed step (explicit; third-order state)"
 
     def start(self, eom, s0, t0=0.0):
-        st = IntegratorState(t=t0, s=np.array(s0, dtype=float), warm=np.array(eom.F1, dtype=float))
-        st.wk = eom.workspaces()
-        fa = np.empty_like(st.s)
-        code = rate(eom.params(), t0, st.s, st.warm, fa, *st.wk)
-        st.extra.update(fa=fa, t0=t0, i=0, code=code)
+        st = _start(eom, s0, t0)
+        st.extra.update(t0=t0, i=0)
         return st
 
     def advance(self, prm, state, t_end, t_out, out):
@@ -188,10 +195,7 @@ class DOPRI5(Integrator):
     description = "Dormand-Prince 5(4), adaptive step (explicit; third-order state)"
 
     def start(self, eom, s0, t0=0.0):
-        st = IntegratorState(t=t0, s=np.array(s0, dtype=float), warm=np.array(eom.F1, dtype=float))
-        st.wk = eom.workspaces()
-        fa = np.empty_like(st.s)
-        code = rate(eom.params(), t0, st.s, st.warm, fa, *st.wk)
+        st = _start(eom, s0, t0)
         nd = eom.n_dof
         from ...modal import modal_analysis
 
@@ -200,7 +204,7 @@ class DOPRI5(Integrator):
         atol = np.concatenate([np.full(nd, self.atol), np.full(nd, self.atol * w_ref), np.full(nd, self.atol * w_ref**2)])
         # First step: a fraction of the shortest modal period, refined by the controller.
         h0 = min(0.2 / float(w[-1]), self.dt_max)
-        st.extra.update(fa=fa, h=h0, atol=atol, code=code)
+        st.extra.update(h=h0, atol=atol)
         return st
 
     def advance(self, prm, state, t_end, t_out, out):

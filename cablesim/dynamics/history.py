@@ -86,8 +86,9 @@ def default_integrator(eom: EquationsOfMotion, omega_interest: float) -> Integra
     """The scheme cablesim uses when the case names none.
 
     Non-stiff cables (highest mode within a few hundred times the frequency of interest): the
-    adaptive ``dopri5``. Stiff cables: ``generalized-alpha`` with 100 steps per period of the
-    frequency of interest, which damps the spurious high axial modes.
+    adaptive ``dopri5``. Stiff cables: ``generalized-alpha``, which damps the spurious high axial
+    modes; :func:`cablesim.analyses.dynamic.make_integrator` sets its step (1600 per period of
+    the frequency of interest).
     """
     w = modal_analysis(eom.K0, eom.mass).omega
     w_int = max(omega_interest, w[0])

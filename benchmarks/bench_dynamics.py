@@ -106,6 +106,9 @@ class Scene:
     # scipy baseline: (method, rtol) pairs; quick runs take the first only
     scipy: tuple = (("RK45", 1e-4), ("RK45", 1e-6), ("DOP853", 1e-5), ("DOP853", 1e-7))
     dopri5_rtols: tuple = (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10)
+    # The README's recommended default when it differs from today's: generalized-alpha with this
+    # many steps per period of interest (rounded, like make_integrator, to divide the forcing period).
+    recommended_steps: int | None = None
 
 
 SCENES = {
@@ -120,7 +123,7 @@ SCENES = {
              scipy=(("RK45", 1e-4), ("RK45", 1e-6), ("RK45", 1e-8), ("DOP853", 1e-5), ("DOP853", 1e-7),
                     ("DOP853", 1e-9))),
     4: Scene(4, "stiff cable EA = 1e12 N (Fig. 8a loads), w = 0.81 rad/s, 600 s",
-             "configs/paper/fig8a.yaml", "exact", 0.81, 600.0, 0.05, 100.0, reference="radau",
+             "configs/paper/fig8a.yaml", "exact", 0.81, 600.0, 0.05, 100.0, reference="radau", recommended_steps=1600,
              scipy=(("Radau", 1e-4), ("Radau", 1e-6))),
     5: Scene(5, "approximate analysis, Fig. 3a loads, w = 2.4 rad/s, 300 s",
              "configs/paper/fig3a.yaml", "approximate", 2.4, 300.0, 0.05, 60.0, reference="approximate",
@@ -481,6 +484,7 @@ class Point:
     error_early: float | None
     status: str
     is_default: bool = False
+    is_recommended: bool = False
     integ: object = field(default=None, repr=False)
     times: list = field(default_factory=list, repr=False)
 
@@ -488,7 +492,7 @@ class Point:
         return dict(scene=self.scene, method=self.method, setting=self.setting, wall_s=f"{self.wall_s:.6g}",
                     n_runs=self.n_runs, error=f"{self.error:.4g}",
                     error_early="" if self.error_early is None else f"{self.error_early:.4g}",
-                    default=int(self.is_default), status=self.status)
+                    default=int(self.is_default), recommended=int(self.is_recommended), status=self.status)
 
 
 def run_cablesim(su: Setup, integ):
@@ -518,6 +522,20 @@ def ladders(su: Setup, quick: bool):
     nm = [Newmark(dt=dt0 * 2.0 ** -k) for k in range(n_fixed)]
     ga = [GeneralizedAlpha(dt=dt0 * 2.0 ** -k, rho_inf=0.8) for k in range(n_fixed)]
     return {"rk4": (rk4, 1e-8), "dopri5": (dopri, 0.0), "newmark": (nm, 1e-6), "generalized-alpha": (ga, 1e-6)}
+
+
+def recommended(su: Setup):
+    """The recommended default of the scene when it differs from today's (else None)."""
+    n = su.scene.recommended_steps
+    if n is None:
+        return None
+    def divisor(dt):  # make_integrator's rounding: a step that divides the forcing period
+        if su.scene.omega <= 0:
+            return dt
+        period = 2 * math.pi / su.scene.omega
+        return period / np.ceil(period / dt - 1e-9)
+
+    return GeneralizedAlpha(dt=divisor(divisor(2 * np.pi / su.w_interest / 100) * 100 / n), rho_inf=0.8)
 
 
 def measure_cablesim(su: Setup, zref, quick: bool, repeats: int):
@@ -554,8 +572,13 @@ def measure_cablesim(su: Setup, zref, quick: bool, repeats: int):
             prev = e
     if not any((p.method, p.setting) == default_label for p in points):
         first_pass(su.default, su.default.name)
+    rec = recommended(su)
+    rec_label = (rec.name, label_of(rec)) if rec is not None else default_label
+    if not any((p.method, p.setting) == rec_label for p in points):
+        first_pass(rec, rec.name)
     for p in points:
         p.is_default = (p.method, p.setting) == default_label
+        p.is_recommended = (p.method, p.setting) == rec_label
     # Further runs, round-robin over the settings (short runs get a few more).
     for rep in range(repeats - 1 + 4):
         for p in points:
@@ -661,6 +684,11 @@ def summarise(su: Setup, points, ref_rows, lines):
                      + (f", whole run {d.error:.1e}" if sc.early else "")
                      + ("" if b4 is None else f" ({d.wall_s / b4.wall_s:.1f}x the cost of the cheapest run below 1e-4)"
                         if ed < 1e-4 else " (above 1e-4)") + ".")
+    r = [p for p in cs if p.is_recommended and not p.is_default]
+    if r:
+        r = r[0]
+        lines.append(f"- recommended default (README): {r.method} {r.setting}: {r.wall_s:.3g} s, {by} {key_error(su, r):.1e}"
+                     + (f" ({r.wall_s / d.wall_s:.1f}x today's default)" if d else "") + ".")
     print("\n".join(lines[start:]), flush=True)
 
 
@@ -687,6 +715,8 @@ def plot(su: Setup, points, ref_rows, path):
             for p in rs:
                 if p.is_default:
                     ax.plot(e(p), p.wall_s, "*", ms=16, mfc="none", mec="k", label="default today")
+                if p.is_recommended and not p.is_default:
+                    ax.plot(e(p), p.wall_s, "D", ms=11, mfc="none", mec="k", label="recommended default")
         ax.axvline(1e-4, color="0.5", ls=":", label="error 1e-4")
         # The reference's accuracy: its smallest difference from a check (a looser check differs
         # by about its own error, a tighter or independent one by about the reference's).
@@ -712,7 +742,7 @@ def write_csv(path: Path, rows, scenes_run):
             old = [r for r in csv.DictReader(fh) if (r.get("scene") or "").isdigit() and int(r["scene"]) not in scenes_run]
     rows = old + rows
     rows.sort(key=lambda r: int(r["scene"]))
-    fields = ["scene", "method", "setting", "wall_s", "n_runs", "error", "error_early", "default", "status"]
+    fields = ["scene", "method", "setting", "wall_s", "n_runs", "error", "error_early", "default", "recommended", "status"]
     with open(path, "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=fields, extrasaction="ignore")
         w.writeheader()
@@ -752,7 +782,8 @@ def prepare(sc: Scene, quick: bool):
 
 def point_of(r) -> Point:
     return Point(int(r["scene"]), r["method"], r["setting"], float(r["wall_s"]), int(r["n_runs"]), float(r["error"]),
-                 float(r["error_early"]) if r["error_early"] else None, r["status"], is_default=r["default"] == "1")
+                 float(r["error_early"]) if r["error_early"] else None, r["status"], is_default=r["default"] == "1",
+                 is_recommended=r.get("recommended") == "1" or (r["default"] == "1" and SCENES[int(r["scene"])].recommended_steps is None))
 
 
 def report(out: Path, quick: bool):

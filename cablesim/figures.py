@@ -744,7 +744,7 @@ def _draw_fdr(fig_spec, infos, png: Path, title: str) -> Path:
     from matplotlib.lines import Line2D
 
     from .plot_history import _channel_desc
-    from .plot_sweep import QUANTITIES, _STYLE, _read_sweep, _runs, _select_channels, _text as sw_text
+    from .plot_sweep import QUANTITIES, _STYLE, _read_sweep, _runs, _select_channels, marker_handles, _text as sw_text
     from .plotting import _plt, save_atomic
 
     sweeps = [_read_sweep(i.path) for i in infos]
@@ -826,12 +826,7 @@ def _draw_fdr(fig_spec, infos, png: Path, title: str) -> Path:
         st = _STYLE[d]
         handles.append(Line2D([], [], ls=st["ls"], marker=st["marker"], ms=st["ms"] + 1, color="0.3", lw=1.2,
                               label=st["label"]))
-    if any_unsteady:
-        handles.append(Line2D([], [], ls="none", marker="o", ms=8, mfc="none", mec="red", mew=1.2,
-                              label="not steady (cap reached)"))
-    if any_sub:
-        handles.append(Line2D([], [], ls="none", marker="D", ms=3.5, color="k",
-                              label="subharmonic response,\nlabelled 1/p"))
+    handles += marker_handles(any_unsteady, any_sub)
     if modal:
         handles.append(Line2D([], [], ls=":", color="0.5", lw=1.0,
                               label="linear modal frequencies\n(" + ", ".join(f"{w:.4g}" for w in modal) + " rad/s)"))

@@ -438,12 +438,7 @@ def plot_sweep(h5_path, png_path=None, channels=None, quantity: str = "amplitude
         st = _STYLE[d]
         handles.append(Line2D([], [], ls=st["ls"], marker=st["marker"], ms=st["ms"] + 1, color=style_color,
                               lw=1.2, label=st["label"]))
-    if any_unsteady:
-        handles.append(Line2D([], [], ls="none", marker="o", ms=8, mfc="none", mec="red", mew=1.2,
-                              label="not steady (cap reached)"))
-    if any_sub:
-        handles.append(Line2D([], [], ls="none", marker="D", ms=3.5, color="k",
-                              label="subharmonic response (period p >= 2),\nlabelled 1/p"))
+    handles += marker_handles(any_unsteady, any_sub)
     if modal_k:
         handles.append(Line2D([], [], ls=":", color="0.5", lw=1.0, label="linear modal frequencies"))
     top_ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, framealpha=0.9)
@@ -474,3 +469,17 @@ def plot_sweep(h5_path, png_path=None, channels=None, quantity: str = "amplitude
         fig.text(0.5 * (pos.x0 + pos.x1), 0.0, "\n".join(notes), ha="center", va="top", fontsize=9,
                  color="red" if warn else "0.3", fontweight="bold" if warn else "normal", wrap=True)
     return save_atomic(fig, png_path)
+
+
+def marker_handles(any_unsteady: bool, any_sub: bool) -> list:
+    """Legend entries for the point markers of a frequency-response plot (those present)."""
+    from matplotlib.lines import Line2D
+
+    handles = []
+    if any_unsteady:
+        handles.append(Line2D([], [], ls="none", marker="o", ms=8, mfc="none", mec="red", mew=1.2,
+                              label="not steady (cap reached)"))
+    if any_sub:
+        handles.append(Line2D([], [], ls="none", marker="D", ms=3.5, color="k",
+                              label="subharmonic response (period p >= 2),\nlabelled 1/p"))
+    return handles

@@ -74,10 +74,10 @@ import numpy as np
 from numba import njit
 from scipy.integrate import ode, solve_ivp
 
-from cablesim.analyses.dynamic import make_integrator
+from cablesim.analyses.setup import build_equations, make_integrator, mode_velocity
 from cablesim.analyses.static import run_static
 from cablesim.case import IntegratorSpec, load_case
-from cablesim.dynamics.history import build_equations, mode_velocity, simulate
+from cablesim.dynamics.simulate import simulate
 from cablesim.dynamics.integrators import DOPRI5, RK4, GeneralizedAlpha, Newmark
 
 OUT = Path("runs/bench")

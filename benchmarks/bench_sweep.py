@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cablesim.analyses.sweep import run_sweep
+from cablesim import api
 from cablesim.case import example_text, parse_case
 
 CASE = example_text().split("\nsweep:")[0] + """
@@ -32,7 +32,7 @@ def run(num: int, jobs: int, tmp: Path):
     case = parse_case(text, default_name="bench-fig3a")
     out = tmp / f"sweep-{num}-{jobs}.h5"
     t0 = time.perf_counter()
-    res = run_sweep(case, text, out, n_jobs=jobs)
+    res = api.sweep(case, jobs=jobs, output=out).result
     wall = time.perf_counter() - t0
     d = res.data[0]
     return wall, float(np.sum(d["t_end"])), float(np.sum(d["wall"])), res

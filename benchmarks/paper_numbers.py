@@ -11,8 +11,8 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from cablesim.figures import read_history
-from cablesim.plot_history import spectrum, spectrum_peaks
+from cablesim.dynamics.spectra import spectrum_peaks
+from cablesim.io.hdf5 import read_history
 
 D = Path(sys.argv[1] if len(sys.argv) > 1 else "runs/paper")
 
@@ -73,7 +73,7 @@ def main():
     z = h.z[:, 0]
     tj, ref, top = envelope_jump(h.t, z, 300.0)
     print(f"== fig3b: w = {h.omega}, envelope at 300 s {ref:.4g} m, first doubling after {tj} s, max {top:.4g} m, "
-          f"final spectrum peaks {spectrum_peaks(h.t, z, 0.2, 3).round(4)} rad/s, status {h.status}")
+          f"final spectrum peaks {spectrum_peaks(h.t, z, 0.2, 3).round(4)} rad/s, status {h.message}")
     report_sweep("fig4", [(2.0, 3.0), (4.5, 5.5)])
     report_sweep("fig5a", [(11.5, 12.5), (12.5, 13.5)])
     h = read_history(D / "fig5b.h5")
@@ -81,7 +81,7 @@ def main():
     pk = spectrum_peaks(h.t, z, 1.0, 3)
     seg = z.size // 20
     env = np.array([np.abs(z[i:i + seg]).max() for i in range(0, z.size - seg, seg // 4)])
-    print(f"== fig5b: status {h.status}; t_end {h.t[-1]:.4g}; z4 spectrum peaks {pk.round(4)}; "
+    print(f"== fig5b: status {h.message}; t_end {h.t[-1]:.4g}; z4 spectrum peaks {pk.round(4)}; "
           f"beat ~ half the peak spacing {abs(pk[0] - pk[1]) / 2 if pk.size > 1 else float('nan'):.4f} rad/s; max |z4| {np.abs(z).max():.4g}")
     report_sweep("fig6", [(1.0, 2.1), (2.1, 4.0)])
     report_sweep("fig7a", [(1.0, 2.3), (2.3, 4.0)])
@@ -105,7 +105,7 @@ def main():
     z = h.z[:, 0]
     tj, ref, top = envelope_jump(h.t, z, 300.0)
     print(f"== fig8c: w = {h.omega}; envelope at 300 s {ref:.4g} m, first doubling after {tj} s, max {top:.4g} m; "
-          f"final spectrum peaks {spectrum_peaks(h.t, z, 0.3, 3).round(4)} rad/s; status {h.status}")
+          f"final spectrum peaks {spectrum_peaks(h.t, z, 0.3, 3).round(4)} rad/s; status {h.message}")
 
 
 if __name__ == "__main__":

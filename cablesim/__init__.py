@@ -2,16 +2,48 @@
 
 A planar cable is fixed at support A = (0, 0) and support B = (L, H) and carries n lumped
 masses at its interior nodes. The vertical axis points *down* (along gravity-like loads), so
-``H > 0`` puts B below A and a positive vertical load pulls a node down.
+``H > 0`` puts B below A and a positive vertical load pulls a node down. SI units throughout.
 
-The layers, from the bottom up:
+Python API (the command line's analyses; see :mod:`cablesim.api`)::
 
-- :mod:`cablesim.cable` -- the cable model (geometry, EA, masses, degree-of-freedom order);
-- :mod:`cablesim.statics` -- inextensible, approximate-elastic and exact-elastic equilibria;
-- :mod:`cablesim.modal` -- modal analysis and Rayleigh damping;
-- :mod:`cablesim.case` -- YAML case files validated into a frozen case model;
-- :mod:`cablesim.io_hdf5`, :mod:`cablesim.plotting` -- writers;
-- :mod:`cablesim.cli` -- the ``cablesim`` command.
+    import cablesim
+    case = cablesim.load_case("my-case.yaml")     # or a dict, or None for the paper's example
+    st = cablesim.static(case)                     # StaticRun: .result, .to_hdf5(path), .plot(png)
+    h = cablesim.history(case, omega=2.4, duration=600.0)   # HistoryRun: .history, .to_hdf5(path)
+    fv = cablesim.free_vibration(case, mode=3, peak_velocity=1.0)
+    sw = cablesim.sweep(case, jobs=2)              # SweepRun: .result, .to_hdf5(path)
+
+The package, from the bottom layer up (a module imports only from layers below it; checked by
+``tests/test_architecture.py``):
+
+- ``names``, ``errors``, ``version``, ``channels`` -- the vocabulary;
+- ``cable``, ``statics``, ``modal`` -- the model: geometry, the three static equilibria
+  (complementary energy), modes and Rayleigh damping;
+- ``dynamics/`` -- compiled kernels, the equations of motion (``equations``), the integrators
+  (``integrators/``), time histories (``simulate``), steady states (``steady``), spectra, run
+  status (``status``); it never sees a case file;
+- ``orbits/`` -- periodic orbits by shooting, Floquet multipliers, continuation, bifurcations;
+- ``case`` -- YAML case files validated into a frozen :class:`~cablesim.case.Case`;
+- ``analyses/`` -- case in, result out: ``setup`` (equations, integrator and step rules, once),
+  ``static``, ``dynamic``, ``sweep``, ``continuation``; no drawing, no files;
+- ``io/`` -- HDF5 writers and readers (``hdf5``, the only h5py), sweep journal, text summaries;
+- ``plots/`` -- every PNG (the only matplotlib);
+- ``stress/`` -- numerical stability across parameter ranges (``cablesim stress``);
+- ``api`` and ``cli`` -- the Python API and the ``cablesim`` command.
 """
 
-__version__ = "0.1.0"
+from .version import __version__
+
+_API = ("load_case", "static", "history", "free_vibration", "sweep", "continuation",
+        "StaticRun", "HistoryRun", "SweepRun", "ContinuationRun")
+
+__all__ = ["__version__", *_API]
+
+
+def __getattr__(name: str):
+    # The API pulls in numba and scipy; load it on first use so `import cablesim` stays light.
+    if name in _API:
+        from . import api
+
+        return getattr(api, name)
+    raise AttributeError(f"module 'cablesim' has no attribute {name!r}")

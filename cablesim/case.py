@@ -16,10 +16,11 @@ from typing import Any, Literal
 
 import numpy as np
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator, model_validator
 
 from .cable import Cable
 from .errors import CablesimError
+from .names import ANALYSES, DIRECTIONS, INTEGRATORS
 
 EXAMPLE_RESOURCE = "paper-example.yaml"
 
@@ -115,7 +116,6 @@ class DampingSpec(_Strict):
         return self
 
 
-INTEGRATOR_NAMES = ("rk4", "dopri5", "newmark", "generalized-alpha")
 
 
 class IntegratorSpec(_Strict):
@@ -125,7 +125,7 @@ class IntegratorSpec(_Strict):
     stiff ones (highest mode over 200 times the frequency of interest).
     """
 
-    name: Literal["rk4", "dopri5", "newmark", "generalized-alpha"] | None = None
+    name: Literal[INTEGRATORS] | None = None
     dt: float | None = Field(default=None, gt=0, description="fixed step, s (rk4, newmark, generalized-alpha)")
     rtol: float | None = Field(default=None, gt=0, lt=1, description="relative tolerance (dopri5)")
     atol: float | None = Field(default=None, gt=0, description="absolute displacement tolerance, m (dopri5)")
@@ -194,7 +194,7 @@ class SweepSpec(_Strict):
     omega: Any = Field(description="grid {start, stop, num} or a list, rad/s")
     duration: float = Field(default=3000.0, gt=0, description="cap on simulated seconds per point")
     window: float = Field(default=200.0, gt=0, description="seconds at the end used when not steady")
-    direction: Literal["independent", "up", "down", "both"] = "independent"
+    direction: Literal[DIRECTIONS] = "independent"
     channels: tuple[str, ...] | None = Field(default=None, description="DOF reported, e.g. [z2, z4]")
     gamma: tuple[float, ...] | None = Field(default=None, description="scales of FL, one curve each")
     tol: float = Field(default=1e-5, gt=0, lt=0.1, description="relative periodicity tolerance")
@@ -291,7 +291,7 @@ class Case(_Strict):
     name: str | None = Field(default=None, description="case name; default: the file stem")
     cable: CableSpec
     loads: LoadsSpec
-    analysis: Literal["exact", "approximate"] = "exact"
+    analysis: Literal[ANALYSES] = "exact"
     damping: DampingSpec = DampingSpec(ratio=0.01)
     integrator: IntegratorSpec = IntegratorSpec()
     history: HistorySpec = HistorySpec()
@@ -299,6 +299,13 @@ class Case(_Strict):
     sweep: SweepSpec | None = None
     outputs: OutputsSpec = OutputsSpec()
     figure: FigureSpec | None = None
+    _text: str = PrivateAttr(default="")
+
+    @property
+    def text(self) -> str:
+        """The YAML text this case was read from (with any ``--set`` overrides recorded), stored
+        with every result so that it can be rerun."""
+        return self._text
 
     @field_validator("name")
     @classmethod
@@ -468,9 +475,11 @@ def parse_case(text: str, source: str = "<case>", default_name: str = "case", ov
     if data.get("name") is None:  # absent, or a blank `name:` (YAML null)
         data["name"] = default_name
     try:
-        return Case.model_validate(data)
+        case = Case.model_validate(data)
     except ValidationError as err:
         raise CablesimError(format_validation_error(err, source)) from None
+    case._text = _with_overrides(text, overrides)
+    return case
 
 
 def load_case(path: str | Path | None, overrides=None) -> tuple[Case, str]:
@@ -488,7 +497,7 @@ def load_case(path: str | Path | None, overrides=None) -> tuple[Case, str]:
     if path is None:
         text = example_text()
         case = parse_case(text, source="(embedded paper example)", default_name="paper-example", overrides=overrides)
-        return case, _with_overrides(text, overrides)
+        return case, case.text
     p = Path(path)
     try:
         text = p.read_text()
@@ -498,7 +507,21 @@ def load_case(path: str | Path | None, overrides=None) -> tuple[Case, str]:
         raise CablesimError(f"Case file {p} cannot be read ({exc.__class__.__name__}).") from None
     # A valid case name starts with a letter or digit; derive one from the file stem.
     stem = re.sub(r"[^A-Za-z0-9._-]", "-", p.stem).lstrip("._-") or "case"
-    return parse_case(text, source=str(p), default_name=stem, overrides=overrides), _with_overrides(text, overrides)
+    case = parse_case(text, source=str(p), default_name=stem, overrides=overrides)
+    return case, case.text
+
+
+def case_from_dict(data: dict, overrides=None) -> Case:
+    """A case from a mapping with the keys of a case file (e.g. built in a notebook).
+
+    Raises
+    ------
+    CablesimError
+        For any invalid field, as for a case file.
+    """
+    if not isinstance(data, dict):
+        raise CablesimError("A case is a mapping with at least the keys `cable` and `loads`.")
+    return parse_case(yaml.safe_dump(data, sort_keys=False), source="(case given as a mapping)", overrides=overrides)
 
 
 OVERRIDES_MARK = "# cablesim --set:"
@@ -518,3 +541,42 @@ def stored_overrides(text: str) -> list[str]:
 def example_text() -> str:
     """The embedded default case (the paper's example), as commented YAML."""
     return resources.files("cablesim").joinpath("data", EXAMPLE_RESOURCE).read_text()
+
+
+def read_figure(path):
+    """The ``figure:`` section of a YAML file (a case file, or a file holding only that section).
+
+    Returns
+    -------
+    FigureSpec
+
+    Raises
+    ------
+    CablesimError
+        If the file is missing, not YAML, has no ``figure:`` section or an invalid one.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except FileNotFoundError:
+        raise CablesimError(f"The figure file {path} does not exist. Check the path.") from None
+    except (IsADirectoryError, PermissionError, UnicodeDecodeError) as exc:
+        raise CablesimError(f"The figure file {path} cannot be read ({exc.__class__.__name__}).") from None
+    try:
+        data = yaml.load(text, Loader=_Loader)
+    except yaml.YAMLError:
+        raise CablesimError(f"The figure file {path} is not valid YAML; check its indentation.") from None
+    if not isinstance(data, dict) or not isinstance(data.get("figure"), dict):
+        raise CablesimError(
+            f"The figure file {path} has no figure: section; write one as in a case file "
+            "(figure: with kind, title, channels, pair, segments, time_window, labels)."
+        )
+
+    class _FigureFile(BaseModel):  # other keys (a whole case file) are ignored
+        model_config = ConfigDict(extra="ignore")
+        figure: FigureSpec
+
+    try:
+        return _FigureFile.model_validate(data).figure
+    except ValidationError as err:
+        raise CablesimError(format_validation_error(err, f"(figure file) {path}")) from None

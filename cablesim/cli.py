@@ -1,7 +1,10 @@
-"""The ``cablesim`` command line: a thin layer over the analyses and the writers.
+"""The ``cablesim`` command line: a thin layer over :mod:`cablesim.api`, the writers and plots.
 
 Every problem a user can fix is reported as one paragraph on standard error with exit status
 2 and no traceback; Ctrl-C exits with status 130 and keeps whatever was already written.
+
+Each command imports its machinery when it runs (numba, scipy, h5py, matplotlib are heavy), so
+that ``cablesim --help`` starts at once.
 """
 
 from __future__ import annotations
@@ -15,8 +18,9 @@ from typing import Optional
 
 import typer
 
-from . import __version__
 from .errors import CablesimError
+from .names import ANALYSES, INTEGRATORS
+from .version import __version__
 
 app = typer.Typer(
     add_completion=False,
@@ -27,9 +31,8 @@ app = typer.Typer(
 )
 
 
-class Analysis(str, Enum):
-    exact = "exact"
-    approximate = "approximate"
+Analysis = Enum("Analysis", {a.replace("-", "_"): a for a in ANALYSES}, type=str)
+IntegratorName = Enum("IntegratorName", {a.replace("-", "_"): a for a in INTEGRATORS}, type=str)
 
 
 def _say_error(message: str) -> None:
@@ -93,30 +96,18 @@ def static(
     plot: bool = typer.Option(True, "--plot/--no-plot", help="Also draw the cable as a PNG beside the HDF5 file."),
 ):
     """Static equilibrium under F0 (inextensible, approximate and exact), modes and damping."""
-    from .analyses.static import run_static
-    from .case import load_case
-    from .io_hdf5 import write_static
-    from .report import static_summary
+    from . import api
+    from .io.report import static_summary
 
-    case, text = load_case(case_file, overrides)
-    result = run_static(case, analysis.value if analysis else None)
-    typer.echo(static_summary(case, result))
+    case = api.load_case(case_file, overrides)
+    run = api.static(case, analysis.value if analysis else None)
+    typer.echo(static_summary(case, run.result))
     out = _output(case, output, "static")
-    write_static(out, result, text)
+    run.to_hdf5(out)
     msg = f"\nWrote {out}"
     if plot:
-        from .plotting import plot_cable
-
-        png = plot_cable(result, out.with_suffix(".png"), case.name)
-        msg += f" and {png}"
+        msg += f" and {run.plot(out.with_suffix('.png'))}"
     typer.echo(msg)
-
-
-class IntegratorName(str, Enum):
-    rk4 = "rk4"
-    dopri5 = "dopri5"
-    newmark = "newmark"
-    generalized_alpha = "generalized-alpha"
 
 
 class _LazyBar:
@@ -160,27 +151,25 @@ def _channels(spec: Optional[str], fallback) -> Optional[list[str]]:
     return list(fallback) if fallback else None
 
 
-def _finish_history(case, hist, integ, out: Path, text: str, command: str, plot: bool, channels, wall: float):
-    from .io_hdf5 import write_history
-    from .report import history_summary
+def _finish_history(run, out: Path, plot: bool, channels, wall: float):
+    from dataclasses import replace
 
+    from .channels import channel_index
+    from .dynamics.status import Status
+    from .io.report import history_summary
+
+    case, hist = run.case, run.history
     if case.outputs.channels:  # a scene keeps only the channels it draws
-        from .plot_history import channel_index
-
         keep = [channel_index(c, hist.n_dof) + 1 for c in case.outputs.channels]
-        hist = hist.keep(keep)
-    write_history(out, hist, text, command)
-    pngs = []
-    if plot and hist.t.size > 1:
-        from .plot_history import plot_history
-
-        what = f"{case.name} ({hist.analysis} analysis, {integ.name})"
-        pngs = plot_history(hist, out.with_suffix(""), what, channels=channels)
-    typer.echo(history_summary(case, hist, integ, wall))
+        run = replace(run, history=hist.keep(keep))
+        hist = run.history
+    run.to_hdf5(out)
+    pngs = run.plot(out.with_suffix(""), channels=channels) if plot and hist.t.size > 1 else []
+    typer.echo(history_summary(case, hist, run.integrator, wall))
     typer.echo(f"\nWrote {out}" + (" and " + ", ".join(str(p) for p in pngs) if pngs else ""))
     if not hist.completed:
-        _say_error(f"the run did not complete: {hist.status}. Results up to that instant were written.")
-        raise typer.Exit(130 if hist.status.startswith("interrupted") else 3)
+        _say_error(f"the run did not complete: {hist.message}. Results up to that instant were written.")
+        raise typer.Exit(130 if hist.status is Status.INTERRUPTED else 3)
 
 
 @app.command()
@@ -200,10 +189,9 @@ def history(
     """Forced response F(t) = F0 + FL sin(w t) at one frequency, from the equilibrium at rest."""
     import time
 
-    from .analyses.dynamic import run_history
-    from .case import load_case
+    from . import api
 
-    case, text = load_case(case_file, overrides)
+    case = api.load_case(case_file, overrides)
     dur = duration if duration is not None else case.history.duration
     if dur <= 0:
         raise CablesimError("--duration must be a positive number of seconds.", field="history.duration")
@@ -212,11 +200,9 @@ def history(
     bar, update = _progress(dur)
     t0 = time.perf_counter()
     with bar:
-        static, hist, integ = run_history(
-            case, omega, dur, output_step, analysis.value if analysis else None,
-            integrator.value if integrator else None, progress=update,
-        )
-    _finish_history(case, hist, integ, out, text, "history", plot, _channels(channels, case.history.channels), time.perf_counter() - t0)
+        run = api.history(case, omega, dur, output_step, analysis.value if analysis else None,
+                          integrator.value if integrator else None, progress=update)
+    _finish_history(run, out, plot, _channels(channels, case.history.channels), time.perf_counter() - t0)
 
 
 @app.command("free-vibration")
@@ -238,10 +224,9 @@ def free_vibration(
     """Damped free vibration about the equilibrium, started with velocities along a linear mode."""
     import time
 
-    from .analyses.dynamic import run_free_vibration
-    from .case import load_case
+    from . import api
 
-    case, text = load_case(case_file, overrides)
+    case = api.load_case(case_file, overrides)
     if damping_ratio is not None and not 0 <= damping_ratio < 1:
         raise CablesimError("--damping-ratio must be in [0, 1).", field="free_vibration.damping_ratio")
     dur = duration if duration is not None else case.free_vibration.duration
@@ -253,11 +238,10 @@ def free_vibration(
     bar, update = _progress(dur)
     t0 = time.perf_counter()
     with bar:
-        static, hist, integ = run_free_vibration(
-            case, mode, peak_velocity, damping_ratio, dur, output_step,
-            analysis.value if analysis else None, integrator.value if integrator else None, progress=update,
-        )
-    _finish_history(case, hist, integ, out, text, "free-vibration", plot, _channels(channels, case.free_vibration.channels), time.perf_counter() - t0)
+        run = api.free_vibration(case, mode, peak_velocity, damping_ratio, dur, output_step,
+                                 analysis.value if analysis else None, integrator.value if integrator else None,
+                                 progress=update)
+    _finish_history(run, out, plot, _channels(channels, case.free_vibration.channels), time.perf_counter() - t0)
 
 
 class Backend(str, Enum):
@@ -282,11 +266,11 @@ def sweep(
     """Frequency-domain response: steady amplitude of each channel against forcing frequency."""
     import time
 
-    from .analyses.sweep import run_sweep
-    from .case import load_case
-    from .report import sweep_summary
+    from . import api
+    from .io.report import sweep_summary
+    from .plots.sweep import plot_sweep
 
-    case, text = load_case(case_file, overrides)
+    case = api.load_case(case_file, overrides)
     if jobs == 0 or jobs < -1:
         raise CablesimError("--jobs must be a positive number of processes, or -1 for all cores.")
     out = output if output is not None else Path("runs") / case.name / "sweep.h5"
@@ -298,11 +282,9 @@ def sweep(
     t0 = time.perf_counter()
     try:
         with bar:
-            res = run_sweep(
-                case, text, out, analysis.value if analysis else None, integrator.value if integrator else None,
-                n_jobs=jobs, resume=resume, backend=None if backend == Backend.loky else "dask",
-                scheduler=scheduler, progress=update,
-            )
+            run = api.sweep(case, jobs, analysis.value if analysis else None, integrator.value if integrator else None,
+                            output=out, resume=resume, backend=None if backend == Backend.loky else "dask",
+                            scheduler=scheduler, progress=update)
     except KeyboardInterrupt:
         where = f" {case_file}" if case_file else ""
         _say_error(
@@ -310,13 +292,10 @@ def sweep(
             f"with: cablesim sweep{where} -o {out} --resume"
         )
         raise typer.Exit(130)
-    typer.echo(sweep_summary(case, res, time.perf_counter() - t0))
+    typer.echo(sweep_summary(case, run.result, time.perf_counter() - t0))
     msg = f"\nWrote {out}"
     if plot:
-        from .plot_sweep import plot_sweep
-
-        png = plot_sweep(out)
-        msg += f" and {png}"
+        msg += f" and {plot_sweep(out)}"
     typer.echo(msg)
 
 
@@ -333,7 +312,7 @@ def plot(
 ):
     """Redraw figures from stored results, recomputing nothing: the figure: section of the stored
     case (or of --figure) as one PNG from all the files, or else each file's standard plots."""
-    from .figures import redraw
+    from .plots.redraw import redraw
 
     paths = redraw(results, output, figure=figure)
     typer.echo("Wrote " + ", ".join(str(p) for p in paths))

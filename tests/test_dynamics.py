@@ -34,7 +34,8 @@ from scipy.integrate import ode, solve_ivp
 from cablesim.analyses.dynamic import run_free_vibration
 from cablesim.analyses.static import run_static
 from cablesim.case import IntegratorSpec, example_text, load_case, parse_case
-from cablesim.dynamics.history import build_equations, mode_velocity, simulate
+from cablesim.analyses.setup import build_equations, mode_velocity
+from cablesim.dynamics.simulate import simulate
 from cablesim.dynamics.integrators import DOPRI5, RK4, GeneralizedAlpha, Newmark
 from cablesim.statics import resisting_force, tangent_stiffness
 
@@ -264,7 +265,7 @@ ACCURACY_CASES = [
 def test_exact_analysis_matches_second_order_reference(forced_eom, reference, integ, bound):
     t, zref, vref = reference
     hist = forced_run(forced_eom, integ, DURATION)
-    assert hist.completed, hist.status
+    assert hist.completed, hist.message
     assert np.allclose(hist.t, t, rtol=0, atol=1e-9)
     assert np.max(np.abs(zref)) > 2.0  # near resonance: metres of response, a nonlinear regime
     err = rel_error(hist.z, zref)
@@ -282,7 +283,7 @@ def test_saved_instants_between_steps_are_accurate(forced_eom):
     zref, _ = reference_history(forced_eom, t)
     for integ, bound in [(RK4(dt=0.005), 1e-7), (Newmark(dt=0.002), 5e-4), (DOPRI5(rtol=1e-10, atol=1e-12), 1e-8)]:
         hist = simulate(forced_eom, integ, t[-1], step)
-        assert hist.completed, hist.status
+        assert hist.completed, hist.message
         assert np.allclose(hist.t, t, rtol=0, atol=1e-9)
         err = rel_error(hist.z, zref)
         print(f"off-grid outputs, {integ}: {err:.3g}")
@@ -299,7 +300,7 @@ def test_displaced_start_matches_reference(paper, exact_static):
     t = np.arange(0, 201) * 0.1
     zref, vref = reference_history(eom, t, s0=s0)
     hist = simulate(eom, DOPRI5(rtol=1e-10, atol=1e-12), t[-1], 0.1, s0=s0)
-    assert hist.completed, hist.status
+    assert hist.completed, hist.message
     assert np.allclose(hist.z[0], z0) and np.allclose(hist.v[0], v0)
     err = rel_error(hist.z, zref)
     print(f"displaced start, dopri5 1e-10 vs reference: {err:.3g}")
@@ -324,7 +325,7 @@ def test_observed_convergence_order(forced_eom, reference, cls, kw, steps, order
     errs = []
     for dt in steps:
         hist = forced_run(forced_eom, cls(dt=dt, **kw), SHORT)
-        assert hist.completed, hist.status
+        assert hist.completed, hist.message
         errs.append(rel_error(hist.z, zref[:k]))
     orders = [math.log2(errs[i] / errs[i + 1]) for i in range(len(errs) - 1)]
     print(f"{cls.name}: errors {errs}, observed orders {orders}")
@@ -347,7 +348,7 @@ def approx_eom(paper, approx_static):
 @pytest.fixture(scope="module")
 def approx_tight(approx_eom):
     hist = simulate(approx_eom, DOPRI5(rtol=1e-10, atol=1e-12), APPROX_DURATION, OUT_STEP)
-    assert hist.completed, hist.status
+    assert hist.completed, hist.message
     return hist
 
 
@@ -361,7 +362,7 @@ def approx_tight(approx_eom):
 )
 def test_approximate_analysis_schemes_agree(approx_eom, approx_tight, integ, bound):
     hist = simulate(approx_eom, integ, APPROX_DURATION, OUT_STEP)
-    assert hist.completed, hist.status
+    assert hist.completed, hist.message
     assert np.max(np.abs(approx_tight.z)) > 1.0
     err = rel_error(hist.z, approx_tight.z)
     print(f"approximate, {integ} vs dopri5 1e-10: {err:.3g}")
@@ -423,7 +424,7 @@ def test_linear_limit_frequency_response(paper, exact_static, approx_static, ana
     eom = build_equations(paper, static, omega=w, load_scale=scale, damping_ratio=LIN_XI)
     step = 2 * np.pi / w / 40
     hist = simulate(eom, DOPRI5(rtol=1e-10, atol=1e-14), LIN_DURATION, step, split=False)
-    assert hist.completed, hist.status
+    assert hist.completed, hist.message
     M = np.diag(eom.mass)
     # C built independently: Rayleigh coefficients for xi in modes 1 and 2 of (K0, M)
     w12 = np.sqrt(np.sort(np.linalg.eigvals(np.linalg.solve(M, static.K0)).real))[:2]
@@ -468,7 +469,7 @@ def test_free_vibration_mode1_frequency_and_decrement(paper, analysis):
         tight, mode=1, peak_velocity=V, damping_ratio=xi, duration=25.0, output_step=0.01,
         analysis=analysis,
     )
-    assert hist.completed, hist.status
+    assert hist.completed, hist.message
     M = static.cable.mass_diagonal
     lam, phi = np.linalg.eig(np.linalg.solve(np.diag(M), static.K0))
     order = np.argsort(lam.real)
@@ -541,7 +542,7 @@ def _energy_run(paper, exact_static, integ):
     assert np.all(eom.C == 0)
     v0 = mode_velocity(exact_static, 1, ENERGY_V)
     hist = simulate(eom, integ, ENERGY_DURATION, 0.02, s0=eom.initial_state(None, v0), split=False)
-    assert hist.completed, hist.status
+    assert hist.completed, hist.message
     E = own_energy(eom.cable, eom.F0, eom.y0, hist.z, hist.v)
     ke0 = 0.5 * np.sum(eom.mass * v0 * v0)
     return hist, (E - E[0]) / ke0
@@ -612,7 +613,7 @@ def test_implicit_schemes_follow_their_amplification_matrix(paper, exact_static,
     h = integ.dt
     n_steps = 30
     hist = simulate(eom, integ, n_steps * h, h, s0=s0, split=False)
-    assert hist.completed, hist.status
+    assert hist.completed, hist.message
     q = hist.z @ (M[:, None] * Phi)
     qd = hist.v @ (M[:, None] * Phi)
     G = chung_hulbert_amplification(w4 * h, rho)
@@ -664,10 +665,10 @@ def test_slack_segment_stops_cleanly(paper, exact_static, integ, bound):
     eom = build_equations(paper, exact_static, omega=OMEGA, load_scale=50.0)
     hist = simulate(eom, integ, 100.0, OUT_STEP)
     assert not hist.completed
-    assert "slack" in hist.status
-    m = re.search(r"segment (\d+)", hist.status)
-    assert m and 1 <= int(m.group(1)) <= 3, hist.status
-    t_stop = _stop_time(hist.status)
+    assert "slack" in hist.message
+    m = re.search(r"segment (\d+)", hist.message)
+    assert m and 1 <= int(m.group(1)) <= 3, hist.message
+    t_stop = _stop_time(hist.message)
     assert 0 < t_stop < 100.0
     assert hist.t.size > 1
     assert hist.t[-1] <= t_stop * (1 + 1e-5)
@@ -676,7 +677,7 @@ def test_slack_segment_stops_cleanly(paper, exact_static, integ, bound):
     assert np.all(hist.T > 0)
     # the record is faithful up to the stop: compare with the independent reference there
     z_ref, _ = reference_history(eom, hist.t, rtol=1e-10)
-    print(f"slack, {integ}: {hist.status}; t[-1] = {hist.t[-1]}, error vs reference {rel_error(hist.z, z_ref):.3g}")
+    print(f"slack, {integ}: {hist.message}; t[-1] = {hist.t[-1]}, error vs reference {rel_error(hist.z, z_ref):.3g}")
     assert rel_error(hist.z, z_ref) < bound
     # independently: the reference (which lets T go negative) first loses tension in the
     # segment named, at the time given
@@ -699,10 +700,10 @@ def test_slack_approximate_analysis_stops_cleanly(paper, approx_static):
     """The approximate analysis has no slack test of its own: its inner solve fails instead."""
     eom = build_equations(paper, approx_static, omega=OMEGA, load_scale=50.0)
     hist = simulate(eom, DOPRI5(rtol=1e-8, atol=1e-10), 100.0, OUT_STEP)
-    print(f"slack, approximate: {hist.status}")
+    print(f"slack, approximate: {hist.message}")
     assert not hist.completed
-    assert "slack" in hist.status
-    t_stop = _stop_time(hist.status)
+    assert "slack" in hist.message
+    t_stop = _stop_time(hist.message)
     assert 0 < t_stop < 100.0
     assert 1 < hist.t.size and hist.t[-1] <= t_stop * (1 + 1e-5)
     assert _all_finite(hist)
@@ -720,16 +721,16 @@ def rk4_unstable(paper, exact_static):
 def test_rk4_beyond_stability_stops_cleanly(rk4_unstable):
     hist = rk4_unstable
     assert not hist.completed
-    t_stop = _stop_time(hist.status)
+    t_stop = _stop_time(hist.message)
     assert hist.t.size >= 1
     assert hist.t[-1] <= t_stop * (1 + 1e-5)
     assert _all_finite(hist)
 
 
 def test_rk4_beyond_stability_message_points_at_the_step(rk4_unstable):
-    status = rk4_unstable.status.lower()
-    assert "dt" in status or "step" in status, rk4_unstable.status
-    assert "stab" in status, rk4_unstable.status
+    status = rk4_unstable.message.lower()
+    assert "dt" in status or "step" in status, rk4_unstable.message
+    assert "stab" in status, rk4_unstable.message
 
 
 STIFF_EA = 1e12
@@ -758,7 +759,7 @@ def test_stiff_cable_generalized_alpha(stiff):
     ga = simulate(eom, GeneralizedAlpha(dt=dt, rho_inf=0.8), 200.0, out)
     nm = simulate(eom, Newmark(dt=dt), 200.0, out)
     for hist in (ga, nm):
-        assert hist.completed, hist.status
+        assert hist.completed, hist.message
         assert _all_finite(hist)
     zmax = np.max(np.abs(ga.z))
     print(f"stiff: w1 = {w1:.4f}, w_max = {static.modes.omega[-1]:.4g}, max|z| = {zmax:.3g}, "
@@ -782,7 +783,7 @@ def test_stiff_cable_against_implicit_reference(stiff):
     errs = []
     for h in (dt, dt / 4):
         hist = simulate(eom, GeneralizedAlpha(dt=h, rho_inf=0.8), t[-1], out)
-        assert hist.completed, hist.status
+        assert hist.completed, hist.message
         errs.append(rel_error(hist.z, zref))
     print(f"stiff vs Radau: errors {errs}, order {math.log(errs[0] / errs[1]) / math.log(4):.3f}")
     assert errs[0] < 5e-2

@@ -21,8 +21,9 @@ from typer.testing import CliRunner
 from cablesim.case import example_text, parse_case
 from cablesim.cli import app
 from cablesim.errors import CablesimError
-from cablesim.figures import read_case_text, read_history, redraw
-from cablesim.plot_history import plot_history
+from cablesim.io.hdf5 import read_case_text, read_history
+from cablesim.plots.history import plot_history
+from cablesim.plots.redraw import redraw
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 HISTORY_SUFFIXES = ["waveforms", "phase", "lissajous", "tensions", "fft"]
@@ -79,7 +80,7 @@ def work(tmp_path, monkeypatch, results):
     import cablesim.analyses.dynamic as dynamic
     import cablesim.analyses.static as static
     import cablesim.analyses.sweep as sweep
-    import cablesim.dynamics.history as history
+    import cablesim.dynamics.simulate as history
 
     def forbidden(*args, **kwargs):
         raise AssertionError("cablesim plot must not recompute anything")
@@ -267,7 +268,7 @@ def test_standard_history_plots(work, results):
 
 
 def test_standard_sweep_plot_uses_plot_sweep(work, results, monkeypatch):
-    import cablesim.plot_sweep as ps
+    import cablesim.plots.redraw as ps
 
     calls = []
     real = ps.plot_sweep
@@ -376,7 +377,7 @@ def test_plot_needs_a_file(work):
 def test_window_beyond_the_run_moves_to_its_end(work, results):
     """A window past the end of a (shorter, or stopped) run shows the same length at its end."""
     a = with_figure(results, "full.h5", work / "late.h5", "  kind: waveform\n  time_window: [100, 110]\n")
-    from cablesim.figures import redraw
+    from cablesim.plots.redraw import redraw
 
     (png,) = redraw([a], work / "late.png")
     check_png(png)

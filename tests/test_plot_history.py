@@ -7,7 +7,10 @@ import pytest
 
 from cablesim.dynamics.result import HistoryResult
 from cablesim.errors import CablesimError
-from cablesim.plot_history import channel_index, plot_history, spectrum, spectrum_peaks
+from cablesim.channels import channel_index
+from cablesim.dynamics.status import Status
+from cablesim.dynamics.spectra import spectrum, spectrum_peaks
+from cablesim.plots.history import plot_history
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 SUFFIXES = ["waveforms", "phase", "lissajous", "tensions", "fft"]
@@ -141,7 +144,9 @@ def _history(split: bool, status: str = "completed", omega: float | None = 2.5, 
         omega=omega,
         analysis="exact",
         integrator="newmark",
-        status=status,
+        status=Status.COMPLETED if status == "completed" else Status.STEP_UNDERFLOW,
+        message=status,
+        t_stop=None if status == "completed" else 80.0,
         modal_omega=modal,
         settings={},
     )
@@ -181,7 +186,7 @@ def test_plot_history_many_nodes_and_short_run(tmp_path):
     result = HistoryResult(
         t=t, z=z, v=z.copy(), zc=None, ze=None, T=T0 + 0 * t[:, None], residual=np.zeros(m),
         y0=np.zeros(14), T0=T0, omega=None, analysis="approximate", integrator="rk45",
-        status="diverged", modal_omega=np.array([]),
+        status=Status.NONFINITE, message="diverged", t_stop=0.08, modal_omega=np.array([]),
     )
     prefix = tmp_path / "short"
     _check_pngs(plot_history(result, prefix, "short run"), prefix)

@@ -6,9 +6,10 @@ import h5py
 import numpy as np
 import pytest
 
-import cablesim.plot_sweep as ps
+import cablesim.plots.sweep as ps
 from cablesim.errors import CablesimError
-from cablesim.plot_sweep import plot_sweep, sweep_summary_rows
+from cablesim.io.hdf5 import sweep_summary_rows
+from cablesim.plots.sweep import plot_sweep
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 MODAL = [2.524, 4.1, 7.9, 30.0]  # 30 rad/s lies outside every sweep below

@@ -34,7 +34,7 @@ import pytest
 import yaml
 
 from cablesim.analyses.static import run_static
-from cablesim.analyses.sweep import run_sweep
+from cablesim import api
 from cablesim.case import example_text, parse_case
 from cablesim.errors import CablesimError
 
@@ -59,6 +59,12 @@ TIGHT = {"name": "dopri5", "rtol": 1.0e-10, "atol": 1.0e-14}
 # ----------------------------------------------------------------------------------------------
 # helpers
 # ----------------------------------------------------------------------------------------------
+def run_sweep(case, text, out, n_jobs=1, resume=False, progress=None):
+    """The sweep as ``cablesim sweep -o out`` runs it: journal and HDF5 file kept current."""
+    assert case.text == text
+    return api.sweep(case, jobs=n_jobs, output=out, resume=resume, progress=progress).result
+
+
 def case_text(sweep: dict | None, *, xi: float | None = None, integrator: dict | None = None) -> str:
     """The paper example with its sweep section replaced (None: no sweep section)."""
     head = HEAD

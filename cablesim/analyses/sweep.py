@@ -6,28 +6,28 @@ so all points run in parallel. On an ``up`` or ``down`` curve each point starts 
 state of the previous one, which reveals jumps and hysteresis; such a curve is a chain, and the
 chains (up, down, each gamma) run in parallel with one another.
 
-Robustness: every completed point is appended at once to a journal (``OUT.h5.journal``, one
-JSON record per line, flushed to disk), and the HDF5 file is rewritten atomically from it every
-few seconds and at the end. A killed run therefore loses no completed point and never leaves a
-corrupt file; ``resume=True`` reads the journal and computes only what is missing. The journal
-is removed when the sweep completes.
+The driver knows nothing of files: every finished point goes to a *recorder* (see
+:class:`SweepRecorder`); :class:`cablesim.io.journal.SweepFile` is the one that journals each
+point and keeps the HDF5 file up to date, so that a killed run loses nothing.
 """
 
 from __future__ import annotations
 
+import contextlib
 import functools
-import hashlib
-import json
-import os
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
-from typing import Callable, Iterable
+from typing import Callable, Iterable, Protocol
 
+import joblib
 import numpy as np
 
 from ..case import Case, parse_case
+from ..channels import channel_index
+from ..dynamics.status import Status
+from ..dynamics.steady import SteadyCriterion, steady_response
 from ..errors import CablesimError
+from .setup import build_equations, make_integrator
 from .static import run_static
 
 FLOAT_FIELDS = ("amplitude", "halfrange", "response_frequency")
@@ -45,7 +45,8 @@ class Curve:
 class SweepResult:
     """All results of a sweep, complete or not.
 
-    Arrays have a leading curve-specific layout: ``data[curve][field]`` with ``(P, C)`` for the
+    ``settings`` holds the sweep's ``cap``, ``window``, ``tol``, ``max_period`` and
+    ``floquet_check``; ``modal_omega`` the linear modal frequencies, rad/s. Arrays have a leading curve-specific layout: ``data[curve][field]`` with ``(P, C)`` for the
     per-channel fields and ``(P,)`` for ``period``, ``steady``, ``t_end``, ``floquet``,
     ``done``.
     """
@@ -55,6 +56,11 @@ class SweepResult:
     direction: str
     channels: list[str]
     curves: list[Curve]
+    analysis: str = "exact"
+    modal_omega: np.ndarray = field(default_factory=lambda: np.empty(0))
+    case_name: str = "case"
+    case_text: str = ""
+    settings: dict = field(default_factory=dict)
     data: dict = field(default_factory=dict)
     states: dict = field(default_factory=dict)  # (curve, index) -> final state (chains)
 
@@ -76,8 +82,6 @@ class SweepResult:
 
 def channel_indices(case: Case, names: Iterable[str] | None) -> tuple[list[str], np.ndarray]:
     """Channel names and 0-based DOF indices (default: every DOF)."""
-    from ..plot_history import channel_index
-
     n_dof = case.cable.n_nodes * 2
     if not names:
         names = [f"z{i + 1}" for i in range(n_dof)]
@@ -121,10 +125,6 @@ def _static_for(case_text: str, analysis: str | None):
 
 def solve_point(job: PointJob) -> dict:
     """Steady response of one sweep point (the unit of parallel work)."""
-    from ..dynamics.history import build_equations
-    from ..dynamics.steady import SteadyCriterion, steady_response
-    from .dynamic import make_integrator
-
     case, static = _static_for(job.case_text, job.analysis)
     sw = case.sweep
     eom = build_equations(case, static, omega=job.omega, load_scale=job.gamma)
@@ -146,7 +146,8 @@ def solve_point(job: PointJob) -> dict:
         "steady": bool(r.steady),
         "t_end": float(r.t_end),
         "floquet": None if not np.isfinite(r.floquet) else float(r.floquet),
-        "status": r.status,
+        "status": r.message,
+        "code": int(r.status),
         "final_state": r.final_state.tolist(),
         "wall": time.perf_counter() - t0,
         "integrator": integ.name,
@@ -156,16 +157,8 @@ def solve_point(job: PointJob) -> dict:
 # ----------------------------------------------------------------------------------------------
 # Journal and result assembly
 # ----------------------------------------------------------------------------------------------
-def _fingerprint(case_text: str, analysis, integrator) -> str:
-    h = hashlib.sha256()
-    for part in (case_text, str(analysis), str(integrator)):
-        h.update(part.encode())
-        h.update(b"\0")
-    return h.hexdigest()[:16]
-
-
-def _empty_result(omega, gamma, direction, channels, curves) -> SweepResult:
-    res = SweepResult(omega=omega, gamma=gamma, direction=direction, channels=channels, curves=curves)
+def _empty_result(omega, gamma, direction, channels, curves, **meta) -> SweepResult:
+    res = SweepResult(omega=omega, gamma=gamma, direction=direction, channels=channels, curves=curves, **meta)
     P, C = omega.size, len(channels)
     for c in range(len(curves)):
         res.data[c] = {
@@ -183,14 +176,15 @@ def _empty_result(omega, gamma, direction, channels, curves) -> SweepResult:
     return res
 
 
-def _record(res: SweepResult, rec: dict) -> None:
+def record_point(res: SweepResult, rec: dict) -> None:
+    """Enter one point's record (from :func:`solve_point` or a journal) into the result."""
     d = res.data[rec["curve"]]
     i = rec["index"]
     for f in FLOAT_FIELDS:
         d[f][i] = [np.nan if x is None else x for x in rec[f]]
     d["period"][i] = rec["period"]
     d["steady"][i] = rec["steady"]
-    d["failed"][i] = rec["status"] not in ("steady", "cap reached")
+    d["failed"][i] = not Status(rec["code"]).success
     d["t_end"][i] = rec["t_end"]
     d["floquet"][i] = np.nan if rec["floquet"] is None else rec["floquet"]
     d["wall"][i] = rec.get("wall", np.nan)
@@ -199,70 +193,45 @@ def _record(res: SweepResult, rec: dict) -> None:
     res.states[(rec["curve"], i)] = None if d["failed"][i] else rec["final_state"]
 
 
-def _read_journal(path: Path, fingerprint: str) -> list[dict]:
-    records = []
-    with open(path) as f:
-        lines = f.read().split("\n")
-    if not lines or not lines[0].strip():
-        return records
-    head = json.loads(lines[0])
-    if head.get("fingerprint") != fingerprint:
-        raise CablesimError(
-            f"The journal {path} belongs to a different case or different settings, so --resume "
-            "cannot continue it. Run without --resume to start afresh (the journal is replaced), "
-            "or give another output file with -o.",
-            field="sweep",
-        )
-    good = len(lines[0]) + 1
-    for line in lines[1:]:
-        if not line.strip():
-            good += len(line) + 1
-            continue
-        try:
-            records.append(json.loads(line))
-        except json.JSONDecodeError:
-            break  # a record torn by a kill: everything before it is intact
-        good += len(line) + 1
-    # Cut a torn tail off, so that new records start on a line of their own.
-    with open(path, "r+b") as f:
-        f.truncate(min(good, os.path.getsize(path)))
-    return records
-
-
-class _Journal:
-    def __init__(self, path: Path, fingerprint: str, fresh: bool):
-        self.path = path
-        path.parent.mkdir(parents=True, exist_ok=True)
-        if fresh:
-            with open(path, "w") as f:
-                f.write(json.dumps({"fingerprint": fingerprint}) + "\n")
-                f.flush()
-                os.fsync(f.fileno())
-        self.f = open(path, "a")
-
-    def append(self, rec: dict) -> None:
-        self.f.write(json.dumps(rec) + "\n")
-        self.f.flush()
-        os.fsync(self.f.fileno())
-
-    def close(self, remove: bool) -> None:
-        self.f.close()
-        if remove:
-            self.path.unlink(missing_ok=True)
-
-
 # ----------------------------------------------------------------------------------------------
 # The driver
 # ----------------------------------------------------------------------------------------------
+class SweepRecorder(Protocol):
+    """What :func:`run_sweep` tells about its progress (all methods optional in spirit: a
+    recorder that keeps nothing returns ``[]`` from :meth:`previous` and ignores the rest)."""
+
+    def previous(self) -> list[dict]:
+        """Records of points already computed (resuming an interrupted sweep)."""
+
+    def begin(self) -> None:
+        """Called once the settings are valid, before the first point."""
+
+    def point(self, record: dict, result: SweepResult) -> None:
+        """Called after each point, with its record and the result so far."""
+
+    def end(self, result: SweepResult, complete: bool) -> None:
+        """Called last, also when the sweep is interrupted or fails."""
+
+
+class _NoRecorder:
+    def previous(self) -> list[dict]:
+        return []
+
+    def begin(self) -> None:
+        pass
+
+    def point(self, record: dict, result: SweepResult) -> None:
+        pass
+
+    def end(self, result: SweepResult, complete: bool) -> None:
+        pass
+
+
 def _parallel(n_jobs: int, backend: str | None, scheduler: str | None):
     """``(config context, Parallel, client)``; the context selects joblib's backend."""
-    import contextlib
-
-    import joblib
-
     if backend == "dask":
         try:
-            from dask.distributed import Client
+            from dask.distributed import Client  # optional extra, loaded only when asked for
         except ImportError:
             raise CablesimError(
                 "--backend dask needs dask.distributed: install cablesim with the 'dask' extra "
@@ -279,48 +248,15 @@ def _parallel(n_jobs: int, backend: str | None, scheduler: str | None):
     return contextlib.nullcontext(), joblib.Parallel(n_jobs=n_jobs, return_as="generator_unordered"), None
 
 
-def run_sweep(
-    case: Case,
-    case_text: str,
-    out: Path,
-    analysis: str | None = None,
-    integrator: str | None = None,
-    n_jobs: int = -1,
-    resume: bool = False,
-    backend: str | None = None,
-    scheduler: str | None = None,
-    progress: Callable[[int, int], None] | None = None,
-    snapshot_every: float = 3.0,
-) -> SweepResult:
-    """Run (or resume) the sweep of a case, writing results to ``out`` as they complete.
+def _check_sweepable(case: Case, static) -> None:
+    if static.inextensible is None:
+        raise CablesimError("Sweeps need sum(cable.S) greater than the chord (see `history`).", field="cable.S")
+    if not np.any(case.FL):
+        raise CablesimError("loads.FL is zero, so a sweep has nothing to force the cable with.", field="loads.FL")
 
-    Parameters
-    ----------
-    case : Case
-        Must have a ``sweep:`` section.
-    case_text : str
-        Its YAML text (sent to the workers and stored in the file).
-    out : Path
-        HDF5 file; the journal is ``out`` + ``.journal``.
-    analysis, integrator : str, optional
-        Overrides of the case file.
-    n_jobs : int
-        Worker processes (-1: all cores).
-    resume : bool
-        Continue from the journal of an interrupted run.
-    backend, scheduler : str, optional
-        ``"dask"`` and the scheduler address to run the points on a Dask cluster.
-    progress : callable, optional
-        Called as ``progress(done, total)`` after each point.
-    snapshot_every : float
-        Seconds between atomic rewrites of the HDF5 file.
 
-    Returns
-    -------
-    SweepResult
-    """
-    from ..io_hdf5 import write_sweep
-
+def new_sweep_result(case: Case, case_text: str, analysis: str | None = None) -> SweepResult:
+    """An empty :class:`SweepResult` for the case's ``sweep:`` section (nothing computed)."""
     if case.sweep is None:
         raise CablesimError(
             "This case has no `sweep:` section. Add one, for example "
@@ -329,76 +265,106 @@ def run_sweep(
             field="sweep",
         )
     static = run_static(case, analysis, all_models=False)
-    if static.inextensible is None:
-        raise CablesimError("Sweeps need sum(cable.S) greater than the chord (see `history`).", field="cable.S")
-    if not np.any(case.FL):
-        raise CablesimError("loads.FL is zero, so a sweep has nothing to force the cable with.", field="loads.FL")
+    _check_sweepable(case, static)
     omega, gamma, curves = plan(case)
-    names, idx = channel_indices(case, case.sweep.channels)
-    res = _empty_result(omega, gamma, case.sweep.direction, names, curves)
-    fp = _fingerprint(case_text, analysis, integrator)
-    jpath = out.with_name(out.name + ".journal")
-    if resume:
-        if not jpath.exists():
-            if out.exists():
-                raise CablesimError(f"{out} is already complete (no journal to resume); nothing to do.")
-            raise CablesimError(f"There is no interrupted sweep to resume at {out} (no {jpath.name}).")
-        for rec in _read_journal(jpath, fp):
-            _record(res, rec)
-    meta = dict(static=static, case_name=case.name, case_text=case_text, sweep=case.sweep)
-    last = [time.monotonic()]
+    names, _ = channel_indices(case, case.sweep.channels)
+    sw = case.sweep
+    settings = dict(cap=sw.duration, window=sw.window, tol=sw.tol, max_period=sw.max_period, floquet_check=sw.floquet)
+    return _empty_result(omega, gamma, sw.direction, names, curves, analysis=static.analysis,
+                         modal_omega=static.modes.omega.copy(), case_name=case.name, case_text=case_text,
+                         settings=settings)
 
-    def save(force: bool = False):
-        if force or time.monotonic() - last[0] >= snapshot_every:
-            write_sweep(out, res, **meta)
-            last[0] = time.monotonic()
+
+def _chain_batches(res: SweepResult, make_job):
+    """Rounds of up/down chains: each round advances every unfinished chain by one point."""
+    n = res.omega.size
+    order = {c: (list(range(n)) if cv.direction == "up" else list(range(n - 1, -1, -1))) for c, cv in enumerate(res.curves)}
+    pos = {c: 0 for c in order}
+    while True:
+        batch = []
+        for c, seq in order.items():
+            while pos[c] < len(seq) and res.data[c]["done"][seq[pos[c]]]:
+                pos[c] += 1
+            if pos[c] < len(seq):
+                prev = res.states.get((c, seq[pos[c] - 1])) if pos[c] > 0 else None
+                batch.append(make_job(c, seq[pos[c]], prev))
+        if not batch:
+            return
+        yield batch
+
+
+def run_sweep(
+    case: Case,
+    case_text: str,
+    analysis: str | None = None,
+    integrator: str | None = None,
+    n_jobs: int = -1,
+    backend: str | None = None,
+    scheduler: str | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    recorder: SweepRecorder | None = None,
+) -> SweepResult:
+    """Run (or finish) the sweep of a case.
+
+    Parameters
+    ----------
+    case : Case
+        Must have a ``sweep:`` section.
+    case_text : str
+        Its YAML text (sent to the workers and stored with the results).
+    analysis, integrator : str, optional
+        Overrides of the case file.
+    n_jobs : int
+        Worker processes (-1: all cores).
+    backend, scheduler : str, optional
+        ``"dask"`` and the scheduler address to run the points on a Dask cluster.
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each point.
+    recorder : SweepRecorder, optional
+        Receives every finished point and supplies those of an interrupted run
+        (:class:`cablesim.io.journal.SweepFile` journals them and writes the HDF5 file).
+
+    Returns
+    -------
+    SweepResult
+    """
+    recorder = recorder or _NoRecorder()
+    res = new_sweep_result(case, case_text, analysis)
+    _, idx = channel_indices(case, case.sweep.channels)
+    for rec in recorder.previous():
+        record_point(res, rec)
+    gamma = res.gamma
 
     def job(c: int, i: int, start) -> PointJob:
-        g = 1.0 if gamma is None else float(gamma[curves[c].gamma_index])
-        return PointJob(case_text, analysis, integrator, g, float(omega[i]), tuple(int(x) for x in idx), c, i,
+        g = 1.0 if gamma is None else float(gamma[res.curves[c].gamma_index])
+        return PointJob(case_text, analysis, integrator, g, float(res.omega[i]), tuple(int(x) for x in idx), c, i,
                         None if start is None else tuple(start))
 
     config, parallel, client = _parallel(n_jobs, backend, scheduler)  # settings errors first
     _warm_up(case_text, analysis, integrator, idx)
-    journal = _Journal(jpath, fp, fresh=not resume)
-    import joblib
+    recorder.begin()
 
     def done(rec):
-        journal.append(rec)
-        _record(res, rec)
+        record_point(res, rec)
+        recorder.point(rec, res)
         if progress is not None:
             progress(res.n_done, res.n_total)
-        save()
 
     completed = False
     try:
         with config, parallel:
             if case.sweep.direction == "independent":
-                todo = [job(c, i, None) for c in range(len(curves)) for i in range(omega.size) if not res.data[c]["done"][i]]
-                for rec in parallel(joblib.delayed(solve_point)(j) for j in todo):
-                    done(rec)
+                todo = [job(c, i, None) for c in range(len(res.curves)) for i in range(res.omega.size)
+                        if not res.data[c]["done"][i]]
+                batches = [todo]
             else:
-                # Chains advance one point per round, all chains in parallel.
-                order = {c: (range(omega.size) if curves[c].direction == "up" else range(omega.size - 1, -1, -1)) for c in range(len(curves))}
-                pos = {c: 0 for c in order}
-                while True:
-                    batch = []
-                    for c, seq in order.items():
-                        seq = list(seq)
-                        while pos[c] < len(seq) and res.data[c]["done"][seq[pos[c]]]:
-                            pos[c] += 1
-                        if pos[c] < len(seq):
-                            i = seq[pos[c]]
-                            prev = res.states.get((c, seq[pos[c] - 1])) if pos[c] > 0 else None
-                            batch.append(job(c, i, prev))
-                    if not batch:
-                        break
-                    for rec in parallel(joblib.delayed(solve_point)(j) for j in batch):
-                        done(rec)
+                batches = _chain_batches(res, job)
+            for batch in batches:
+                for rec in parallel(joblib.delayed(solve_point)(j) for j in batch):
+                    done(rec)
         completed = res.complete
     finally:
-        save(force=True)
-        journal.close(remove=completed)
+        recorder.end(res, completed)
         if client is not None:
             client.close()
     return res
@@ -408,11 +374,6 @@ def _warm_up(case_text, analysis, integrator, idx) -> None:
     """Compile (or load from numba's cache) the kernels once before forking workers."""
     case, static = _static_for(case_text, analysis)
     w = float(static.modes.omega[0])
-    job = PointJob(case_text, analysis, integrator, 1.0, w, tuple(int(x) for x in idx), 0, 0, None)
-    from ..dynamics.history import build_equations
-    from ..dynamics.steady import SteadyCriterion, steady_response
-    from .dynamic import make_integrator
-
     eom = build_equations(case, static, omega=w)
     integ = make_integrator(case.integrator, eom, w, integrator)
-    steady_response(eom, integ, np.array(job.channels), SteadyCriterion(cap=4 * 2 * np.pi / w, window=2 * 2 * np.pi / w))
+    steady_response(eom, integ, np.array(idx), SteadyCriterion(cap=4 * 2 * np.pi / w, window=2 * 2 * np.pi / w))

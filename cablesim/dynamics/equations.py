@@ -17,11 +17,14 @@ Numba functions take the model as a tuple ``prm`` built by :meth:`EquationsOfMot
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numba import njit
 
 from ..cable import Cable
+from ..modal import modal_analysis
+from ..statics import resisting_force
 from . import kernels as kn
 
 EXACT = 0
@@ -211,6 +214,9 @@ class EquationsOfMotion:
         Force in segment 1 of the inextensible equilibrium (warm start of inner solves), N.
     a0, a1 : float
         The Rayleigh coefficients behind ``C`` (1/s, s).
+    modal_omega : ndarray, optional
+        Linear modal frequencies about the equilibrium, rad/s, ascending (computed from ``K0``
+        and ``mass`` when not given).
     """
 
     cable: Cable
@@ -228,6 +234,19 @@ class EquationsOfMotion:
     F1: np.ndarray
     a0: float = 0.0
     a1: float = 0.0
+    modal_omega: np.ndarray | None = None
+
+    @cached_property
+    def frequencies(self) -> np.ndarray:
+        """Linear modal frequencies about the equilibrium, rad/s, ascending."""
+        if self.modal_omega is not None:
+            return np.asarray(self.modal_omega, dtype=float)
+        return modal_analysis(self.K0, self.mass).omega
+
+    @property
+    def exact(self) -> bool:
+        """Whether the exact analysis is in use (else the approximate one)."""
+        return self.analysis == "exact"
 
     @property
     def n_dof(self) -> int:
@@ -238,14 +257,14 @@ class EquationsOfMotion:
         """``(wk, awk)`` scratch arrays for the compiled kernels; ``awk`` is None for the exact
         analysis."""
         n = self.cable.n_nodes
-        return workspace(n), (None if self.analysis == "exact" else approximate_workspace(n))
+        return workspace(n), (None if self.exact else approximate_workspace(n))
 
     def params(self) -> tuple:
         """The numba parameter tuple (see the module docstring)."""
         c = self.cable
         tol = 1e-13 * max(c.total_length, c.chord_length)
         return (
-            EXACT if self.analysis == "exact" else APPROXIMATE,
+            EXACT if self.exact else APPROXIMATE,
             np.ascontiguousarray(c.S),
             float(c.EA),
             float(c.L),
@@ -277,9 +296,7 @@ class EquationsOfMotion:
         z0 = np.zeros(nd) if z0 is None else np.asarray(z0, dtype=float)
         v0 = np.zeros(nd) if v0 is None else np.asarray(v0, dtype=float)
         F = self.F0  # F(0) = F0 + FL sin 0
-        if self.analysis == "exact":
-            from ..statics import resisting_force
-
+        if self.exact:
             P = resisting_force(self.cable, self.y0 + z0)
         else:
             if np.any(z0 != 0):

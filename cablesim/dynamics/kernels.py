@@ -15,19 +15,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-OK = 0
-NONFINITE = 1
-SLACK = 2
-INNER_SOLVE = 3
-STEP_UNDERFLOW = 4
+from .status import Status
 
-STATUS_TEXT = {
-    OK: "completed",
-    NONFINITE: "the state became non-finite (NaN or infinity)",
-    SLACK: "a segment went slack (its length fell below its natural length)",
-    INNER_SOLVE: "the inner equilibrium solve failed",
-    STEP_UNDERFLOW: "the adaptive step size fell below its minimum",
-}
+# Status codes returned by the kernels: the values of :class:`cablesim.dynamics.status.Status`.
+OK = int(Status.COMPLETED)
+NONFINITE = int(Status.NONFINITE)
+SLACK = int(Status.SLACK)
+INNER_SOLVE = int(Status.INNER_SOLVE)
+STEP_UNDERFLOW = int(Status.STEP_UNDERFLOW)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -439,16 +434,6 @@ def flexibility_workspace(n: int):
         np.empty((2, m)),
         np.empty((2, m)),
     )
-
-
-@njit(cache=True)
-def matvec(A, x, out):
-    """``out = A x`` without temporaries (small matrices)."""
-    for i in range(A.shape[0]):
-        acc = 0.0
-        for j in range(A.shape[1]):
-            acc += A[i, j] * x[j]
-        out[i] = acc
 
 
 @njit(cache=True)

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
+
+from .status import Status
 
 
 @dataclass(frozen=True)
@@ -38,8 +40,13 @@ class HistoryResult:
         ``"exact"`` or ``"approximate"``.
     integrator : str
         Name of the time-integration scheme.
-    status : str
-        ``"completed"``, or why the run stopped early (the arrays hold everything up to then).
+    status : Status
+        :attr:`Status.COMPLETED`, or why the run stopped early (the arrays hold everything up
+        to then).
+    message : str
+        The outcome in words: ``"completed"``, or when and why the run stopped and what to try.
+    t_stop : float or None
+        Time the run stopped early, s (None if it completed).
     modal_omega : ndarray
         Linear modal frequencies about the equilibrium, rad/s.
     settings : dict
@@ -61,7 +68,9 @@ class HistoryResult:
     omega: float | None
     analysis: str
     integrator: str
-    status: str
+    status: Status
+    message: str
+    t_stop: float | None
     modal_omega: np.ndarray
     settings: dict = field(default_factory=dict)
     dof: tuple | None = None
@@ -73,8 +82,6 @@ class HistoryResult:
 
     def keep(self, dof_numbers) -> "HistoryResult":
         """The same history with only the given DOF (1-based numbers) kept."""
-        from dataclasses import replace
-
         cols = [self.dof_numbers.index(d) for d in dof_numbers]
         pick = lambda a: None if a is None else a[:, cols]  # noqa: E731
         return replace(self, z=self.z[:, cols], v=self.v[:, cols], zc=pick(self.zc), ze=pick(self.ze),
@@ -83,7 +90,7 @@ class HistoryResult:
     @property
     def completed(self) -> bool:
         """Whether the run reached its requested duration."""
-        return self.status == "completed"
+        return self.status is Status.COMPLETED
 
     @property
     def n_dof(self) -> int:

@@ -30,6 +30,7 @@ import numpy as np
 from . import kernels as kn
 from .equations import EquationsOfMotion
 from .integrators import DOPRI5, Integrator
+from .status import Status
 
 #: Floquet multipliers above this modulus mark an unstable periodic orbit.
 UNSTABLE_MULTIPLIER = 1.0 + 1e-3
@@ -89,8 +90,11 @@ class PointResult:
         Largest Floquet multiplier modulus of the last orbit checked (NaN if none).
     final_state : ndarray
         ``(z, y', y'')`` at the end, at forcing phase 0 (start of a continuation sweep).
-    status : str
-        ``"steady"``, ``"cap reached"`` or why the run stopped.
+    status : Status
+        :attr:`Status.COMPLETED` when the integration ran to its end (steady or cap reached),
+        else why it stopped.
+    message : str
+        ``"steady"``, ``"cap reached"`` or when and why the run stopped.
     """
 
     omega: float
@@ -102,7 +106,13 @@ class PointResult:
     t_end: float
     floquet: float
     final_state: np.ndarray
-    status: str
+    status: Status
+    message: str
+
+    @property
+    def failed(self) -> bool:
+        """Whether the integration stopped early (a slack segment, a blow-up)."""
+        return not self.status.success
 
 
 def _refined_extreme(x: np.ndarray, sign: float) -> float:
@@ -153,7 +163,7 @@ def monodromy_multipliers(
     nd = eom.n_dof
     T = 2.0 * np.pi / eom.omega
     prm = eom.params()
-    exact = eom.analysis == "exact"
+    exact = eom.exact
     lo = 0 if exact else nd  # first component of the reduced state
     idx = np.arange(lo, lo + 2 * nd)
     scale = max(np.abs(s_star[idx]).max(), 1e-9 * eom.cable.chord_length)
@@ -269,15 +279,8 @@ def steady_response(
         p = _periodic(strobes[: k + 1], hold, crit.max_period, ftol, floor)
         if p == 0 or k < recheck_after:
             continue
-        s_star = state.s.copy()
         if crit.floquet and 2 * nd <= 80:
-            floquet = np.nan  # stays NaN only if no perturbed flow can be integrated
-            for rel_step in (1e-6, 1e-8):
-                try:
-                    floquet = float(np.abs(monodromy_multipliers(eom, f_integ, s_star, p, rel_step)[0]))
-                    break
-                except FloatingPointError:
-                    continue
+            floquet = _largest_multiplier(eom, f_integ, state.s.copy(), p)
             if floquet > UNSTABLE_MULTIPLIER:
                 # An unstable orbit: keep integrating; look again after it has had time to leave.
                 recheck_after = k + max(50, 10 * p)
@@ -299,8 +302,19 @@ def steady_response(
         t_end=state.t,
         floquet=floquet,
         final_state=state.s.copy(),
-        status="cap reached",
+        status=Status.COMPLETED,
+        message="cap reached",
     )
+
+
+def _largest_multiplier(eom, integrator, s_star, p) -> float:
+    """Modulus of the largest Floquet multiplier (NaN if no perturbed flow can be integrated)."""
+    for rel_step in (1e-6, 1e-8):
+        try:
+            return float(np.abs(monodromy_multipliers(eom, integrator, s_star, p, rel_step)[0]))
+        except FloatingPointError:
+            continue
+    return np.nan
 
 
 def _periodic(strobes: np.ndarray, hold: int, max_period: int, tol: float, floor: float) -> int:
@@ -360,7 +374,8 @@ def _finish_steady(eom, integrator, prm, state, channels, p, k, T, spp, floquet)
         t_end=float(t_out[-1]),
         floquet=floquet,
         final_state=out[-1].copy(),
-        status="steady",
+        status=Status.COMPLETED,
+        message="steady",
     )
 
 
@@ -380,5 +395,6 @@ def _failed(eom, channels, w, out, t_out, state, code, fine, spp, T) -> PointRes
         t_end=state.t,
         floquet=np.nan,
         final_state=state.s.copy(),
-        status=f"stopped at t = {state.t:.6g} s: {kn.STATUS_TEXT.get(code, 'failure')}",
+        status=Status(code),
+        message=f"stopped at t = {state.t:.6g} s: {Status(code).text}",
     )

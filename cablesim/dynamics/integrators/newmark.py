@@ -199,7 +199,7 @@ class GeneralizedAlpha(Integrator):
     def start(self, eom, s0, t0=0.0):
         st = IntegratorState(t=t0, s=np.array(s0, dtype=float), warm=np.array(eom.F1, dtype=float))
         nd = eom.n_dof
-        if eom.analysis == "exact":
+        if eom.exact:
             from ...statics import resisting_force
 
             P = resisting_force(eom.cable, eom.y0 + st.s[:nd])

@@ -197,9 +197,7 @@ class DOPRI5(Integrator):
     def start(self, eom, s0, t0=0.0):
         st = _start(eom, s0, t0)
         nd = eom.n_dof
-        from ...modal import modal_analysis
-
-        w = modal_analysis(eom.K0, eom.mass).omega
+        w = eom.frequencies
         w_ref = float(w[0])
         atol = np.concatenate([np.full(nd, self.atol), np.full(nd, self.atol * w_ref), np.full(nd, self.atol * w_ref**2)])
         # First step: a fraction of the shortest modal period, refined by the controller.

@@ -1,4 +1,4 @@
-"""Time histories: build the equations of motion of a case and integrate them.
+"""Time histories: integrate the equations of motion and observe the outputs.
 
 :func:`simulate` drives any integrator chunk by chunk: between chunks it reports progress and
 honours Ctrl-C, so an interrupted run returns everything computed so far. A run that fails
@@ -16,85 +16,14 @@ from typing import Callable
 import numpy as np
 from numba import njit
 
-from ..analyses.static import StaticResult
-from ..case import Case
-from ..modal import fastest_rate, modal_analysis, rayleigh_coefficients
+from ..errors import CablesimError, SlackSegmentError
+from ..modal import fastest_rate
+from ..statics import inextensible_equilibrium, resisting_force
 from . import kernels as kn
 from .equations import EquationsOfMotion, approximate_workspace, observe
-from .integrators import DOPRI5, GeneralizedAlpha, Integrator
+from .integrators import Integrator
 from .result import HistoryResult
-
-
-def build_equations(
-    case: Case,
-    static: StaticResult,
-    omega: float = 0.0,
-    load_scale: float = 1.0,
-    damping_ratio: float | None = None,
-) -> EquationsOfMotion:
-    """The equations of motion of a case about its static equilibrium under F0.
-
-    Parameters
-    ----------
-    case : Case
-    static : StaticResult
-        From :func:`cablesim.analyses.static.run_static` (its ``analysis`` is used).
-    omega : float
-        Forcing frequency, rad/s.
-    load_scale : float
-        Multiplies ``FL`` (``gamma`` of the paper's Fig. 4; 0 for free vibration).
-    damping_ratio : float, optional
-        Overrides the case's damping ratio (same two modes).
-
-    Returns
-    -------
-    EquationsOfMotion
-    """
-    cable = static.cable
-    M = cable.mass_diagonal
-    if damping_ratio is None:
-        a0, a1 = static.a0, static.a1
-    else:
-        i, j = case.damping.modes
-        w = static.modes.omega
-        a0, a1 = rayleigh_coefficients(w[i - 1], w[j - 1], damping_ratio)
-    C = a0 * np.diag(M) + a1 * static.K0
-    inext = static.inextensible
-    if inext is None:
-        raise ValueError("time histories need the inextensible state (sum S > chord)")
-    x0 = inext.x
-    return EquationsOfMotion(
-        cable=cable,
-        analysis=static.analysis,
-        mass=M,
-        C=C,
-        F0=static.P.copy(),
-        FL=case.FL * load_scale,
-        omega=float(omega),
-        y0=static.y0.copy(),
-        x0=x0.copy(),
-        u0=static.y0 - x0,
-        K0=static.K0.copy(),
-        T0=static.T0.copy(),
-        F1=inext.segments.F[0].copy(),
-        a0=float(a0),
-        a1=float(a1),
-    )
-
-
-def default_integrator(eom: EquationsOfMotion, omega_interest: float) -> Integrator:
-    """The scheme cablesim uses when the case names none.
-
-    Non-stiff cables (highest mode within a few hundred times the frequency of interest): the
-    adaptive ``dopri5``. Stiff cables: ``generalized-alpha``, which damps the spurious high axial
-    modes; :func:`cablesim.analyses.dynamic.make_integrator` sets its step (1600 per period of
-    the frequency of interest).
-    """
-    w = modal_analysis(eom.K0, eom.mass).omega
-    w_int = max(omega_interest, w[0])
-    if w[-1] / w_int > 200.0:
-        return GeneralizedAlpha(dt=2.0 * np.pi / w_int / 100.0, rho_inf=0.8)
-    return DOPRI5(rtol=1e-8, atol=1e-10 * eom.cable.chord_length)
+from .status import Status
 
 
 @njit(cache=True)
@@ -128,13 +57,13 @@ class _Interrupt:
 
 def _failure_text(code: int, t: float, eom: EquationsOfMotion, integrator: Integrator, state_s) -> str:
     where = f"at t = {t:.6g} s"
-    rate = fastest_rate(modal_analysis(eom.K0, eom.mass).omega, eom.a0, eom.a1)
+    rate = fastest_rate(eom.frequencies, eom.a0, eom.a1)
     dt = getattr(integrator, "dt", None)
     if integrator.name == "rk4" and dt is not None and dt * rate > 2.0:
         # An explicit step beyond its stability limit grows without bound; a segment usually
         # compresses (reads as slack) before anything turns non-finite, so say so first.
         return (
-            f"stopped {where}: {kn.STATUS_TEXT[code]}, but the step dt = {dt:.3g} s exceeds rk4's "
+            f"stopped {where}: {Status(code).text}, but the step dt = {dt:.3g} s exceeds rk4's "
             f"stability limit (about 2.8 / {rate:.4g} 1/s = {2.8 / rate:.3g} s, set by the fastest "
             "mode or, with stiffness-proportional damping, the fastest overdamped mode), which is "
             "the likely cause: use a smaller dt, dopri5, or the newmark or generalized-alpha integrator"
@@ -150,21 +79,18 @@ def _failure_text(code: int, t: float, eom: EquationsOfMotion, integrator: Integ
         )
     if code in (kn.NONFINITE, kn.STEP_UNDERFLOW):
         return (
-            f"stopped {where}: {kn.STATUS_TEXT[code]}; try a smaller step or tolerance, or the "
+            f"stopped {where}: {Status(code).text}; try a smaller step or tolerance, or the "
             "generalized-alpha integrator."
         )
     if code == kn.INNER_SOLVE:
         return f"stopped {where}: the inner equilibrium solve failed ({_inner_diagnosis(eom, t, state_s)}); reduce FL or the step size."
-    return f"stopped {where}: {kn.STATUS_TEXT.get(code, 'unknown failure')}."
+    return f"stopped {where}: {Status(code).text}."
 
 
 def _inner_diagnosis(eom: EquationsOfMotion, t: float, s) -> str:
     """Why the inextensible state x(P) was not found at the last good state."""
-    from ..errors import CablesimError, SlackSegmentError
-    from ..statics import inextensible_equilibrium, resisting_force
-
     nd = eom.n_dof
-    if eom.analysis == "exact":
+    if eom.exact:
         P = resisting_force(eom.cable, eom.y0 + s[:nd])
     else:
         P = eom.F0 + eom.FL * np.sin(eom.omega * t) - eom.C @ s[nd : 2 * nd] - eom.mass * s[2 * nd :]
@@ -227,11 +153,12 @@ def simulate(
     written = 0
     code = state.extra.get("code", kn.OK)
     chunk = min(duration, 50.0 * output_step, 10.0)
-    status = "completed"
+    status, message, t_stop = Status.COMPLETED, Status.COMPLETED.text, None
     with _Interrupt() as stop:
         while code == kn.OK and state.t < duration - 1e-12 * max(duration, 1.0):
             if stop.hit:
-                status = f"interrupted at t = {state.t:.6g} s"
+                status, t_stop = Status.INTERRUPTED, state.t
+                message = f"interrupted at t = {state.t:.6g} s"
                 break
             t_end = min(state.t + chunk, duration)
             wall = time.perf_counter()
@@ -243,7 +170,8 @@ def simulate(
             spent = time.perf_counter() - wall
             chunk *= float(np.clip(chunk_seconds / max(spent, 1e-4), 0.5, 4.0))
     if code != kn.OK:
-        status = _failure_text(code, state.t, eom, integrator, state.s).rstrip(".")
+        status, t_stop = Status(code), state.t
+        message = _failure_text(code, state.t, eom, integrator, state.s).rstrip(".")
     m = written + 1
     t = np.concatenate([[0.0], t_out[:written]])
     S = out[:m]
@@ -260,8 +188,9 @@ def simulate(
     if bad.any():
         first = int(np.argmax(bad))
         m = max(first, 1)
-        if status == "completed" or first < written:
-            status = f"stopped at t = {t[first]:.6g} s: derived outputs became non-finite (inner solve failed)"
+        if status is Status.COMPLETED or first < written:
+            status, t_stop = Status.OUTPUT_NONFINITE, float(t[first])
+            message = f"stopped at t = {t[first]:.6g} s: {Status.OUTPUT_NONFINITE.text}"
     return HistoryResult(
         t=t[:m],
         z=S[:m, :nd].copy(),
@@ -276,7 +205,9 @@ def simulate(
         analysis=eom.analysis,
         integrator=integrator.name,
         status=status,
-        modal_omega=modal_analysis(eom.K0, eom.mass).omega,
+        message=message,
+        t_stop=t_stop,
+        modal_omega=eom.frequencies,
         settings={
             **{f"integrator_{k}": v for k, v in integrator.settings().items()},
             "duration": float(duration),
@@ -285,10 +216,3 @@ def simulate(
             "a1": eom.a1,
         },
     )
-
-
-def mode_velocity(static: StaticResult, mode: int, peak_velocity: float) -> np.ndarray:
-    """Initial velocities along linear mode ``mode`` (1-based), largest component = V > 0."""
-    phi = static.modes.shapes[:, mode - 1]
-    k = int(np.argmax(np.abs(phi)))
-    return phi * (peak_velocity / phi[k])

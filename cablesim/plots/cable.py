@@ -1,4 +1,4 @@
-"""PNG plots. Only this module imports matplotlib (lazily, with the Agg backend)."""
+"""The cable drawing of ``cablesim static``."""
 
 from __future__ import annotations
 
@@ -6,30 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .cable import nodes_with_supports
-
-
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def save_atomic(fig, path: str | Path, dpi: int = 130) -> Path:
-    """Save a figure through a temporary file so a failure never leaves a broken PNG."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.stem + ".part.png")
-    try:
-        fig.savefig(tmp, dpi=dpi, bbox_inches="tight")
-        tmp.replace(path)
-    finally:
-        tmp.unlink(missing_ok=True)
-        _plt().close(fig)
-    return path
+from ..cable import nodes_with_supports
+from .base import pyplot, save_atomic
 
 
 def plot_cable(result, path: str | Path, title: str) -> Path:
@@ -43,7 +21,7 @@ def plot_cable(result, path: str | Path, title: str) -> Path:
     title : str
         First title line (the case name).
     """
-    plt = _plt()
+    plt = pyplot()
     cable = result.cable
     fig, ax = plt.subplots(figsize=(9, 5.5))
     y = result.y0

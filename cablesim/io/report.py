@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import __version__
+from ..dynamics.spectra import spectrum_peaks
+from ..version import __version__
 
 
 def _table(header: list[str], rows: list[list[str]]) -> str:
@@ -92,13 +93,11 @@ def static_summary(case, result) -> str:
 
 def history_summary(case, hist, integ, wall: float) -> str:
     """Summary of a time history: status, peak displacements, response frequencies, drift."""
-    from .plot_history import spectrum_peaks
-
     forced = f"forcing w = {hist.omega:g} rad/s" if hist.omega is not None else "free vibration"
     lines = [
         f"cablesim {__version__}: '{case.name}', {forced}, {hist.analysis} analysis, "
         f"integrator {integ.name} ({', '.join(f'{k}={v:g}' for k, v in integ.settings().items() if isinstance(v, float))})",
-        f"simulated {hist.t[-1]:.6g} s in {wall:.3g} s wall time; status: {hist.status}",
+        f"simulated {hist.t[-1]:.6g} s in {wall:.3g} s wall time; status: {hist.message}",
         f"linear modes: {', '.join(f'{w:.5g}' for w in hist.modal_omega[:6])} rad/s",
         "",
     ]

@@ -1,10 +1,4 @@
-"""Redraw figures from stored result files, without recomputing anything.
-
-``cablesim plot RESULT.h5 [MORE.h5 ...]`` reads HDF5 files written by ``cablesim static``,
-``history``, ``free-vibration`` or ``sweep``. If the case stored in the first file (root
-attribute ``case_yaml``) has a ``figure:`` section, or ``--figure FILE.yaml`` gives one, one
-composite PNG is drawn from all the files (one column per file); otherwise each file gets the
-standard plots of its command.
+"""Composite figures: several stored results drawn as one PNG (a ``figure:`` section).
 
 Composite kinds (``figure.kind``):
 
@@ -19,16 +13,25 @@ Composite kinds (``figure.kind``):
 from __future__ import annotations
 
 import textwrap
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from .errors import CablesimError
+from ..channels import (
+    channel_description,
+    column_description,
+    column_name,
+    column_of,
+    default_pair,
+    resolve_columns,
+    stored_names,
+)
+from ..dynamics.spectra import spectrum, spectrum_peaks
+from ..errors import CablesimError
+from ..io.hdf5 import ResultInfo, FAMILY_TEXT, attr_text, inspect_result, read_history, read_sweep, select_channels
+from .base import MAX_LINE_POINTS, pyplot, save_atomic, steady_start, two_tone
+from .sweep import DIRECTION_STYLE, QUANTITIES, marker_handles, period_runs
 
-#: Result file families: the ``command`` root attribute -> the kind of data it holds.
-FAMILIES = {"static": "static", "history": "history", "free-vibration": "history", "sweep": "sweep"}
-_FAMILY_TEXT = {"static": "a static file", "history": "a time-history file", "sweep": "a sweep file"}
 #: Kinds drawing time histories (history or free-vibration files).
 HISTORY_KINDS = ("waveform", "waveform_phase", "waveform_fft", "split", "lissajous_tension")
 _KIND_TEXT = {
@@ -49,313 +52,6 @@ _COLORS = ["C0", "C1", "C2", "C4", "C5", "C6", "C8", "C9", "C7"]
 
 
 # --------------------------------------------------------------------------------------------
-# Reading
-# --------------------------------------------------------------------------------------------
-
-
-def _text(value) -> str:
-    if isinstance(value, bytes):
-        return value.decode("utf-8", "replace")
-    if isinstance(value, np.ndarray) and value.size == 1:
-        return _text(value.item())
-    return str(value)
-
-
-def _plain(value):
-    """numpy scalars (from HDF5 attributes) as Python numbers, bytes as str."""
-    if isinstance(value, bytes):
-        return value.decode("utf-8", "replace")
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
-
-
-@dataclass(frozen=True)
-class _Info:
-    path: Path
-    command: str
-    family: str
-    case_text: str
-
-
-def _inspect(path) -> _Info:
-    """Check that ``path`` is a cablesim result file; its command and stored case text."""
-    import h5py
-
-    path = Path(path)
-    if not path.exists():
-        raise CablesimError(f"The result file {path} does not exist. Check the path.")
-    if not path.is_file():
-        raise CablesimError(f"{path} is not a file; give the HDF5 file a cablesim command wrote.")
-    try:
-        f = h5py.File(path, "r")
-    except OSError:
-        raise CablesimError(
-            f"{path} is not an HDF5 file (or cannot be read); give a .h5 file written by cablesim "
-            "static, history, free-vibration or sweep."
-        ) from None
-    with f:
-        command = f.attrs.get("command")
-        case_text = f.attrs.get("case_yaml")
-    if command is None or case_text is None:
-        raise CablesimError(
-            f"{path} is an HDF5 file but not a cablesim result: it has no 'command' and 'case_yaml' "
-            "attributes. Give a file written by cablesim static, history, free-vibration or sweep."
-        )
-    command = _text(command)
-    if command not in FAMILIES:
-        raise CablesimError(
-            f"{path} was written by the command '{command}', which cablesim plot does not know; it "
-            f"redraws the results of {', '.join(FAMILIES)}."
-        )
-    return _Info(path, command, FAMILIES[command], _text(case_text))
-
-
-def read_case_text(path) -> str:
-    """The case YAML stored in a cablesim result file (root attribute ``case_yaml``).
-
-    Raises
-    ------
-    CablesimError
-        If the file is missing, not HDF5 or not a cablesim result file.
-    """
-    return _inspect(path).case_text
-
-
-def read_history(path):
-    """Rebuild the :class:`~cablesim.dynamics.result.HistoryResult` stored in a history file.
-
-    Parameters
-    ----------
-    path : str or Path
-        HDF5 file written by ``cablesim history`` or ``cablesim free-vibration``.
-
-    Returns
-    -------
-    HistoryResult
-        With ``dof`` from ``/history/dof`` (None when every DOF was kept, in order), ``omega``
-        None for free vibration (NaN attribute), ``modal_omega`` from ``/modal/omega`` and
-        ``settings`` from the remaining attributes of ``/history``.
-
-    Raises
-    ------
-    CablesimError
-        If the file is missing, not HDF5, not a cablesim file, not a time history, or malformed.
-    """
-    import h5py
-
-    from .dynamics.result import HistoryResult
-
-    info = _inspect(path)
-    path = info.path
-    if info.family != "history":
-        raise CablesimError(
-            f"{path} is {_FAMILY_TEXT[info.family]} (written by 'cablesim {info.command}'), not a time "
-            "history; give a file written by cablesim history or free-vibration."
-        )
-    with h5py.File(path, "r") as f:
-        g = f.get("history")
-        need = ("t", "z", "v", "T", "residual", "y0", "T0")
-        missing = [k for k in need if g is None or k not in g]
-        if missing:
-            raise CablesimError(
-                f"The history file {path} is malformed: /history/{{{', '.join(missing)}}} missing. "
-                "Rerun the history."
-            )
-        data = {k: np.asarray(g[k][()]) for k in need}
-        zc = np.asarray(g["zc"][()]) if "zc" in g else None
-        ze = np.asarray(g["ze"][()]) if "ze" in g else None
-        dof = tuple(int(d) for d in np.asarray(g["dof"][()]).ravel()) if "dof" in g else None
-        attrs = {k: _plain(v) for k, v in g.attrs.items()}
-        modal = np.asarray(f["modal/omega"][()], dtype=float) if "modal/omega" in f else np.empty(0)
-    if dof is not None and dof == tuple(range(1, data["y0"].size + 1)):
-        dof = None  # every DOF, in order
-    omega = attrs.pop("omega", None)
-    omega = None if omega is None or not np.isfinite(float(omega)) else float(omega)
-    analysis = _text(attrs.pop("analysis", "unknown"))
-    integrator = _text(attrs.pop("integrator", "unknown"))
-    status = _text(attrs.pop("status", "completed"))
-    for k in ("forced", "completed"):  # derived from omega and status
-        attrs.pop(k, None)
-    return HistoryResult(
-        t=data["t"], z=data["z"], v=data["v"], zc=zc, ze=ze, T=data["T"], residual=data["residual"],
-        y0=data["y0"], T0=data["T0"], omega=omega, analysis=analysis, integrator=integrator,
-        status=status, modal_omega=modal, settings=attrs, dof=dof,
-    )
-
-
-def _read_static(path: Path, case):
-    """What :func:`cablesim.plotting.plot_cable` needs, from a static file (no solving)."""
-    from types import SimpleNamespace
-
-    import h5py
-
-    with h5py.File(path, "r") as f:
-        analysis = _text(f.attrs.get("analysis", f["modal"].attrs.get("analysis", "exact") if "modal" in f else "exact"))
-        st = f.get("static")
-        try:
-            grp = st[analysis]
-            y0 = np.asarray(grp["y"][()], dtype=float)
-            T0 = np.asarray(grp["T"][()], dtype=float)
-            P = np.asarray(st["P"][()], dtype=float)
-            omega = np.asarray(f["modal/omega"][()], dtype=float)
-        except (KeyError, TypeError):
-            raise CablesimError(
-                f"The static file {path} is malformed (its /static/{analysis} results or /modal/omega "
-                "are missing); rerun cablesim static, which draws the cable too."
-            ) from None
-        inext = None
-        if "inextensible" in st and "x" in st["inextensible"]:
-            inext = SimpleNamespace(x=np.asarray(st["inextensible/x"][()], dtype=float))
-    return SimpleNamespace(cable=case.to_cable(), analysis=analysis, P=P, y0=y0, T0=T0, inextensible=inext,
-                           modes=SimpleNamespace(omega=omega))
-
-
-# --------------------------------------------------------------------------------------------
-# Redrawing
-# --------------------------------------------------------------------------------------------
-
-
-def read_figure(path):
-    """The ``figure:`` section of a YAML file (a case file, or a file holding only that section).
-
-    Returns
-    -------
-    FigureSpec
-
-    Raises
-    ------
-    CablesimError
-        If the file is missing, not YAML, has no ``figure:`` section or an invalid one.
-    """
-    import yaml
-    from pydantic import BaseModel, ConfigDict, ValidationError
-
-    from .case import FigureSpec, _Loader, format_validation_error
-
-    path = Path(path)
-    try:
-        text = path.read_text()
-    except FileNotFoundError:
-        raise CablesimError(f"The figure file {path} does not exist. Check the path.") from None
-    except (IsADirectoryError, PermissionError, UnicodeDecodeError) as exc:
-        raise CablesimError(f"The figure file {path} cannot be read ({exc.__class__.__name__}).") from None
-    try:
-        data = yaml.load(text, Loader=_Loader)
-    except yaml.YAMLError:
-        raise CablesimError(f"The figure file {path} is not valid YAML; check its indentation.") from None
-    if not isinstance(data, dict) or not isinstance(data.get("figure"), dict):
-        raise CablesimError(
-            f"The figure file {path} has no figure: section; write one as in a case file "
-            "(figure: with kind, title, channels, pair, segments, time_window, labels)."
-        )
-    class _FigureFile(BaseModel):  # other keys (a whole case file) are ignored
-        model_config = ConfigDict(extra="ignore")
-        figure: FigureSpec
-
-    try:
-        return _FigureFile.model_validate(data).figure
-    except ValidationError as err:
-        raise CablesimError(format_validation_error(err, f"(figure file) {path}")) from None
-
-
-def redraw(paths, output=None, figure=None) -> list[Path]:
-    """Redraw figures from stored result files; nothing is recomputed.
-
-    Parameters
-    ----------
-    paths : list of Path
-        Result files of cablesim static, history, free-vibration or sweep; all of one type
-        (history and free-vibration files count as one type: time histories).
-    output : Path, optional
-        With a ``figure:`` section: the PNG (default: the first file with suffix ``.png``).
-        Without one (one file only): the PNG of a static or sweep file, or the prefix of the
-        five time-history PNGs (``output`` without its suffix).
-    figure : Path or FigureSpec, optional
-        A composite figure to draw instead of the stored case's ``figure:`` section: a YAML
-        file with a ``figure:`` section (see :func:`read_figure`), or the spec itself.
-
-    Returns
-    -------
-    list of Path
-        The PNG files written.
-
-    Raises
-    ------
-    CablesimError
-        If a file is missing, not HDF5 or not a cablesim result, the files mix types, the
-        figure does not fit the files (e.g. ``fdr`` from time histories, ``split`` without
-        z_c/z_e), or a channel, segment or label list does not fit.
-    """
-    from .case import parse_case
-
-    paths = [Path(p) for p in paths]
-    if not paths:
-        raise CablesimError("Give at least one result file (.h5) to plot.")
-    infos = [_inspect(p) for p in paths]
-    families = {i.family for i in infos}
-    if len(families) > 1:
-        listing = "; ".join(f"{i.path} is {_FAMILY_TEXT[i.family]}" for i in infos)
-        raise CablesimError(
-            f"The result files mix types ({listing}); plot files of one type together (history and "
-            "free-vibration files count as one)."
-        )
-    family = infos[0].family
-    case = parse_case(infos[0].case_text, source=f"(the case stored in {paths[0]})", default_name=paths[0].stem)
-    output = None if output is None else Path(output)
-
-    if figure is not None:  # asked for explicitly: it must fit the files
-        spec = figure if hasattr(figure, "kind") else read_figure(figure)
-        png = output if output is not None else paths[0].with_suffix(".png")
-        return [draw_figure(spec, infos, png, case.name)]
-    if case.figure is not None and family != "static":
-        png = output if output is not None else paths[0].with_suffix(".png")
-        return [draw_figure(case.figure, infos, png, case.name)]
-
-    if output is not None and len(paths) > 1:
-        raise CablesimError(
-            "-o names one output, but several files were given and no figure: section of the stored "
-            "case applies to them; drop -o (each file's plots go beside it) or plot the files one at a time."
-        )
-    written: list[Path] = []
-    for info in infos:
-        written += _standard(info, output)
-    return written
-
-
-def _standard(info: _Info, output: Path | None) -> list[Path]:
-    """The plots the command that wrote the file draws."""
-    from .case import parse_case
-
-    case = parse_case(info.case_text, source=f"(the case stored in {info.path})", default_name=info.path.stem)
-    if info.family == "static":
-        from .plotting import plot_cable
-
-        result = _read_static(info.path, case)
-        png = output if output is not None else info.path.with_suffix(".png")
-        return [plot_cable(result, png, case.name)]
-    if info.family == "sweep":
-        from .plot_sweep import plot_sweep
-
-        return [plot_sweep(info.path, output if output is not None else info.path.with_suffix(".png"))]
-    from .plot_history import plot_history
-
-    hist = read_history(info.path)
-    if hist.t.size < 2:
-        raise CablesimError(f"The history in {info.path} holds a single instant; there is nothing to plot.")
-    wanted = case.history.channels if info.command == "history" else case.free_vibration.channels
-    stored = {f"z{d}" for d in hist.dof_numbers}
-    channels = None
-    if wanted:  # the case's plotted channels, among those the file kept
-        from .plot_sweep import _normalise_channel
-
-        channels = [c for c in wanted if _normalise_channel(c) in stored] or None
-    prefix = output.with_suffix("") if output is not None else info.path.with_suffix("")
-    what = f"{case.name} ({hist.analysis} analysis, {hist.integrator})"
-    return plot_history(hist, prefix, what, channels=channels)
-
-
-# --------------------------------------------------------------------------------------------
 # Composite figures
 # --------------------------------------------------------------------------------------------
 
@@ -372,7 +68,7 @@ def draw_figure(fig_spec, infos, png: Path, case_name: str = "case") -> Path:
     case_name : str
         For the default title.
     """
-    infos = [i if isinstance(i, _Info) else _inspect(i) for i in infos]
+    infos = [i if isinstance(i, ResultInfo) else inspect_result(i) for i in infos]
     kind = fig_spec.kind
     labels = fig_spec.labels
     if labels is not None and len(labels) != len(infos):
@@ -385,7 +81,7 @@ def draw_figure(fig_spec, infos, png: Path, case_name: str = "case") -> Path:
         if info.family != want:
             needs = "sweep files (cablesim sweep)" if want == "sweep" else "time-history files (cablesim history or free-vibration)"
             raise CablesimError(
-                f"figure.kind {kind!r} draws {needs}, but {info.path} is {_FAMILY_TEXT[info.family]}."
+                f"figure.kind {kind!r} draws {needs}, but {info.path} is {FAMILY_TEXT[info.family]}."
             )
     title = fig_spec.title if fig_spec.title else f"{case_name}: {_KIND_TEXT[kind]}"
     if kind == "fdr":
@@ -405,8 +101,6 @@ def _caption(h) -> str:
 
 
 def _stride(m: int) -> int:
-    from .plot_history import MAX_LINE_POINTS
-
     return max(1, -(-m // MAX_LINE_POINTS))
 
 
@@ -440,8 +134,6 @@ def _window(t: np.ndarray, tw, path: Path):
 
 def _channel_columns(fig_spec, hist, path: Path, single: bool) -> tuple[list[int], list[str]]:
     """Stored columns to draw (at most MAX_ROWS), and notes."""
-    from .plot_history import resolve_columns, stored_names
-
     notes = []
     try:
         cols = resolve_columns(hist, fig_spec.channels)
@@ -460,8 +152,6 @@ def _channel_columns(fig_spec, hist, path: Path, single: bool) -> tuple[list[int
 
 
 def _draw_history_figure(fig_spec, infos, hists, captions, png: Path, title: str) -> Path:
-    from .plotting import _plt, save_atomic
-
     kind = fig_spec.kind
     n = len(hists)
     # Resolve everything first, so that a bad channel or segment writes no file.
@@ -495,14 +185,14 @@ def _draw_history_figure(fig_spec, infos, hists, captions, png: Path, title: str
         col_w, height = 9.0, 4.8
     else:  # lissajous_tension
         col_w, height = 4.8, 8.6
-    plt = _plt()
+    plt = pyplot()
     fig = plt.figure(figsize=(col_w * n, height), layout="constrained")
     fig.get_layout_engine().set(w_pad=0.06, h_pad=0.06, wspace=0.04, hspace=0.04)
     subs = fig.subfigures(1, n, squeeze=False, wspace=0.03)[0]
     for sf, info, h, cap, plan in zip(subs, infos, hists, captions, plans):
-        stopped = h.status != "completed"
+        stopped = not h.completed
         if stopped:  # wrapped to the column width
-            cap += "\n" + textwrap.fill(f"run stopped early: {h.status}", width=int(11 * col_w))
+            cap += "\n" + textwrap.fill(f"run stopped early: {h.message}", width=int(11 * col_w))
         sf.suptitle(cap, fontsize=11 if not stopped else 9.5, color="C3" if stopped else "black",
                     fontweight="bold")
         if kind == "waveform":
@@ -522,8 +212,6 @@ def _draw_history_figure(fig_spec, infos, hists, captions, png: Path, title: str
 
 
 def _pair_columns(fig_spec, h, path: Path):
-    from .plot_history import column_of, default_pair
-
     if fig_spec.pair is not None:
         try:
             return column_of(h, fig_spec.pair[0]), column_of(h, fig_spec.pair[1])
@@ -563,17 +251,13 @@ def _tension_window(h, tw, path: Path):
 
 
 def _label_axes(ax, h, col, xlabel: bool, name_suffix: str = ""):
-    from .plot_history import col_desc, col_name
-
-    ax.set_ylabel(f"{col_name(h, col)}{name_suffix} (m)\n{col_desc(h, col)}", fontsize=9)
+    ax.set_ylabel(f"{column_name(h, col)}{name_suffix} (m)\n{column_description(h, col)}", fontsize=9)
     if xlabel:
         ax.set_xlabel("time t (s)")
     ax.grid(True, alpha=0.3)
 
 
 def _draw_waveforms(sf, h, cols, win, rows, tw=None):
-    from .plot_history import col_name
-
     t = np.asarray(h.t, dtype=float)
     i0, i1 = win
     s = _stride(i1 - i0)
@@ -583,7 +267,7 @@ def _draw_waveforms(sf, h, cols, win, rows, tw=None):
             ax.set_visible(False)
             continue
         c = cols[r]
-        ax.plot(t[i0:i1:s], h.z[i0:i1:s, c], "-", color="C0", lw=1.0, label=f"{col_name(h, c)}(t)")
+        ax.plot(t[i0:i1:s], h.z[i0:i1:s, c], "-", color="C0", lw=1.0, label=f"{column_name(h, c)}(t)")
         ax.axhline(0.0, color="0.5", lw=0.7, ls="--", label="static equilibrium")
         _label_axes(ax, h, c, xlabel=(r == len(cols) - 1))
         _xlim(ax, t, win, tw)
@@ -616,29 +300,25 @@ def _draw_split(sf, h, cols, win, rows, tw=None):
 
 
 def _draw_waveform_left(ax, h, c, win, tw=None):
-    from .plot_history import col_name
-
     t = np.asarray(h.t, dtype=float)
     i0, i1 = win
     s = _stride(i1 - i0)
-    ax.plot(t[i0:i1:s], h.z[i0:i1:s, c], "-", color="C0", lw=0.9, label=f"{col_name(h, c)}(t)")
+    ax.plot(t[i0:i1:s], h.z[i0:i1:s, c], "-", color="C0", lw=0.9, label=f"{column_name(h, c)}(t)")
     ax.axhline(0.0, color="0.5", lw=0.7, ls="--", label="static equilibrium")
     _label_axes(ax, h, c, xlabel=True)
     _xlim(ax, t, win, tw)
-    ax.set_title(f"waveform of {col_name(h, c)}", fontsize=10)
+    ax.set_title(f"waveform of {column_name(h, c)}", fontsize=10)
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, fontsize=7.5, frameon=False)
 
 
 def _draw_waveform_phase(sf, h, c, win, tw=None):
-    from .plot_history import _t_split, _two_tone, col_name
-
     ax1, ax2 = sf.subplots(1, 2)
     _draw_waveform_left(ax1, h, c, win, tw)
     t = np.asarray(h.t, dtype=float)
-    i_half = _t_split(t)
+    i_half = steady_start(t)
     t_s = t[min(i_half, t.size - 1)]
-    name = col_name(h, c)
-    _two_tone(ax2, h.z[:, c], h.v[:, c], i_half, f"t < {t_s:.4g} s", f"t >= {t_s:.4g} s (last half)")
+    name = column_name(h, c)
+    two_tone(ax2, h.z[:, c], h.v[:, c], i_half, f"t < {t_s:.4g} s", f"t >= {t_s:.4g} s (last half)")
     ax2.set_xlabel(f"{name} (m)")
     ax2.set_ylabel(f"{name}' (m/s)")
     ax2.set_title(f"phase plot of {name} (whole run)", fontsize=10)
@@ -647,14 +327,12 @@ def _draw_waveform_phase(sf, h, c, win, tw=None):
 
 
 def _draw_waveform_fft(sf, h, c, win, tw=None):
-    from matplotlib.ticker import NullLocator
-
-    from .plot_history import col_name, spectrum, spectrum_peaks
+    from matplotlib.ticker import NullLocator  # matplotlib loads only when drawing
 
     ax1, ax2 = sf.subplots(1, 2)
     _draw_waveform_left(ax1, h, c, win, tw)
     t = np.asarray(h.t, dtype=float)
-    name = col_name(h, c)
+    name = column_name(h, c)
     ax2.set_title(f"amplitude spectrum of {name}, t >= {t[t.size - int(round(0.5 * t.size))]:.4g} s (last half)",
                   fontsize=10)
     ax2.set_xlabel("circular frequency omega (rad/s)")
@@ -698,18 +376,16 @@ def _draw_waveform_fft(sf, h, c, win, tw=None):
 
 
 def _draw_lissajous_tension(sf, h, pair, segs, win, tw=None):
-    from .plot_history import _t_split, _two_tone, col_desc, col_name
-
     ax1, ax2 = sf.subplots(2, 1, height_ratios=[1.25, 1.0])
     t = np.asarray(h.t, dtype=float)
     i, j = pair
-    i_half = _t_split(t)
+    i_half = steady_start(t)
     t_s = t[min(i_half, t.size - 1)]
     x, y = h.z[:, i], h.z[:, j]
-    _two_tone(ax1, x, y, i_half, f"t < {t_s:.4g} s", f"t >= {t_s:.4g} s (last half)")
-    ax1.set_xlabel(f"{col_name(h, i)} (m): {col_desc(h, i)}", fontsize=9)
-    ax1.set_ylabel(f"{col_name(h, j)} (m): {col_desc(h, j)}", fontsize=9)
-    ax1.set_title(f"Lissajous figure {col_name(h, j)} against {col_name(h, i)}", fontsize=10)
+    two_tone(ax1, x, y, i_half, f"t < {t_s:.4g} s", f"t >= {t_s:.4g} s (last half)")
+    ax1.set_xlabel(f"{column_name(h, i)} (m): {column_description(h, i)}", fontsize=9)
+    ax1.set_ylabel(f"{column_name(h, j)} (m): {column_description(h, j)}", fontsize=9)
+    ax1.set_title(f"Lissajous figure {column_name(h, j)} against {column_name(h, i)}", fontsize=10)
     ax1.grid(True, alpha=0.3)
     ax1.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=3, fontsize=7, frameon=False)
 
@@ -743,22 +419,18 @@ def _draw_lissajous_tension(sf, h, pair, segs, win, tw=None):
 def _draw_fdr(fig_spec, infos, png: Path, title: str) -> Path:
     from matplotlib.lines import Line2D
 
-    from .plot_history import _channel_desc
-    from .plot_sweep import QUANTITIES, _STYLE, _read_sweep, _runs, _select_channels, marker_handles, _text as sw_text
-    from .plotting import _plt, save_atomic
-
-    sweeps = [_read_sweep(i.path) for i in infos]
+    sweeps = [read_sweep(i.path) for i in infos]
     if fig_spec.labels is not None:
         names = list(fig_spec.labels)
     else:
-        names = [sw_text(sw.attrs.get("case_name", sw.path.stem)) for sw in sweeps]
+        names = [attr_text(sw.attrs.get("case_name", sw.path.stem)) for sw in sweeps]
         if len(set(names)) < len(names):
             names = [sw.path.name for sw in sweeps]
     # Channels: the figure's (each must be in every file), else the first file's.
     if fig_spec.channels is not None:
         chans = []
         for sw in sweeps:
-            idx = _select_channels(sw, fig_spec.channels)
+            idx = select_channels(sw, fig_spec.channels)
             chans = [sw.channels[k] for k in idx]
     else:
         chans = list(sweeps[0].channels)
@@ -782,7 +454,7 @@ def _draw_fdr(fig_spec, infos, png: Path, title: str) -> Path:
     x_lo, x_hi = lo - pad, hi + pad
     modal = [w for w in sweeps[0].modal if np.isfinite(w) and x_lo <= w <= x_hi]
 
-    plt = _plt()
+    plt = pyplot()
     n = len(chans)
     fig = plt.figure(figsize=(10.5, 1.3 + 2.8 * n), layout="constrained")
     axes = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
@@ -796,7 +468,7 @@ def _draw_fdr(fig_spec, infos, png: Path, title: str) -> Path:
             for curve in sw.curves:
                 valid = curve.valid
                 y = np.where(valid, curve.data["amplitude"][:, c], np.nan)
-                st = _STYLE[curve.direction]
+                st = DIRECTION_STYLE[curve.direction]
                 col = colors[(k, curve.gamma)]
                 ax.plot(sw.omega, y, ls=st["ls"], marker=st["marker"], ms=st["ms"], color=col, lw=1.3,
                         markevery=markevery, zorder=2)
@@ -810,20 +482,20 @@ def _draw_fdr(fig_spec, infos, png: Path, title: str) -> Path:
                 if sub.any():
                     any_sub = True
                     ax.plot(sw.omega[sub], y[sub], ls="none", marker="D", ms=3.5, color="k", zorder=5)
-                    for q in _runs(sub, period):
+                    for q in period_runs(sub, period):
                         ax.annotate(f"1/{period[q]}", (sw.omega[q], y[q]), textcoords="offset points",
                                     xytext=(0, 7), ha="center", va="bottom", fontsize=7, color="0.15", zorder=6)
         for w in modal:
             ax.axvline(w, color="0.5", ls=":", lw=1.0, alpha=0.7, zorder=1)
         ax.set_ylim(bottom=0.0)
-        desc = f"\n{_channel_desc(int(name[1:]) - 1)}" if name[1:].isdigit() else ""
+        desc = f"\n{channel_description(int(name[1:]) - 1)}" if name[1:].isdigit() else ""
         ax.set_ylabel(f"{name} {QUANTITIES['amplitude']} (m){desc}", fontsize=9)
         ax.grid(True, alpha=0.3)
     axes[-1].set_xlim(x_lo, x_hi)
     axes[-1].set_xlabel("forcing frequency omega (rad/s)")
     handles = [Line2D([], [], color=colors[(k, g)], lw=2.5, label=label) for k, g, label in series]
     for d in dict.fromkeys(cv.direction for sw in sweeps for cv in sw.curves):
-        st = _STYLE[d]
+        st = DIRECTION_STYLE[d]
         handles.append(Line2D([], [], ls=st["ls"], marker=st["marker"], ms=st["ms"] + 1, color="0.3", lw=1.2,
                               label=st["label"]))
     handles += marker_handles(any_unsteady, any_sub)

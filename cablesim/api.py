@@ -1,0 +1,194 @@
+"""The Python API: the command line's analyses as functions, for scripts and notebooks.
+
+Each function takes a :class:`~cablesim.case.Case` and returns a *run*: the result objects of
+the analysis together with the case, with :meth:`to_hdf5` writing the same file the command line
+writes (and :meth:`plot` its PNGs). Nothing here prints, exits or writes unless asked to.
+
+>>> import cablesim
+>>> case = cablesim.load_case()                    # the paper's example (or a path, or a dict)
+>>> run = cablesim.static(case)
+>>> run.result.modes.omega[:2]                      # rad/s
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from .analyses.dynamic import run_free_vibration, run_history
+from .analyses.static import StaticResult, run_static
+from .analyses.sweep import SweepResult, run_sweep
+from .case import Case, case_from_dict
+from .case import load_case as _read_case_file
+from .dynamics.integrators import Integrator
+from .dynamics.result import HistoryResult
+from .io.hdf5 import write_history, write_static, write_sweep
+from .io.journal import SweepFile, fingerprint
+from .plots.cable import plot_cable
+from .plots.history import plot_history
+from .plots.sweep import plot_sweep
+
+
+def load_case(source: str | Path | dict | None = None, overrides: list[str] | None = None) -> Case:
+    """A validated case: from a YAML file, a mapping, or (None) the paper's example.
+
+    Parameters
+    ----------
+    source : str, Path, dict or None
+        Path of a case file; or a mapping with the keys of one; or None for the embedded
+        example (``cablesim example`` prints it).
+    overrides : list of str, optional
+        ``KEY=VALUE`` settings over the file, as ``--set`` on the command line.
+
+    Raises
+    ------
+    CablesimError
+        Naming the field at fault and what to do.
+    """
+    if isinstance(source, dict):
+        return case_from_dict(source, overrides)
+    return _read_case_file(source, overrides)[0]
+
+
+@dataclass(frozen=True)
+class StaticRun:
+    """A static analysis: ``result`` (:class:`~cablesim.analyses.static.StaticResult`)."""
+
+    case: Case
+    result: StaticResult
+
+    def to_hdf5(self, path: str | Path) -> Path:
+        """Write the file ``cablesim static`` writes."""
+        return write_static(path, self.result, self.case.text)
+
+    def plot(self, path: str | Path) -> Path:
+        """Draw the cable under F0 as a PNG."""
+        return plot_cable(self.result, path, self.case.name)
+
+
+@dataclass(frozen=True)
+class HistoryRun:
+    """A time history: ``history`` (:class:`~cablesim.dynamics.result.HistoryResult`), the
+    ``static`` equilibrium it started from and the ``integrator`` used."""
+
+    case: Case
+    command: str
+    static: StaticResult
+    history: HistoryResult
+    integrator: Integrator
+
+    def to_hdf5(self, path: str | Path) -> Path:
+        """Write the file ``cablesim history`` (or ``free-vibration``) writes."""
+        return write_history(path, self.history, self.case.text, self.command)
+
+    def plot(self, prefix: str | Path, channels=None) -> list[Path]:
+        """Draw the waveform, phase, Lissajous, tension and spectrum PNGs (``prefix-*.png``)."""
+        what = f"{self.case.name} ({self.history.analysis} analysis, {self.integrator.name})"
+        return plot_history(self.history, Path(prefix), what, channels=channels)
+
+
+@dataclass(frozen=True)
+class SweepRun:
+    """A frequency sweep: ``result`` (:class:`~cablesim.analyses.sweep.SweepResult`)."""
+
+    case: Case
+    result: SweepResult
+
+    def to_hdf5(self, path: str | Path) -> Path:
+        """Write the file ``cablesim sweep`` writes."""
+        return write_sweep(path, self.result)
+
+    def plot(self, path: str | Path, h5_path: str | Path) -> Path:
+        """Draw the frequency response from the stored file ``h5_path`` as the PNG ``path``."""
+        return plot_sweep(h5_path, path)
+
+
+def static(case: Case, analysis: str | None = None) -> StaticRun:
+    """Static equilibrium under F0 (inextensible, approximate, exact), modes and damping.
+
+    ``analysis`` (``"exact"`` or ``"approximate"``) overrides the case's.
+    """
+    return StaticRun(case, run_static(case, analysis))
+
+
+def history(
+    case: Case,
+    omega: float | None = None,
+    duration: float | None = None,
+    output_step: float | None = None,
+    analysis: str | None = None,
+    integrator: str | None = None,
+    progress: Callable[[float], None] | None = None,
+) -> HistoryRun:
+    """Forced response ``F(t) = F0 + FL sin(w t)`` from the equilibrium at rest.
+
+    Parameters
+    ----------
+    case : Case
+    omega : float, optional
+        Forcing frequency, rad/s (default: the case's ``history.omega``).
+    duration, output_step : float, optional
+        Simulated time and interval between saved instants, s.
+    analysis, integrator : str, optional
+        Override the case's choices.
+    progress : callable, optional
+        Called with the simulated time reached, s.
+    """
+    st, hist, integ = run_history(case, omega, duration, output_step, analysis, integrator, progress=progress)
+    return HistoryRun(case, "history", st, hist, integ)
+
+
+def free_vibration(
+    case: Case,
+    mode: int | None = None,
+    peak_velocity: float | None = None,
+    damping_ratio: float | None = None,
+    duration: float | None = None,
+    output_step: float | None = None,
+    analysis: str | None = None,
+    integrator: str | None = None,
+    progress: Callable[[float], None] | None = None,
+) -> HistoryRun:
+    """Damped free vibration started with velocities along linear mode ``mode`` (largest
+    component ``peak_velocity``, m/s); defaults from the case's ``free_vibration:`` section."""
+    st, hist, integ = run_free_vibration(
+        case, mode, peak_velocity, damping_ratio, duration, output_step, analysis, integrator, progress=progress
+    )
+    return HistoryRun(case, "free-vibration", st, hist, integ)
+
+
+def sweep(
+    case: Case,
+    jobs: int = 1,
+    analysis: str | None = None,
+    integrator: str | None = None,
+    output: str | Path | None = None,
+    resume: bool = False,
+    backend: str | None = None,
+    scheduler: str | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> SweepRun:
+    """Steady response of each channel over the case's ``sweep:`` frequencies.
+
+    Parameters
+    ----------
+    case : Case
+    jobs : int
+        Worker processes (-1: all cores).
+    analysis, integrator : str, optional
+        Override the case's choices.
+    output : str or Path, optional
+        Keep the HDF5 file and its journal up to date while the sweep runs (a killed sweep
+        loses no finished point; ``resume=True`` finishes it). Without it nothing is written.
+    backend, scheduler : str, optional
+        ``"dask"`` and a scheduler address to run the points on a Dask cluster.
+    progress : callable, optional
+        Called as ``progress(done, total)``.
+    """
+    recorder = None
+    if output is not None:
+        recorder = SweepFile(Path(output), fingerprint(case.text, analysis, integrator), resume=resume)
+    res = run_sweep(case, case.text, analysis, integrator, n_jobs=jobs, backend=backend, scheduler=scheduler,
+                    progress=progress, recorder=recorder)
+    return SweepRun(case, res)

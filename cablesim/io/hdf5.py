@@ -1,0 +1,625 @@
+"""HDF5 files: every writer and every reader of cablesim's results, and their layout.
+
+Layout (every dataset has a ``units`` attribute; every file has the root attributes
+``case_yaml``, ``cablesim_version``, ``command``, ``created_utc`` and ``analysis``):
+
+- ``cablesim static``: ``/static/P``, ``/static/{inextensible,approximate,exact}/...``,
+  ``/modal/{omega, shapes, damping_ratio, inextensible_omega}`` (attributes ``analysis``, ``a0``,
+  ``a1``);
+- ``cablesim history`` / ``free-vibration``: ``/history/{t, z, v, zc, ze, T, residual, dof, y0,
+  T0}`` (time along the first axis, DOF along the second) with attributes ``omega``,
+  ``analysis``, ``integrator``, ``status`` (the outcome in words), ``status_code``, ``t_stop``
+  and the integrator's settings; ``/modal/omega``;
+- ``cablesim sweep``: see :func:`write_sweep`;
+- ``cablesim continue``: see :func:`write_continuation`.
+
+Files are written atomically: into ``NAME.part`` beside the target, then renamed over it, so a
+failed or interrupted run never leaves a corrupt or half-written result under the real name.
+Every dataset carries a ``units`` attribute; non-finite numbers are refused unless a caller
+says explicitly that they mark missing values.
+"""
+
+from __future__ import annotations
+
+import datetime
+import numbers
+import os
+import shutil
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import SimpleNamespace
+
+import h5py
+import numpy as np
+
+from ..channels import normalise_channel
+from ..dynamics.result import HistoryResult
+from ..dynamics.status import Status
+from ..errors import CablesimError
+from ..names import DIRECTIONS
+from ..version import __version__
+
+
+@contextmanager
+def atomic_h5(path: str | Path, mode: str = "w"):
+    """Open ``path`` for writing via a temporary file renamed into place on success.
+
+    Parameters
+    ----------
+    path : str or Path
+        Final file name; its folder is created if needed.
+    mode : str
+        ``"w"`` starts empty; ``"a"`` starts from a copy of the existing file.
+
+    Yields
+    ------
+    h5py.File
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".part")
+    if mode == "a" and path.exists():
+        shutil.copyfile(path, tmp)
+    try:
+        with h5py.File(tmp, "a" if mode == "a" else "w") as f:
+            yield f
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def stamp(f: h5py.File, case_text: str, command: str, **attrs) -> None:
+    """Root attributes every cablesim file has: the case, the version, the command."""
+    f.attrs["case_yaml"] = case_text
+    f.attrs["cablesim_version"] = __version__
+    f.attrs["command"] = command
+    f.attrs["created_utc"] = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    for k, v in attrs.items():
+        f.attrs[k] = v
+
+
+def put(group: h5py.Group, name: str, data, units: str, description: str = "", allow_nan: bool = False):
+    """Write one dataset with its units (and an optional description).
+
+    Raises
+    ------
+    ValueError
+        If ``data`` holds NaN or infinity and ``allow_nan`` is False.
+    """
+    arr = np.asarray(data)
+    if arr.dtype.kind == "f" and not allow_nan and not np.all(np.isfinite(arr)):
+        raise ValueError(f"refusing to write non-finite values to {group.name}/{name}")
+    ds = group.create_dataset(name, data=arr)
+    ds.attrs["units"] = units
+    if description:
+        ds.attrs["description"] = description
+    return ds
+
+
+def write_static(path: str | Path, result, case_text: str) -> Path:
+    """Write a :class:`~cablesim.analyses.static.StaticResult` to HDF5.
+
+    Layout: ``/static/inextensible/{x,T,B,D}``, ``/static/approximate/{x,u,y,T,B,D,f,N,K}``,
+    ``/static/exact/{y,T,K}``, ``/modal/{omega,shapes,damping_ratio}`` with attributes
+    ``analysis``, ``a0``, ``a1``; the case YAML and the version as root attributes.
+    """
+    path = Path(path)
+    r = result
+    with atomic_h5(path) as f:
+        stamp(f, case_text, "static", analysis=r.analysis)
+        st = f.create_group("static")
+        put(st, "P", r.P, "N", "sustained loads F0 in DOF order")
+        if r.inextensible is not None:
+            g = st.create_group("inextensible")
+            put(g, "x", r.inextensible.x, "m", "node coordinates of the inextensible cable")
+            put(g, "T", r.inextensible.T, "N", "segment tensions")
+            put(g, "B", r.inextensible.B, "1", "tangent transformation dT/dP")
+            put(g, "D", r.inextensible.D, "m/N", "configurational flexibility dx/dP")
+            g.attrs["omega_c"] = r.inextensible.omega_c
+        if r.approximate is not None:
+            a = r.approximate
+            g = st.create_group("approximate")
+            for name, val, units, desc in [
+                ("x", a.x, "m", "natural-state coordinates x(P)"),
+                ("u", a.u, "m", "elastic displacements (eq. 7)"),
+                ("y", a.y, "m", "deformed coordinates y = x + u"),
+                ("T", a.T, "N", "segment tensions"),
+                ("B", a.B, "1", "tangent transformation dT/dP"),
+                ("D", a.D, "m/N", "configurational flexibility"),
+                ("f", a.f, "m/N", "elastic flexibility (eq. 8)"),
+                ("N", a.N, "m/N", "elasto-configurational flexibility D + f"),
+                ("K", a.K, "N/m", "tangent stiffness N^-1"),
+            ]:
+                put(g, name, val, units, desc)
+            g.attrs["omega_c"] = a.omega_c
+            g.attrs["omega_e"] = a.omega_e
+        if r.exact is not None:
+            g = st.create_group("exact")
+            put(g, "y", r.exact.y, "m", "deformed node coordinates")
+            put(g, "T", r.exact.T, "N", "segment tensions EA (l - S) / S")
+            put(g, "l", r.exact.length, "m", "stretched segment lengths")
+            put(g, "K", r.exact.K, "N/m", "tangent stiffness of the deformed configuration")
+        m = f.create_group("modal")
+        put(m, "omega", r.modes.omega, "rad/s", "linear modal frequencies, ascending")
+        put(m, "shapes", r.modes.shapes, "1/sqrt(kg)", "mass-normalised mode shapes (columns)")
+        put(m, "damping_ratio", r.damping_ratios, "1", "Rayleigh damping ratio of each mode")
+        put(m, "inextensible_omega", r.inextensible_omega, "rad/s", "finite frequencies of the inextensible cable")
+        m.attrs["analysis"] = r.analysis
+        m.attrs["a0"] = r.a0
+        m.attrs["a1"] = r.a1
+        if r.sole_inextensible_omega is not None:
+            m.attrs["sole_inextensible_omega"] = r.sole_inextensible_omega
+    return path
+
+
+def write_history(path: str | Path, hist, case_text: str, command: str, extra_attrs: dict | None = None) -> Path:
+    """Write a :class:`~cablesim.dynamics.result.HistoryResult` to HDF5.
+
+    Layout: ``/history/{t,z,v,zc,ze,T,residual}`` (time along the first axis, DOF along the
+    second), ``/history/y0``, ``/history/T0``, ``/modal/omega``; attributes ``omega``,
+    ``analysis``, ``integrator``, ``status`` and the integrator's settings on ``/history``.
+    """
+    with atomic_h5(path) as f:
+        stamp(f, case_text, command, analysis=hist.analysis)
+        g = f.create_group("history")
+        put(g, "t", hist.t, "s", "saved instants")
+        put(g, "z", hist.z, "m", "displacement from the static equilibrium, z = y - y(0) (DOF order)")
+        put(g, "v", hist.v, "m/s", "velocity y'")
+        if hist.zc is not None:
+            put(g, "zc", hist.zc, "m", "configurational part x(P(t)) - x(P(0)) (eq. 22)")
+            put(g, "ze", hist.ze, "m", "elastic part of z (eq. 22)")
+        put(g, "T", hist.T, "N", "segment tensions")
+        put(g, "residual", hist.residual, "1", "drift of eq. 15 relative to |F0|")
+        put(g, "dof", np.array(hist.dof_numbers), "1", "1-based DOF number of each column of z, v, zc, ze")
+        put(g, "y0", hist.y0, "m", "static equilibrium the displacements are measured from")
+        put(g, "T0", hist.T0, "N", "tensions at that equilibrium")
+        g.attrs["omega"] = np.nan if hist.omega is None else hist.omega
+        g.attrs["forced"] = hist.omega is not None
+        g.attrs["analysis"] = hist.analysis
+        g.attrs["integrator"] = hist.integrator
+        g.attrs["status"] = hist.message
+        g.attrs["status_code"] = int(hist.status)
+        g.attrs["t_stop"] = np.nan if hist.t_stop is None else hist.t_stop
+        g.attrs["completed"] = hist.completed
+        for k, v in hist.settings.items():
+            g.attrs[k] = v
+        for k, v in (extra_attrs or {}).items():
+            g.attrs[k] = v
+        m = f.create_group("modal")
+        put(m, "omega", hist.modal_omega, "rad/s", "linear modal frequencies about the equilibrium")
+    return Path(path)
+
+
+def write_sweep(path: str | Path, res) -> Path:
+    """Write a (possibly incomplete) :class:`~cablesim.analyses.sweep.SweepResult` atomically.
+
+    Layout: ``/sweep/omega``, optional ``/sweep/gamma`` (then every result dataset has a
+    leading gamma axis); for ``independent`` sweeps ``/sweep/{amplitude, halfrange, period,
+    steady, response_frequency, t_end, floquet, done}``, for up/down sweeps the same under
+    ``/sweep/up/`` and ``/sweep/down/``; ``/modal/omega``. Points not yet computed have
+    ``done = False`` and NaN in the float datasets; a point that stopped early (``failed``) may
+    have NaN response frequencies. These marked gaps are the only NaN cablesim writes.
+    """
+    units = {
+        "amplitude": ("m", "peak |z| from the static equilibrium"),
+        "halfrange": ("m", "half the peak-to-peak range"),
+        "response_frequency": ("rad/s", "dominant response frequency"),
+        "period": ("forcing periods", "response period p (0: no periodic response found)"),
+        "steady": ("1", "whether a stable periodic response was found before the cap"),
+        "failed": ("1", "whether the run stopped early (slack segment, blow-up); its values are partial"),
+        "t_end": ("s", "simulated time used"),
+        "floquet": ("1", "largest Floquet multiplier modulus of the last periodic orbit checked"),
+        "done": ("1", "whether the point has been computed"),
+        "wall": ("s", "wall-clock time of the point"),
+    }
+    with atomic_h5(path) as f:
+        stamp(f, res.case_text, "sweep", analysis=res.analysis)
+        g = f.create_group("sweep")
+        put(g, "omega", res.omega, "rad/s", "forcing frequencies")
+        if res.gamma is not None:
+            put(g, "gamma", res.gamma, "1", "scale of the harmonic loads FL")
+        g.attrs["direction"] = res.direction
+        g.attrs["channels"] = np.array(res.channels, dtype="S")
+        g.attrs["case_name"] = res.case_name
+        for k in ("cap", "window", "tol", "max_period", "floquet_check"):
+            g.attrs[k] = res.settings[k]
+        g.attrs["complete"] = res.complete
+        g.attrs["points_done"] = res.n_done
+        g.attrs["points_total"] = res.n_total
+        dirs = sorted({c.direction for c in res.curves}, key=DIRECTIONS.index)
+        for d in dirs:
+            target = g if d == "independent" else g.create_group(d)
+            cs = [k for k, c in enumerate(res.curves) if c.direction == d]
+            for name, (u, desc) in units.items():
+                arrs = [res.data[k][name] for k in cs]
+                arr = np.stack(arrs) if res.gamma is not None else arrs[0]
+                put(target, name, arr, u, desc, allow_nan=True)
+        m = f.create_group("modal")
+        put(m, "omega", res.modal_omega, "rad/s", "linear modal frequencies about the equilibrium")
+    return Path(path)
+
+
+# --------------------------------------------------------------------------------------------
+# Reading
+# --------------------------------------------------------------------------------------------
+#: Result file families: the ``command`` root attribute -> the kind of data it holds.
+FAMILIES = {"static": "static", "history": "history", "free-vibration": "history", "sweep": "sweep",
+            "continue": "continuation"}
+#: How messages name each family.
+FAMILY_TEXT = {"static": "a static file", "history": "a time-history file", "sweep": "a sweep file",
+               "continuation": "a continuation file"}
+#: Sweep directions and the result groups they use.
+DIRECTION_GROUPS = {"independent": [None], "up": ["up"], "down": ["down"], "both": ["up", "down"]}
+
+
+def attr_text(value) -> str:
+    """An HDF5 attribute (bytes, 1-element array, ...) as str."""
+    if isinstance(value, bytes):
+        return value.decode("utf-8", "replace")
+    if isinstance(value, np.ndarray) and value.size == 1:
+        return attr_text(value.item())
+    return str(value)
+
+
+def _plain(value):
+    """numpy scalars (from HDF5 attributes) as Python numbers, bytes as str."""
+    if isinstance(value, bytes):
+        return value.decode("utf-8", "replace")
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+@dataclass(frozen=True)
+class ResultInfo:
+    path: Path
+    command: str
+    family: str
+    case_text: str
+
+
+def inspect_result(path) -> ResultInfo:
+    """Check that ``path`` is a cablesim result file; its command and stored case text."""
+
+    path = Path(path)
+    if not path.exists():
+        raise CablesimError(f"The result file {path} does not exist. Check the path.")
+    if not path.is_file():
+        raise CablesimError(f"{path} is not a file; give the HDF5 file a cablesim command wrote.")
+    try:
+        f = h5py.File(path, "r")
+    except OSError:
+        raise CablesimError(
+            f"{path} is not an HDF5 file (or cannot be read); give a .h5 file written by cablesim "
+            "static, history, free-vibration or sweep."
+        ) from None
+    with f:
+        command = f.attrs.get("command")
+        case_text = f.attrs.get("case_yaml")
+    if command is None or case_text is None:
+        raise CablesimError(
+            f"{path} is an HDF5 file but not a cablesim result: it has no 'command' and 'case_yaml' "
+            "attributes. Give a file written by cablesim static, history, free-vibration or sweep."
+        )
+    command = attr_text(command)
+    if command not in FAMILIES:
+        raise CablesimError(
+            f"{path} was written by the command '{command}', which cablesim plot does not know; it "
+            f"redraws the results of {', '.join(FAMILIES)}."
+        )
+    return ResultInfo(path, command, FAMILIES[command], attr_text(case_text))
+
+
+def read_case_text(path) -> str:
+    """The case YAML stored in a cablesim result file (root attribute ``case_yaml``).
+
+    Raises
+    ------
+    CablesimError
+        If the file is missing, not HDF5 or not a cablesim result file.
+    """
+    return inspect_result(path).case_text
+
+
+def read_history(path):
+    """Rebuild the :class:`~cablesim.dynamics.result.HistoryResult` stored in a history file.
+
+    Parameters
+    ----------
+    path : str or Path
+        HDF5 file written by ``cablesim history`` or ``cablesim free-vibration``.
+
+    Returns
+    -------
+    HistoryResult
+        With ``dof`` from ``/history/dof`` (None when every DOF was kept, in order), ``omega``
+        None for free vibration (NaN attribute), ``modal_omega`` from ``/modal/omega`` and
+        ``settings`` from the remaining attributes of ``/history``.
+
+    Raises
+    ------
+    CablesimError
+        If the file is missing, not HDF5, not a cablesim file, not a time history, or malformed.
+    """
+
+
+    info = inspect_result(path)
+    path = info.path
+    if info.family != "history":
+        raise CablesimError(
+            f"{path} is {FAMILY_TEXT[info.family]} (written by 'cablesim {info.command}'), not a time "
+            "history; give a file written by cablesim history or free-vibration."
+        )
+    with h5py.File(path, "r") as f:
+        g = f.get("history")
+        need = ("t", "z", "v", "T", "residual", "y0", "T0")
+        missing = [k for k in need if g is None or k not in g]
+        if missing:
+            raise CablesimError(
+                f"The history file {path} is malformed: /history/{{{', '.join(missing)}}} missing. "
+                "Rerun the history."
+            )
+        data = {k: np.asarray(g[k][()]) for k in need}
+        zc = np.asarray(g["zc"][()]) if "zc" in g else None
+        ze = np.asarray(g["ze"][()]) if "ze" in g else None
+        dof = tuple(int(d) for d in np.asarray(g["dof"][()]).ravel()) if "dof" in g else None
+        attrs = {k: _plain(v) for k, v in g.attrs.items()}
+        modal = np.asarray(f["modal/omega"][()], dtype=float) if "modal/omega" in f else np.empty(0)
+    if dof is not None and dof == tuple(range(1, data["y0"].size + 1)):
+        dof = None  # every DOF, in order
+    omega = attrs.pop("omega", None)
+    omega = None if omega is None or not np.isfinite(float(omega)) else float(omega)
+    analysis = attr_text(attrs.pop("analysis", "unknown"))
+    integrator = attr_text(attrs.pop("integrator", "unknown"))
+    message = attr_text(attrs.pop("status", "completed"))
+    completed = bool(attrs.pop("completed", message == "completed"))
+    code = attrs.pop("status_code", None)
+    if code is not None:
+        status = Status(int(code))
+    else:  # files without a status code: only whether the run completed is known
+        status = Status.COMPLETED if completed else Status.UNKNOWN
+    t_stop = attrs.pop("t_stop", None)
+    t_stop = None if t_stop is None or not np.isfinite(float(t_stop)) else float(t_stop)
+    attrs.pop("forced", None)  # derived from omega
+    return HistoryResult(
+        t=data["t"], z=data["z"], v=data["v"], zc=zc, ze=ze, T=data["T"], residual=data["residual"],
+        y0=data["y0"], T0=data["T0"], omega=omega, analysis=analysis, integrator=integrator,
+        status=status, message=message, t_stop=t_stop, modal_omega=modal, settings=attrs, dof=dof,
+    )
+
+
+def read_static_drawing(path: Path, case):
+    """What :func:`cablesim.plots.cable.plot_cable` needs, from a static file (no solving)."""
+
+    with h5py.File(path, "r") as f:
+        analysis = attr_text(f.attrs.get("analysis", f["modal"].attrs.get("analysis", "exact") if "modal" in f else "exact"))
+        st = f.get("static")
+        try:
+            grp = st[analysis]
+            y0 = np.asarray(grp["y"][()], dtype=float)
+            T0 = np.asarray(grp["T"][()], dtype=float)
+            P = np.asarray(st["P"][()], dtype=float)
+            omega = np.asarray(f["modal/omega"][()], dtype=float)
+        except (KeyError, TypeError):
+            raise CablesimError(
+                f"The static file {path} is malformed (its /static/{analysis} results or /modal/omega "
+                "are missing); rerun cablesim static, which draws the cable too."
+            ) from None
+        inext = None
+        if "inextensible" in st and "x" in st["inextensible"]:
+            inext = SimpleNamespace(x=np.asarray(st["inextensible/x"][()], dtype=float))
+    return SimpleNamespace(cable=case.to_cable(), analysis=analysis, P=P, y0=y0, T0=T0, inextensible=inext,
+                           modes=SimpleNamespace(omega=omega))
+
+
+
+
+@dataclass
+class StoredCurve:
+    """One sweep curve: one gamma value (or none) and one direction; arrays over P points."""
+
+    gamma: float | None
+    direction: str  # "independent", "up" or "down"
+    data: dict  # name -> (P, C) or (P,) array, in ascending omega order
+
+    @property
+    def valid(self) -> np.ndarray:
+        """Points that were computed (done, with a finite amplitude)."""
+        return self.data["done"] & np.all(np.isfinite(self.data["amplitude"]), axis=1)
+
+    @property
+    def label(self) -> str:
+        """``"gamma = 0.5, up"``: which curve this is."""
+        g = "" if self.gamma is None else f"gamma = {self.gamma:g}, "
+        return f"{g}{self.direction}"
+
+
+@dataclass
+class StoredSweep:
+    path: Path
+    omega: np.ndarray
+    channels: list[str]
+    direction: str
+    analysis: str
+    attrs: dict
+    gamma: np.ndarray | None
+    curves: list[StoredCurve] = field(default_factory=list)
+    modal: np.ndarray = field(default_factory=lambda: np.empty(0))
+
+
+
+
+def _str_list(value) -> list[str]:
+    if isinstance(value, (str, bytes)):
+        return [attr_text(value)]
+    return [attr_text(v) for v in np.asarray(value, dtype=object).ravel()]
+
+
+
+
+def read_sweep(h5_path) -> StoredSweep:
+    """Read a sweep file (see :func:`write_sweep` for the layout), points in ascending omega."""
+
+    path = Path(h5_path)
+    if not path.is_file():
+        raise CablesimError(f"The sweep file {path} does not exist.")
+    try:
+        f = h5py.File(path, "r")
+    except OSError as exc:
+        raise CablesimError(f"{path} is not an HDF5 file (or cannot be read): {exc}.") from exc
+    with f:
+        if "sweep" not in f or not isinstance(f["sweep"], h5py.Group):
+            command = attr_text(f.attrs.get("command", "unknown"))
+            raise CablesimError(
+                f"{path} is not a sweep file: it has no /sweep group (it was written by the "
+                f"'{command}' command). Plot the output of 'cablesim sweep'."
+            )
+        g = f["sweep"]
+
+        def bad(what: str):
+            return CablesimError(f"The sweep file {path} is malformed: {what}.")
+
+        if "omega" not in g:
+            raise bad("/sweep/omega is missing")
+        omega = np.asarray(g["omega"][()], dtype=float).ravel()
+        P = omega.size
+        if P == 0:
+            raise bad("/sweep/omega is empty")
+        order = np.argsort(omega, kind="stable")
+        omega = omega[order]
+
+        direction = attr_text(g.attrs.get("direction", "independent"))
+        if direction not in DIRECTION_GROUPS:
+            raise bad(f"unknown sweep direction {direction!r} (expected one of {', '.join(DIRECTION_GROUPS)})")
+        gamma = np.atleast_1d(np.asarray(g["gamma"][()], dtype=float)) if "gamma" in g else None
+        G = None if gamma is None else gamma.size
+
+        curves: list[StoredCurve] = []
+        n_chan = None
+        for sub in DIRECTION_GROUPS[direction]:
+            where = g if sub is None else g.get(sub)
+            name = "/sweep" if sub is None else f"/sweep/{sub}"
+            if where is None:
+                raise bad(f"direction {direction!r} but the group {name} is missing")
+            if "amplitude" not in where:
+                raise bad(f"{name}/amplitude is missing")
+            raw = {}
+            C = None
+            for key in ("amplitude", "halfrange", "response_frequency", "period", "steady", "done"):
+                if key not in where:
+                    continue
+                arr = np.asarray(where[key][()])
+                if key == "amplitude":
+                    C = arr.shape[-1] if arr.ndim >= 2 else 0
+                tail = (P, C) if key in ("amplitude", "halfrange", "response_frequency") else (P,)
+                if G is not None and arr.ndim == len(tail):  # gamma axis left out for G = 1
+                    if G != 1:
+                        raise bad(f"{name}/{key} has no gamma axis but /sweep/gamma has {G} values")
+                    arr = arr[None]
+                want = ((G,) if G is not None else ()) + tail
+                if arr.shape != want:
+                    raise bad(f"{name}/{key} has shape {arr.shape}, expected {want}")
+                raw[key] = np.take(arr, order, axis=0 if G is None else 1)
+            if n_chan is not None and C != n_chan:
+                raise bad(f"{name} holds {C} channels, another group {n_chan}")
+            n_chan = C
+            for gi in range(1 if G is None else G):
+                data = {k: (v if G is None else v[gi]) for k, v in raw.items()}
+                amp = data["amplitude"].astype(float)
+                data["amplitude"] = amp
+                for key in ("halfrange", "response_frequency"):
+                    data[key] = data[key].astype(float) if key in data else np.full_like(amp, np.nan)
+                data["period"] = data["period"].astype(int) if "period" in data else np.ones(P, dtype=int)
+                data["steady"] = data["steady"].astype(bool) if "steady" in data else np.ones(P, dtype=bool)
+                finite = np.all(np.isfinite(amp), axis=1)
+                data["done"] = (data["done"].astype(bool) & finite) if "done" in data else finite
+                curves.append(StoredCurve(None if G is None else float(gamma[gi]), sub or "independent", data))
+
+        channels = _str_list(g.attrs["channels"]) if "channels" in g.attrs else [f"z{k + 1}" for k in range(n_chan)]
+        if len(channels) != n_chan:
+            raise bad(f"the attribute channels names {len(channels)} channels but the results hold {n_chan}")
+        channels = [normalise_channel(c) or c for c in channels]
+        analysis = attr_text(f.attrs.get("analysis", g.attrs.get("analysis", "unknown")))
+        attrs = {k: g.attrs[k] for k in ("case_name", "integrator", "cap", "window") if k in g.attrs}
+        modal = np.empty(0)
+        if "modal" in f and "omega" in f["modal"]:
+            modal = np.sort(np.asarray(f["modal"]["omega"][()], dtype=float).ravel())
+    return StoredSweep(path, omega, channels, direction, analysis, attrs, gamma, curves, modal)
+
+
+
+
+def select_channels(sweep: StoredSweep, channels) -> list[int]:
+    """Indices into the file's channel axis of the chosen channels."""
+    have = ", ".join(sweep.channels)
+    if channels is None:
+        return list(range(len(sweep.channels)))
+    if isinstance(channels, (str, bytes, numbers.Integral)):
+        channels = [channels]
+    out: list[int] = []
+    for c in channels:
+        name = normalise_channel(c)
+        if name is None:
+            raise CablesimError(f"Channel name {c!r} is malformed; the sweep file {sweep.path} holds {have}.")
+        if name not in sweep.channels:
+            raise CablesimError(
+                f"Channel {c!r} was not recorded in the sweep file {sweep.path}; it holds {have}. "
+                "Choose one of those, or rerun the sweep with the channel."
+            )
+        i = sweep.channels.index(name)
+        if i not in out:
+            out.append(i)
+    if not out:
+        raise CablesimError(f"No channels were chosen to plot; name at least one of {have}.")
+    return out
+
+
+
+
+def sweep_summary_rows(h5_path, quantity: str = "amplitude") -> list[dict]:
+    """The largest response of every curve and channel of a sweep file.
+
+    Parameters
+    ----------
+    h5_path : str or Path
+        The HDF5 file written by ``cablesim sweep``.
+    quantity : {"amplitude", "halfrange"}, optional
+        The quantity whose maximum is sought.
+
+    Returns
+    -------
+    list of dict
+        One row per curve (gamma value, direction) and channel, in file order, with keys
+        ``gamma`` (float or None), ``direction`` (``"independent"``, ``"up"`` or ``"down"``),
+        ``channel`` (``"z2"``), ``omega`` (forcing frequency of the largest value, rad/s),
+        ``value`` (that largest value, m), ``period`` and ``steady`` (at that point),
+        ``points_done`` and ``points``. ``omega`` and ``value`` are NaN (``period`` 0,
+        ``steady`` False) if no point of the curve was computed.
+
+    Raises
+    ------
+    CablesimError
+        If the file is missing, not HDF5 or not a sweep file, or the quantity is unknown.
+    """
+    if quantity not in ("amplitude", "halfrange"):
+        raise CablesimError(f"Unknown quantity {quantity!r}; choose amplitude or halfrange.")
+    sweep = read_sweep(h5_path)
+    rows = []
+    for curve in sweep.curves:
+        valid = curve.valid
+        y_all = curve.data[quantity]
+        for c, name in enumerate(sweep.channels):
+            ok = valid & np.isfinite(y_all[:, c])
+            row = dict(gamma=curve.gamma, direction=curve.direction, channel=name,
+                       omega=float("nan"), value=float("nan"), period=0, steady=False,
+                       points_done=int(valid.sum()), points=int(sweep.omega.size))
+            if ok.any():
+                k = np.flatnonzero(ok)[np.argmax(y_all[ok, c])]
+                row.update(omega=float(sweep.omega[k]), value=float(y_all[k, c]),
+                           period=int(curve.data["period"][k]), steady=bool(curve.data["steady"][k]))
+            rows.append(row)
+    return rows
+
+

@@ -1,0 +1,107 @@
+"""Redraw figures from stored result files, without recomputing anything.
+
+``cablesim plot RESULT.h5 [MORE.h5 ...]`` reads HDF5 files written by ``cablesim static``,
+``history``, ``free-vibration``, ``sweep`` or ``continue``. If the case stored in the first
+file (root attribute ``case_yaml``) has a ``figure:`` section, or ``--figure FILE.yaml`` gives
+one, one composite PNG is drawn from all the files (one column per file); otherwise each file
+gets the standard plots of its command.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..case import parse_case, read_figure
+from ..channels import normalise_channel
+from ..errors import CablesimError
+from ..io.hdf5 import FAMILY_TEXT, ResultInfo, inspect_result, read_history, read_static_drawing
+from .cable import plot_cable
+from .composite import draw_figure
+from .history import plot_history
+from .sweep import plot_sweep
+
+
+def redraw(paths, output=None, figure=None) -> list[Path]:
+    """Redraw figures from stored result files; nothing is recomputed.
+
+    Parameters
+    ----------
+    paths : list of Path
+        Result files of cablesim static, history, free-vibration or sweep; all of one type
+        (history and free-vibration files count as one type: time histories).
+    output : Path, optional
+        With a ``figure:`` section: the PNG (default: the first file with suffix ``.png``).
+        Without one (one file only): the PNG of a static or sweep file, or the prefix of the
+        five time-history PNGs (``output`` without its suffix).
+    figure : Path or FigureSpec, optional
+        A composite figure to draw instead of the stored case's ``figure:`` section: a YAML
+        file with a ``figure:`` section (see :func:`read_figure`), or the spec itself.
+
+    Returns
+    -------
+    list of Path
+        The PNG files written.
+
+    Raises
+    ------
+    CablesimError
+        If a file is missing, not HDF5 or not a cablesim result, the files mix types, the
+        figure does not fit the files (e.g. ``fdr`` from time histories, ``split`` without
+        z_c/z_e), or a channel, segment or label list does not fit.
+    """
+    paths = [Path(p) for p in paths]
+    if not paths:
+        raise CablesimError("Give at least one result file (.h5) to plot.")
+    infos = [inspect_result(p) for p in paths]
+    families = {i.family for i in infos}
+    if len(families) > 1:
+        listing = "; ".join(f"{i.path} is {FAMILY_TEXT[i.family]}" for i in infos)
+        raise CablesimError(
+            f"The result files mix types ({listing}); plot files of one type together (history and "
+            "free-vibration files count as one)."
+        )
+    family = infos[0].family
+    case = parse_case(infos[0].case_text, source=f"(the case stored in {paths[0]})", default_name=paths[0].stem)
+    output = None if output is None else Path(output)
+
+    if figure is not None:  # asked for explicitly: it must fit the files
+        spec = figure if hasattr(figure, "kind") else read_figure(figure)
+        png = output if output is not None else paths[0].with_suffix(".png")
+        return [draw_figure(spec, infos, png, case.name)]
+    if case.figure is not None and family != "static":
+        png = output if output is not None else paths[0].with_suffix(".png")
+        return [draw_figure(case.figure, infos, png, case.name)]
+
+    if output is not None and len(paths) > 1:
+        raise CablesimError(
+            "-o names one output, but several files were given and no figure: section of the stored "
+            "case applies to them; drop -o (each file's plots go beside it) or plot the files one at a time."
+        )
+    written: list[Path] = []
+    for info in infos:
+        written += _standard(info, output)
+    return written
+
+
+def _standard(info: ResultInfo, output: Path | None) -> list[Path]:
+    """The plots the command that wrote the file draws."""
+    case = parse_case(info.case_text, source=f"(the case stored in {info.path})", default_name=info.path.stem)
+    if info.family == "static":
+        result = read_static_drawing(info.path, case)
+        png = output if output is not None else info.path.with_suffix(".png")
+        return [plot_cable(result, png, case.name)]
+    if info.family == "sweep":
+        return [plot_sweep(info.path, output if output is not None else info.path.with_suffix(".png"))]
+    hist = read_history(info.path)
+    if hist.t.size < 2:
+        raise CablesimError(f"The history in {info.path} holds a single instant; there is nothing to plot.")
+    wanted = case.history.channels if info.command == "history" else case.free_vibration.channels
+    stored = {f"z{d}" for d in hist.dof_numbers}
+    channels = None
+    if wanted:  # the case's plotted channels, among those the file kept
+        channels = [c for c in wanted if normalise_channel(c) in stored] or None
+    prefix = output.with_suffix("") if output is not None else info.path.with_suffix("")
+    what = f"{case.name} ({hist.analysis} analysis, {hist.integrator})"
+    return plot_history(hist, prefix, what, channels=channels)
+
+

@@ -1,0 +1,3 @@
+"""The version of cablesim (recorded in every result file)."""
+
+__version__ = "0.1.0"

@@ -17,8 +17,8 @@ The package, from the bottom layer up (a module imports only from layers below i
 ``tests/test_architecture.py``):
 
 - ``names``, ``errors``, ``version``, ``channels`` -- the vocabulary;
-- ``cable``, ``statics``, ``modal`` -- the model: geometry, the three static equilibria
-  (complementary energy), modes and Rayleigh damping;
+- ``cable``, ``closure``, ``statics``, ``modal`` -- the model: geometry, the closure problem on
+  the complementary energy, the three static equilibria, modes and Rayleigh damping;
 - ``dynamics/`` -- compiled kernels, the equations of motion (``equations``), the integrators
   (``integrators/``), time histories (``simulate``), steady states (``steady``), spectra, run
   status (``status``); it never sees a case file;

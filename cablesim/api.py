@@ -23,7 +23,8 @@ from .case import Case, case_from_dict
 from .case import load_case as _read_case_file
 from .dynamics.integrators import Integrator
 from .dynamics.result import HistoryResult
-from .io.hdf5 import write_history, write_static, write_sweep
+from .io.hdf5 import write_history, write_static
+from .io.sweeps import write_sweep
 from .io.journal import SweepFile, fingerprint
 from .plots.cable import plot_cable
 from .plots.history import plot_history

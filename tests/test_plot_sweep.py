@@ -8,7 +8,7 @@ import pytest
 
 import cablesim.plots.sweep as ps
 from cablesim.errors import CablesimError
-from cablesim.io.hdf5 import sweep_summary_rows
+from cablesim.io.sweeps import sweep_summary_rows
 from cablesim.plots.sweep import plot_sweep
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"

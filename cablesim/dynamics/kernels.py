@@ -242,7 +242,7 @@ def closure_solve(S, Q, eps, L, H, F, tol, maxit):
 
     Near a kink of Phi (a segment force passing through zero) Newton's model is useless; there
     the iterate escapes along the exact descent ray (see :func:`_escape_kink`), as in
-    :func:`cablesim.statics.solve_segment_forces`. Returns the number of iterations, or -1 if
+    :func:`cablesim.closure.solve_segment_forces`. Returns the number of iterations, or -1 if
     it failed (a slack segment, or no convergence).
     """
     phi, g0, g1, h00, h01, h11, tmin = _phi(S, Q, eps, L, H, F[0], F[1])

@@ -287,13 +287,19 @@ def steady_response(
                 continue
         return _finish_steady(eom, integrator, prm, state, channels, p, k, T, spp, floquet)
 
-    # Cap reached: amplitudes over the last window.
+    return _cap_reached(eom, channels, state, fine, spp, floquet)
+
+
+def _cap_reached(eom, channels, state, fine, spp, floquet) -> PointResult:
+    """No steady state before the cap: amplitudes over the last window."""
+    nd = eom.n_dof
+    T = 2.0 * np.pi / eom.omega
     rec = np.concatenate(fine) if fine else state.s[None, :]
     z = rec[:, :nd][:, channels]
     amp, half = _amplitudes(z, periodic=False)
     freq = _dominant_frequency(z, T / spp) if z.shape[0] > 8 else np.full(channels.size, np.nan)
     return PointResult(
-        omega=w,
+        omega=eom.omega,
         amplitude=amp,
         halfrange=half,
         period=0,

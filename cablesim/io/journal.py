@@ -16,7 +16,7 @@ import time
 from pathlib import Path
 
 from ..errors import CablesimError
-from .hdf5 import write_sweep
+from .sweeps import write_sweep
 
 
 def fingerprint(case_text: str, analysis, integrator) -> str:

@@ -18,7 +18,6 @@ from pathlib import Path
 import numpy as np
 
 from ..channels import (
-    channel_description,
     column_description,
     column_name,
     column_of,
@@ -28,9 +27,10 @@ from ..channels import (
 )
 from ..dynamics.spectra import spectrum, spectrum_peaks
 from ..errors import CablesimError
-from ..io.hdf5 import ResultInfo, FAMILY_TEXT, attr_text, inspect_result, read_history, read_sweep, select_channels
+from ..io.hdf5 import FAMILY_TEXT, ResultInfo, attr_text, inspect_result, read_history
+from ..io.sweeps import read_sweep, select_channels
 from .base import MAX_LINE_POINTS, pyplot, save_atomic, steady_start, two_tone
-from .sweep import DIRECTION_STYLE, QUANTITIES, marker_handles, period_runs
+from .sweep import DIRECTION_STYLE, channel_label, draw_curve, marker_handles
 
 #: Kinds drawing time histories (history or free-vibration files).
 HISTORY_KINDS = ("waveform", "waveform_phase", "waveform_fft", "split", "lissajous_tension")
@@ -466,30 +466,12 @@ def _draw_fdr(fig_spec, infos, png: Path, title: str) -> Path:
             c = sw.channels.index(name)
             markevery = max(1, sw.omega.size // 80)
             for curve in sw.curves:
-                valid = curve.valid
-                y = np.where(valid, curve.data["amplitude"][:, c], np.nan)
-                st = DIRECTION_STYLE[curve.direction]
-                col = colors[(k, curve.gamma)]
-                ax.plot(sw.omega, y, ls=st["ls"], marker=st["marker"], ms=st["ms"], color=col, lw=1.3,
-                        markevery=markevery, zorder=2)
-                unsteady = valid & ~curve.data["steady"] & np.isfinite(y)
-                if unsteady.any():
-                    any_unsteady = True
-                    ax.plot(sw.omega[unsteady], y[unsteady], ls="none", marker="o", ms=8, mfc="none", mec="red",
-                            mew=1.2, zorder=4)
-                period = curve.data["period"]
-                sub = valid & (period >= 2) & np.isfinite(y)
-                if sub.any():
-                    any_sub = True
-                    ax.plot(sw.omega[sub], y[sub], ls="none", marker="D", ms=3.5, color="k", zorder=5)
-                    for q in period_runs(sub, period):
-                        ax.annotate(f"1/{period[q]}", (sw.omega[q], y[q]), textcoords="offset points",
-                                    xytext=(0, 7), ha="center", va="bottom", fontsize=7, color="0.15", zorder=6)
+                unsteady, sub = draw_curve(ax, sw.omega, curve, c, "amplitude", colors[(k, curve.gamma)], markevery, 1.3)
+                any_unsteady, any_sub = any_unsteady or unsteady, any_sub or sub
         for w in modal:
             ax.axvline(w, color="0.5", ls=":", lw=1.0, alpha=0.7, zorder=1)
         ax.set_ylim(bottom=0.0)
-        desc = f"\n{channel_description(int(name[1:]) - 1)}" if name[1:].isdigit() else ""
-        ax.set_ylabel(f"{name} {QUANTITIES['amplitude']} (m){desc}", fontsize=9)
+        ax.set_ylabel(channel_label(name), fontsize=9)
         ax.grid(True, alpha=0.3)
     axes[-1].set_xlim(x_lo, x_hi)
     axes[-1].set_xlabel("forcing frequency omega (rad/s)")

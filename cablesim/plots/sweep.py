@@ -12,7 +12,8 @@ import numpy as np
 
 from ..channels import channel_description
 from ..errors import CablesimError
-from ..io.hdf5 import StoredSweep, attr_text, read_sweep, select_channels
+from ..io.hdf5 import attr_text
+from ..io.sweeps import StoredSweep, read_sweep, select_channels
 from .base import figure_grid, save_atomic
 
 #: Largest number of channels drawn (one subplot each).
@@ -69,6 +70,69 @@ def _subtitle(sweep: StoredSweep, shown: list[str]) -> str:
     return ", ".join(parts)
 
 
+def draw_curve(ax, omega, curve, c: int, quantity: str, color, markevery: int, lw: float = 1.2):
+    """One sweep curve of channel ``c``: its line, non-steady points ringed in red, subharmonic
+    points as black diamonds labelled ``1/p``; whether each kind of marker was drawn."""
+    valid = curve.valid
+    y = np.where(valid, curve.data[quantity][:, c], np.nan)
+    st = DIRECTION_STYLE[curve.direction]
+    ax.plot(omega, y, ls=st["ls"], marker=st["marker"], ms=st["ms"], color=color, lw=lw,
+            markevery=markevery, zorder=2)
+    unsteady = valid & ~curve.data["steady"] & np.isfinite(y)
+    if unsteady.any():
+        ax.plot(omega[unsteady], y[unsteady], ls="none", marker="o", ms=8, mfc="none",
+                mec="red", mew=1.2, zorder=4)
+    period = curve.data["period"]
+    sub = valid & (period >= 2) & np.isfinite(y)
+    if sub.any():
+        ax.plot(omega[sub], y[sub], ls="none", marker="D", ms=3.5, color="k", zorder=5)
+        for k in period_runs(sub, period):
+            ax.annotate(f"1/{period[k]}", (omega[k], y[k]), textcoords="offset points",
+                        xytext=(0, 7), ha="center", va="bottom", fontsize=7, color="0.15", zorder=6,
+                        bbox=dict(boxstyle="round,pad=0.1", fc="white", ec="none", alpha=0.7))
+    return bool(unsteady.any()), bool(sub.any())
+
+
+def channel_label(name: str, quantity: str = "amplitude") -> str:
+    """Axis label of a channel, e.g. ``"z2 peak |z| (m)\nnode 1, vertical (down +)"``."""
+    desc = f"\n{channel_description(int(name[1:]) - 1)}" if name[1:].isdigit() else ""
+    return f"{name} {QUANTITIES[quantity]} (m){desc}"
+
+
+def _draw_channel(ax, sweep: StoredSweep, c: int, quantity: str, color_of, markevery: int):
+    """Every curve of channel ``c``; whether non-steady and subharmonic points were drawn."""
+    any_unsteady = any_sub = False
+    for curve in sweep.curves:
+        unsteady, sub = draw_curve(ax, sweep.omega, curve, c, quantity, color_of(curve), markevery)
+        any_unsteady, any_sub = any_unsteady or unsteady, any_sub or sub
+    ax.set_ylim(bottom=0.0)
+    ax.set_ylabel(channel_label(sweep.channels[c], quantity), fontsize=9)
+    ax.grid(True, alpha=0.3)
+    return any_unsteady, any_sub
+
+
+def _legend(sweep: StoredSweep, gammas, colors, any_unsteady, any_sub, modal_k) -> list:
+    """Proxy artists: colours = gamma values, line styles = directions, markers."""
+    from matplotlib.lines import Line2D
+
+    handles = []
+    if gammas:
+        shown = list(range(len(gammas))) if len(gammas) <= 12 else [0, len(gammas) - 1]
+        for r in shown:
+            handles.append(Line2D([], [], color=colors[r], lw=2.5, label=f"gamma = {gammas[r]:g}"))
+            if len(shown) == 2 and r == 0:
+                handles.append(Line2D([], [], ls="none", label=f"... ({len(gammas) - 2} more)"))
+    style_color = "0.3" if gammas else colors[0]
+    for d in dict.fromkeys(cv.direction for cv in sweep.curves):
+        st = DIRECTION_STYLE[d]
+        handles.append(Line2D([], [], ls=st["ls"], marker=st["marker"], ms=st["ms"] + 1, color=style_color,
+                              lw=1.2, label=st["label"]))
+    handles += marker_handles(any_unsteady, any_sub)
+    if modal_k:
+        handles.append(Line2D([], [], ls=":", color="0.5", lw=1.0, label="linear modal frequencies"))
+    return handles
+
+
 def plot_sweep(h5_path, png_path=None, channels=None, quantity: str = "amplitude", title: str | None = None) -> Path:
     """Draw the frequency response of a sweep file as a PNG.
 
@@ -106,8 +170,6 @@ def plot_sweep(h5_path, png_path=None, channels=None, quantity: str = "amplitude
         If the file is missing, not HDF5 or not a sweep file, a channel is unknown or the
         quantity is unknown.
     """
-    from matplotlib.lines import Line2D
-
     _check_quantity(quantity)
     sweep = read_sweep(h5_path)
     chans = select_channels(sweep, channels)
@@ -142,34 +204,10 @@ def plot_sweep(h5_path, png_path=None, channels=None, quantity: str = "amplitude
     fig, axes = figure_grid(n, 1, 8.6, 2.6, sharex=True, top=0.8 if modal_k else 0.65, hspace=0.3, left=1.4)
     any_unsteady = any_sub = False
     for ax, c in zip(axes[:, 0], chans):
-        name = sweep.channels[c]
-        for curve in sweep.curves:
-            valid = curve.valid
-            y = np.where(valid, curve.data[quantity][:, c], np.nan)
-            st = DIRECTION_STYLE[curve.direction]
-            col = color_of(curve)
-            ax.plot(omega, y, ls=st["ls"], marker=st["marker"], ms=st["ms"], color=col, lw=1.2,
-                    markevery=markevery, zorder=2)
-            unsteady = valid & ~curve.data["steady"] & np.isfinite(y)
-            if unsteady.any():
-                any_unsteady = True
-                ax.plot(omega[unsteady], y[unsteady], ls="none", marker="o", ms=8, mfc="none",
-                        mec="red", mew=1.2, zorder=4)
-            period = curve.data["period"]
-            sub = valid & (period >= 2) & np.isfinite(y)
-            if sub.any():
-                any_sub = True
-                ax.plot(omega[sub], y[sub], ls="none", marker="D", ms=3.5, color="k", zorder=5)
-                for k in period_runs(sub, period):
-                    ax.annotate(f"1/{period[k]}", (omega[k], y[k]), textcoords="offset points",
-                                xytext=(0, 7), ha="center", va="bottom", fontsize=7, color="0.15", zorder=6,
-                                bbox=dict(boxstyle="round,pad=0.1", fc="white", ec="none", alpha=0.7))
+        unsteady, sub = _draw_channel(ax, sweep, c, quantity, color_of, markevery)
+        any_unsteady, any_sub = any_unsteady or unsteady, any_sub or sub
         for _, w in modal_k:
             ax.axvline(w, color="0.5", ls=":", lw=1.0, alpha=0.7, zorder=1)
-        ax.set_ylim(bottom=0.0)
-        ax.set_ylabel(f"{name} {QUANTITIES[quantity]} (m)\n{channel_description(int(name[1:]) - 1)}"
-                      if name[1:].isdigit() else f"{name} {QUANTITIES[quantity]} (m)", fontsize=9)
-        ax.grid(True, alpha=0.3)
     top_ax = axes[0, 0]
     last_text = -np.inf
     for k, w in modal_k:  # above the top axes; name the lines that have room
@@ -180,23 +218,8 @@ def plot_sweep(h5_path, png_path=None, channels=None, quantity: str = "amplitude
     axes[-1, 0].set_xlim(x_lo, x_hi)
     axes[-1, 0].set_xlabel("forcing frequency omega (rad/s)")
 
-    # Legend from proxy artists: colours = gamma values, line styles = directions, markers.
-    handles = []
-    if gammas:
-        shown = list(range(len(gammas))) if len(gammas) <= 12 else [0, len(gammas) - 1]
-        for r in shown:
-            handles.append(Line2D([], [], color=colors[r], lw=2.5, label=f"gamma = {gammas[r]:g}"))
-            if len(shown) == 2 and r == 0:
-                handles.append(Line2D([], [], ls="none", label=f"... ({len(gammas) - 2} more)"))
-    style_color = "0.3" if gammas else colors[0]
-    for d in dict.fromkeys(cv.direction for cv in sweep.curves):
-        st = DIRECTION_STYLE[d]
-        handles.append(Line2D([], [], ls=st["ls"], marker=st["marker"], ms=st["ms"] + 1, color=style_color,
-                              lw=1.2, label=st["label"]))
-    handles += marker_handles(any_unsteady, any_sub)
-    if modal_k:
-        handles.append(Line2D([], [], ls=":", color="0.5", lw=1.0, label="linear modal frequencies"))
-    top_ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, framealpha=0.9)
+    top_ax.legend(handles=_legend(sweep, gammas, colors, any_unsteady, any_sub, modal_k), loc="upper left",
+                  bbox_to_anchor=(1.01, 1.0), fontsize=8, framealpha=0.9)
 
     # Incomplete sweep.
     total = P * len(sweep.curves)

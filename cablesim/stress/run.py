@@ -19,7 +19,8 @@ from ..dynamics.simulate import simulate
 from ..dynamics.status import Status
 from ..errors import CablesimError
 from ..modal import fastest_rate as damped_fastest_rate
-from ..statics import CLOSURE_RTOL, inextensible_equilibrium, resisting_force, segment_geometry
+from ..closure import CLOSURE_RTOL
+from ..statics import inextensible_equilibrium, resisting_force, segment_geometry
 from .cases import (
     AGREE_SAFETY,
     AGREE_TOL_CAP,
@@ -311,6 +312,16 @@ def run_one(case: StressCase, analysis: str, scheme: Scheme, cache: dict | None 
         return row
 
 
+def _agreement(hist, ref) -> float:
+    """Relative max ``|dz|`` against the reference over the common instants (NaN if none)."""
+    m = min(hist.t.size, ref.t.size)
+    scale = float(np.max(np.abs(ref.z[:m]))) if m else 0.0
+    if m <= 1:  # stopped before the first saved instant: nothing to compare
+        return float("nan")
+    diff = float(np.max(np.abs(hist.z[:m] - ref.z[:m])))
+    return diff / scale if scale > 0 else (0.0 if diff == 0 else float("inf"))
+
+
 def _classify(row, hist, ref, half, scheme, integ, prep, case, static_ok, static_why) -> dict:
     ck = row["checks"]
     reasons = [] if static_ok else [static_why]
@@ -325,14 +336,7 @@ def _classify(row, hist, ref, half, scheme, integ, prep, case, static_ok, static
     row["drift_pos"] = drift
     explicit = scheme.kind in ("rk4", "dopri5")
     row["drift_tol"] = DRIFT_TOL_EXPLICIT if explicit else DRIFT_TOL_IMPLICIT
-    m = min(hist.t.size, ref.t.size)
-    scale = float(np.max(np.abs(ref.z[:m]))) if m else 0.0
-    if m <= 1:  # stopped before the first saved instant: nothing to compare
-        agree = float("nan")
-    else:
-        diff = float(np.max(np.abs(hist.z[:m] - ref.z[:m])))
-        agree = diff / scale if scale > 0 else (0.0 if diff == 0 else float("inf"))
-    row["agreement"] = agree
+    row["agreement"] = agree = _agreement(hist, ref)
     row["agree_tol"] = _agreement_tol(scheme, hist, half, ref)
     drift_ok = drift <= row["drift_tol"]
     agree_ok = bool(agree <= row["agree_tol"])

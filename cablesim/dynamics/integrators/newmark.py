@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from ...statics import resisting_force
 from .. import kernels as kn
 from ..equations import approximate_stiffness
 from .base import Integrator, IntegratorState, hermite
@@ -72,6 +73,39 @@ def _internal(prm, z, P_n, z_n, warm, P1, K, first, wk, awk, check_slack):
 
 
 @njit(cache=True)
+def _store(s, z, v, a):
+    """``s = (z, v, a)``."""
+    nd = z.size
+    s[:nd] = z
+    s[nd : 2 * nd] = v
+    s[2 * nd :] = a
+
+
+@njit(cache=True)
+def _write_outputs(ta, tb, h, z, v, a, z1, v1, a1, sa, sb, da, db, t_out, out, j):
+    """Interpolate the step ``ta -> tb`` at the output instants it covers; the next index."""
+    nd = z.size
+    for q in range(nd):
+        sa[q] = z[q]
+        sa[nd + q] = v[q]
+        sa[2 * nd + q] = a[q]
+        sb[q] = z1[q]
+        sb[nd + q] = v1[q]
+        sb[2 * nd + q] = a1[q]
+        jerk = (a1[q] - a[q]) / h
+        da[q] = v[q]
+        da[nd + q] = a[q]
+        da[2 * nd + q] = jerk
+        db[q] = v1[q]
+        db[nd + q] = a1[q]
+        db[2 * nd + q] = jerk
+    while j < t_out.size and t_out[j] <= tb + 1e-9 * h:
+        hermite(ta, tb, sa, sb, da, db, t_out[j], out[j])
+        j += 1
+    return j
+
+
+@njit(cache=True)
 def _galpha_advance(prm, s, P_n, warm, wk, awk, t0, h, i0, nsteps, am, af, beta, gamma, t_out, out, ztol, maxit):
     m, C, F0, FL, w = prm[5], prm[6], prm[7], prm[8], prm[9]
     nd = m.size
@@ -108,9 +142,7 @@ def _galpha_advance(prm, s, P_n, warm, wk, awk, t0, h, i0, nsteps, am, af, beta,
                 v1[q] = v[q] + h * ((1.0 - gamma) * a[q] + gamma * a1[q])
             st = _internal(prm, z1, P_n, z, warm, P1, K, it == 0, wk, awk, False)
             if st != kn.OK:
-                s[:nd] = z
-                s[nd : 2 * nd] = v
-                s[2 * nd :] = a
+                _store(s, z, v, a)
                 return i, j, st
             big = 0.0
             for q in range(nd):
@@ -134,9 +166,7 @@ def _galpha_advance(prm, s, P_n, warm, wk, awk, t0, h, i0, nsteps, am, af, beta,
                 converged = True
                 break
         if not converged:
-            s[:nd] = z
-            s[nd : 2 * nd] = v
-            s[2 * nd :] = a
+            _store(s, z, v, a)
             for q in range(nd):
                 if not np.isfinite(z1[q]):
                     return i, j, kn.NONFINITE
@@ -148,31 +178,13 @@ def _galpha_advance(prm, s, P_n, warm, wk, awk, t0, h, i0, nsteps, am, af, beta,
         if st != kn.OK:
             return i, j, st
         if j < t_out.size and t_out[j] <= tb + 1e-9 * h:
-            for q in range(nd):
-                sa[q] = z[q]
-                sa[nd + q] = v[q]
-                sa[2 * nd + q] = a[q]
-                sb[q] = z1[q]
-                sb[nd + q] = v1[q]
-                sb[2 * nd + q] = a1[q]
-                jerk = (a1[q] - a[q]) / h
-                da[q] = v[q]
-                da[nd + q] = a[q]
-                da[2 * nd + q] = jerk
-                db[q] = v1[q]
-                db[nd + q] = a1[q]
-                db[2 * nd + q] = jerk
-            while j < t_out.size and t_out[j] <= tb + 1e-9 * h:
-                hermite(ta, tb, sa, sb, da, db, t_out[j], out[j])
-                j += 1
+            j = _write_outputs(ta, tb, h, z, v, a, z1, v1, a1, sa, sb, da, db, t_out, out, j)
         for q in range(nd):
             z[q] = z1[q]
             v[q] = v1[q]
             a[q] = a1[q]
             P_n[q] = P1[q]
-    s[:nd] = z
-    s[nd : 2 * nd] = v
-    s[2 * nd :] = a
+    _store(s, z, v, a)
     return i0 + nsteps, j, kn.OK
 
 
@@ -200,8 +212,6 @@ class GeneralizedAlpha(Integrator):
         st = IntegratorState(t=t0, s=np.array(s0, dtype=float), warm=np.array(eom.F1, dtype=float))
         nd = eom.n_dof
         if eom.exact:
-            from ...statics import resisting_force
-
             P = resisting_force(eom.cable, eom.y0 + st.s[:nd])
         else:
             # eq. 15 at t0

@@ -1,0 +1,283 @@
+"""Sweep files (``cablesim sweep``): writer, reader, summary rows."""
+
+from __future__ import annotations
+
+import numbers
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from ..channels import normalise_channel
+from ..errors import CablesimError
+from ..names import DIRECTIONS
+from .hdf5 import DIRECTION_GROUPS, atomic_h5, attr_text, put, stamp
+
+
+def write_sweep(path: str | Path, res) -> Path:
+    """Write a (possibly incomplete) :class:`~cablesim.analyses.sweep.SweepResult` atomically.
+
+    Layout: ``/sweep/omega``, optional ``/sweep/gamma`` (then every result dataset has a
+    leading gamma axis); for ``independent`` sweeps ``/sweep/{amplitude, halfrange, period,
+    steady, response_frequency, t_end, floquet, done}``, for up/down sweeps the same under
+    ``/sweep/up/`` and ``/sweep/down/``; ``/modal/omega``. Points not yet computed have
+    ``done = False`` and NaN in the float datasets; a point that stopped early (``failed``) may
+    have NaN response frequencies. These marked gaps are the only NaN cablesim writes.
+    """
+    units = {
+        "amplitude": ("m", "peak |z| from the static equilibrium"),
+        "halfrange": ("m", "half the peak-to-peak range"),
+        "response_frequency": ("rad/s", "dominant response frequency"),
+        "period": ("forcing periods", "response period p (0: no periodic response found)"),
+        "steady": ("1", "whether a stable periodic response was found before the cap"),
+        "failed": ("1", "whether the run stopped early (slack segment, blow-up); its values are partial"),
+        "t_end": ("s", "simulated time used"),
+        "floquet": ("1", "largest Floquet multiplier modulus of the last periodic orbit checked"),
+        "done": ("1", "whether the point has been computed"),
+        "wall": ("s", "wall-clock time of the point"),
+    }
+    with atomic_h5(path) as f:
+        stamp(f, res.case_text, "sweep", analysis=res.analysis)
+        g = f.create_group("sweep")
+        put(g, "omega", res.omega, "rad/s", "forcing frequencies")
+        if res.gamma is not None:
+            put(g, "gamma", res.gamma, "1", "scale of the harmonic loads FL")
+        g.attrs["direction"] = res.direction
+        g.attrs["channels"] = np.array(res.channels, dtype="S")
+        g.attrs["case_name"] = res.case_name
+        for k in ("cap", "window", "tol", "max_period", "floquet_check"):
+            g.attrs[k] = res.settings[k]
+        g.attrs["complete"] = res.complete
+        g.attrs["points_done"] = res.n_done
+        g.attrs["points_total"] = res.n_total
+        dirs = sorted({c.direction for c in res.curves}, key=DIRECTIONS.index)
+        for d in dirs:
+            target = g if d == "independent" else g.create_group(d)
+            cs = [k for k, c in enumerate(res.curves) if c.direction == d]
+            for name, (u, desc) in units.items():
+                arrs = [res.data[k][name] for k in cs]
+                arr = np.stack(arrs) if res.gamma is not None else arrs[0]
+                put(target, name, arr, u, desc, allow_nan=True)
+        m = f.create_group("modal")
+        put(m, "omega", res.modal_omega, "rad/s", "linear modal frequencies about the equilibrium")
+    return Path(path)
+
+
+@dataclass
+class StoredCurve:
+    """One sweep curve: one gamma value (or none) and one direction; arrays over P points."""
+
+    gamma: float | None
+    direction: str  # "independent", "up" or "down"
+    data: dict  # name -> (P, C) or (P,) array, in ascending omega order
+
+    @property
+    def valid(self) -> np.ndarray:
+        """Points that were computed (done, with a finite amplitude)."""
+        return self.data["done"] & np.all(np.isfinite(self.data["amplitude"]), axis=1)
+
+    @property
+    def label(self) -> str:
+        """``"gamma = 0.5, up"``: which curve this is."""
+        g = "" if self.gamma is None else f"gamma = {self.gamma:g}, "
+        return f"{g}{self.direction}"
+
+
+@dataclass
+class StoredSweep:
+    path: Path
+    omega: np.ndarray
+    channels: list[str]
+    direction: str
+    analysis: str
+    attrs: dict
+    gamma: np.ndarray | None
+    curves: list[StoredCurve] = field(default_factory=list)
+    modal: np.ndarray = field(default_factory=lambda: np.empty(0))
+
+
+
+
+def _str_list(value) -> list[str]:
+    if isinstance(value, (str, bytes)):
+        return [attr_text(value)]
+    return [attr_text(v) for v in np.asarray(value, dtype=object).ravel()]
+
+
+
+
+def _read_group(where, name: str, P: int, G: int | None, order, bad):
+    """The result datasets of one direction group, points in ascending omega; channel count."""
+    if "amplitude" not in where:
+        raise bad(f"{name}/amplitude is missing")
+    raw = {}
+    C = None
+    for key in ("amplitude", "halfrange", "response_frequency", "period", "steady", "done"):
+        if key not in where:
+            continue
+        arr = np.asarray(where[key][()])
+        if key == "amplitude":
+            C = arr.shape[-1] if arr.ndim >= 2 else 0
+        tail = (P, C) if key in ("amplitude", "halfrange", "response_frequency") else (P,)
+        if G is not None and arr.ndim == len(tail):  # gamma axis left out for G = 1
+            if G != 1:
+                raise bad(f"{name}/{key} has no gamma axis but /sweep/gamma has {G} values")
+            arr = arr[None]
+        want = ((G,) if G is not None else ()) + tail
+        if arr.shape != want:
+            raise bad(f"{name}/{key} has shape {arr.shape}, expected {want}")
+        raw[key] = np.take(arr, order, axis=0 if G is None else 1)
+    return raw, C
+
+
+def _curve_data(data: dict, P: int) -> dict:
+    """One curve's arrays with their types, and defaults for datasets older files lack."""
+    amp = data["amplitude"].astype(float)
+    data["amplitude"] = amp
+    for key in ("halfrange", "response_frequency"):
+        data[key] = data[key].astype(float) if key in data else np.full_like(amp, np.nan)
+    data["period"] = data["period"].astype(int) if "period" in data else np.ones(P, dtype=int)
+    data["steady"] = data["steady"].astype(bool) if "steady" in data else np.ones(P, dtype=bool)
+    finite = np.all(np.isfinite(amp), axis=1)
+    data["done"] = (data["done"].astype(bool) & finite) if "done" in data else finite
+    return data
+
+
+def read_sweep(h5_path) -> StoredSweep:
+    """Read a sweep file (see :func:`write_sweep` for the layout), points in ascending omega."""
+
+    path = Path(h5_path)
+    if not path.is_file():
+        raise CablesimError(f"The sweep file {path} does not exist.")
+    try:
+        f = h5py.File(path, "r")
+    except OSError as exc:
+        raise CablesimError(f"{path} is not an HDF5 file (or cannot be read): {exc}.") from exc
+    with f:
+        if "sweep" not in f or not isinstance(f["sweep"], h5py.Group):
+            command = attr_text(f.attrs.get("command", "unknown"))
+            raise CablesimError(
+                f"{path} is not a sweep file: it has no /sweep group (it was written by the "
+                f"'{command}' command). Plot the output of 'cablesim sweep'."
+            )
+        g = f["sweep"]
+
+        def bad(what: str):
+            return CablesimError(f"The sweep file {path} is malformed: {what}.")
+
+        if "omega" not in g:
+            raise bad("/sweep/omega is missing")
+        omega = np.asarray(g["omega"][()], dtype=float).ravel()
+        P = omega.size
+        if P == 0:
+            raise bad("/sweep/omega is empty")
+        order = np.argsort(omega, kind="stable")
+        omega = omega[order]
+
+        direction = attr_text(g.attrs.get("direction", "independent"))
+        if direction not in DIRECTION_GROUPS:
+            raise bad(f"unknown sweep direction {direction!r} (expected one of {', '.join(DIRECTION_GROUPS)})")
+        gamma = np.atleast_1d(np.asarray(g["gamma"][()], dtype=float)) if "gamma" in g else None
+        G = None if gamma is None else gamma.size
+
+        curves: list[StoredCurve] = []
+        n_chan = None
+        for sub in DIRECTION_GROUPS[direction]:
+            where = g if sub is None else g.get(sub)
+            name = "/sweep" if sub is None else f"/sweep/{sub}"
+            if where is None:
+                raise bad(f"direction {direction!r} but the group {name} is missing")
+            raw, C = _read_group(where, name, P, G, order, bad)
+            if n_chan is not None and C != n_chan:
+                raise bad(f"{name} holds {C} channels, another group {n_chan}")
+            n_chan = C
+            for gi in range(1 if G is None else G):
+                data = _curve_data({k: (v if G is None else v[gi]) for k, v in raw.items()}, P)
+                curves.append(StoredCurve(None if G is None else float(gamma[gi]), sub or "independent", data))
+        channels = _str_list(g.attrs["channels"]) if "channels" in g.attrs else [f"z{k + 1}" for k in range(n_chan)]
+        if len(channels) != n_chan:
+            raise bad(f"the attribute channels names {len(channels)} channels but the results hold {n_chan}")
+        channels = [normalise_channel(c) or c for c in channels]
+        analysis = attr_text(f.attrs.get("analysis", g.attrs.get("analysis", "unknown")))
+        attrs = {k: g.attrs[k] for k in ("case_name", "integrator", "cap", "window") if k in g.attrs}
+        modal = np.empty(0)
+        if "modal" in f and "omega" in f["modal"]:
+            modal = np.sort(np.asarray(f["modal"]["omega"][()], dtype=float).ravel())
+    return StoredSweep(path, omega, channels, direction, analysis, attrs, gamma, curves, modal)
+
+
+
+
+def select_channels(sweep: StoredSweep, channels) -> list[int]:
+    """Indices into the file's channel axis of the chosen channels."""
+    have = ", ".join(sweep.channels)
+    if channels is None:
+        return list(range(len(sweep.channels)))
+    if isinstance(channels, (str, bytes, numbers.Integral)):
+        channels = [channels]
+    out: list[int] = []
+    for c in channels:
+        name = normalise_channel(c)
+        if name is None:
+            raise CablesimError(f"Channel name {c!r} is malformed; the sweep file {sweep.path} holds {have}.")
+        if name not in sweep.channels:
+            raise CablesimError(
+                f"Channel {c!r} was not recorded in the sweep file {sweep.path}; it holds {have}. "
+                "Choose one of those, or rerun the sweep with the channel."
+            )
+        i = sweep.channels.index(name)
+        if i not in out:
+            out.append(i)
+    if not out:
+        raise CablesimError(f"No channels were chosen to plot; name at least one of {have}.")
+    return out
+
+
+
+
+def sweep_summary_rows(h5_path, quantity: str = "amplitude") -> list[dict]:
+    """The largest response of every curve and channel of a sweep file.
+
+    Parameters
+    ----------
+    h5_path : str or Path
+        The HDF5 file written by ``cablesim sweep``.
+    quantity : {"amplitude", "halfrange"}, optional
+        The quantity whose maximum is sought.
+
+    Returns
+    -------
+    list of dict
+        One row per curve (gamma value, direction) and channel, in file order, with keys
+        ``gamma`` (float or None), ``direction`` (``"independent"``, ``"up"`` or ``"down"``),
+        ``channel`` (``"z2"``), ``omega`` (forcing frequency of the largest value, rad/s),
+        ``value`` (that largest value, m), ``period`` and ``steady`` (at that point),
+        ``points_done`` and ``points``. ``omega`` and ``value`` are NaN (``period`` 0,
+        ``steady`` False) if no point of the curve was computed.
+
+    Raises
+    ------
+    CablesimError
+        If the file is missing, not HDF5 or not a sweep file, or the quantity is unknown.
+    """
+    if quantity not in ("amplitude", "halfrange"):
+        raise CablesimError(f"Unknown quantity {quantity!r}; choose amplitude or halfrange.")
+    sweep = read_sweep(h5_path)
+    rows = []
+    for curve in sweep.curves:
+        valid = curve.valid
+        y_all = curve.data[quantity]
+        for c, name in enumerate(sweep.channels):
+            ok = valid & np.isfinite(y_all[:, c])
+            row = dict(gamma=curve.gamma, direction=curve.direction, channel=name,
+                       omega=float("nan"), value=float("nan"), period=0, steady=False,
+                       points_done=int(valid.sum()), points=int(sweep.omega.size))
+            if ok.any():
+                k = np.flatnonzero(ok)[np.argmax(y_all[ok, c])]
+                row.update(omega=float(sweep.omega[k]), value=float(y_all[k, c]),
+                           period=int(curve.data["period"][k]), steady=bool(curve.data["steady"][k]))
+            rows.append(row)
+    return rows
+
+

@@ -110,7 +110,7 @@ def sole_inextensible_frequency(
     """The paper's closed-form sole frequency of the 2-node inextensible cable, rad/s.
 
     ``omega^2 = R / (s (m^2 M1 S1^2 + s^2 M2 S3^2))`` (after eq. 21), with ``R``, ``m``, ``s``
-    and ``A1..A4`` of eq. 21 and ``r = s T2 / S2`` (THEORY.md section 2).
+    and ``A1..A4`` of eq. 21 and ``r = s T2 / S2`` (docs/theory.md, section 4).
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""Time histories checked against independent references (THEORY.md sections 1 and 3).
+"""Time histories checked against independent references (docs/theory.md, sections 1 and 5).
 
 Every expected value here is computed in this file from the physics, never taken from an
 earlier cablesim run:
@@ -50,7 +50,7 @@ OUT_STEP = 0.1  # s, a multiple of every fixed step used below (no interpolation
 # ----------------------------------------------------------------------------------------------
 @njit(cache=True)
 def _own_force(y, S, EA, L, H):
-    """P_r = T_r e_r - T_{r+1} e_{r+1}, T = EA (l - S) / S (THEORY.md section 1)."""
+    """P_r = T_r e_r - T_{r+1} e_{r+1}, T = EA (l - S) / S (docs/theory.md, section 1)."""
     nd = y.size
     n = nd // 2
     P = np.zeros(nd)
@@ -90,7 +90,7 @@ def _second_order_rhs(t, s, y0, S, EA, L, H, M, C, F0, FL, w):
 
 @njit(cache=True)
 def _own_stiffness(y, S, EA, L, H):
-    """K = sum_r [(EA/S_r) e e^T + (T_r/l_r)(I - e e^T)] assembled (THEORY.md section 2)."""
+    """K = sum_r [(EA/S_r) e e^T + (T_r/l_r)(I - e e^T)] assembled (docs/theory.md, section 2)."""
     nd = y.size
     n = nd // 2
     K = np.zeros((nd, nd))
@@ -519,7 +519,7 @@ def test_mode_velocity_and_initial_acceleration(paper, exact_static):
     assert np.allclose(s0[:nd], 0.0)
     assert np.allclose(s0[nd : 2 * nd], v0)
     assert np.allclose(s0[2 * nd :], a_expected, rtol=0, atol=1e-6 * np.abs(a_expected).max())
-    # C is Rayleigh: a0 M + a1 K0 with the THEORY formulas for xi = 0.2 in modes 1 and 2
+    # C is Rayleigh: a0 M + a1 K0 with the formulas of docs/theory.md for xi = 0.2 in modes 1 and 2
     w1, w2 = st.modes.omega[:2]
     C = 2 * 0.2 * w1 * w2 / (w1 + w2) * np.diag(st.cable.mass_diagonal) + 2 * 0.2 / (w1 + w2) * st.K0
     assert np.allclose(eom.C, C, rtol=1e-12, atol=1e-9 * np.abs(C).max())

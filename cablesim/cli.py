@@ -299,6 +299,46 @@ def sweep(
     typer.echo(msg)
 
 
+@app.command("continue")
+@user_errors
+def continue_(
+    case_file: Optional[Path] = CASE_ARG,
+    overrides: Optional[list[str]] = typer.Option(None, "--set", help="Override a case-file value, KEY=VALUE with a dotted key (e.g. continuation.period=2); repeatable."),
+    output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file [default: runs/<name>/continuation.h5]"),
+    analysis: Optional[Analysis] = typer.Option(None, "--analysis", help="Override the case file's analysis."),
+    overlay: Optional[Path] = typer.Option(None, "--overlay", metavar="SWEEP.h5", help="Draw a sweep file's points on the plot."),
+    plot: bool = typer.Option(True, "--plot/--no-plot", help="Draw the response diagram."),
+):
+    """Every periodic response over the continuation: range, stable and unstable, with Floquet
+    multipliers and the bifurcations (folds, period doublings, Neimark-Sacker) where responses
+    appear, vanish or jump."""
+    import time
+
+    from . import api
+    from .io.report import continuation_summary
+    from .plots.continuation import plot_continuation
+
+    case = api.load_case(case_file, overrides)
+    out = output if output is not None else Path("runs") / case.name / "continuation.h5"
+    if overlay is not None and not overlay.is_file():
+        raise CablesimError(f"--overlay {overlay}: no such sweep file; give the output of cablesim sweep.")
+
+    def update(point):
+        sys.stderr.write(f"\rbranch {point.branch} (period {point.period}): {point.parameter:.5g}, "
+                         f"point {point.index}, {'stable' if point.stable else 'unstable'}   ")
+        sys.stderr.flush()
+
+    t0 = time.perf_counter()
+    run = api.continuation(case, analysis.value if analysis else None, progress=update)
+    sys.stderr.write("\n")
+    run.to_hdf5(out)
+    typer.echo(continuation_summary(case, run.result, time.perf_counter() - t0))
+    msg = f"\nWrote {out}"
+    if plot:
+        msg += f" and {plot_continuation(out, out.with_suffix('.png'), overlay=overlay)}"
+    typer.echo(msg)
+
+
 @app.command()
 @user_errors
 def plot(

@@ -1,4 +1,6 @@
-"""Shared fixtures for the command-line and case-file tests.
+"""Shared fixtures.
+
+Command-line and case-file tests:
 
 - ``run_cli``: run the real ``cablesim`` command in a subprocess (cwd = the test's tmp_path) and
   return ``(returncode, stdout, stderr)``. Each process start costs about a second, so the tests
@@ -7,6 +9,16 @@
   tmp_path; fast, used for most error cases.
 - ``write_case``: write a case (a dict, dumped as YAML, or YAML text as is) into tmp_path.
 - ``paper_case``: a fresh, mutable dict of the shipped ``configs/paper-example.yaml``.
+
+Time histories (session-scoped; the independent reference is in ``helpers_dynamics.py``):
+
+- ``paper`` (the example case), ``exact_static``, ``approx_static``;
+- ``forced_eom`` / ``approx_eom``: equations of motion forced at ``helpers_dynamics.OMEGA``;
+- ``reference``: ``(t, z, v)`` of the independent scipy reference for ``forced_eom``;
+- ``approx_tight``: a tight DOPRI5 run of ``approx_eom``.
+
+Sweeps (session-scoped; helpers in ``helpers_sweep.py``): ``wdir`` (a working folder),
+``linear`` and ``late`` (sweeps read by more than one module).
 """
 
 from __future__ import annotations
@@ -167,3 +179,96 @@ def _paper_case_dict() -> dict:
 def paper_case(_paper_case_dict) -> dict:
     """A fresh deep copy of configs/paper-example.yaml as a dict (safe to mutate)."""
     return copy.deepcopy(_paper_case_dict)
+
+
+# ----------------------------------------------------------------------------------------------
+# Time histories (test_equations, test_integrators, test_simulate): the paper example, its
+# static equilibria and the forced runs, once per session. The independent reference they are
+# checked against is in helpers_dynamics.py.
+# ----------------------------------------------------------------------------------------------
+@pytest.fixture(scope="session")
+def paper():
+    from cablesim.case import load_case
+
+    case, _ = load_case(None)
+    return case
+
+
+@pytest.fixture(scope="session")
+def exact_static(paper):
+    from cablesim.analyses.static import run_static
+
+    return run_static(paper, "exact", all_models=False)
+
+
+@pytest.fixture(scope="session")
+def approx_static(paper):
+    from cablesim.analyses.static import run_static
+
+    return run_static(paper, "approximate", all_models=False)
+
+
+@pytest.fixture(scope="session")
+def forced_eom(paper, exact_static):
+    from cablesim.analyses.setup import build_equations
+    from helpers_dynamics import OMEGA
+
+    return build_equations(paper, exact_static, omega=OMEGA)
+
+
+@pytest.fixture(scope="session")
+def reference(forced_eom):
+    import numpy as np
+    from helpers_dynamics import DURATION, OUT_STEP, reference_history
+
+    t = np.arange(0, round(DURATION / OUT_STEP) + 1) * OUT_STEP
+    z, v = reference_history(forced_eom, t)
+    return t, z, v
+
+
+@pytest.fixture(scope="session")
+def approx_eom(paper, approx_static):
+    from cablesim.analyses.setup import build_equations
+    from helpers_dynamics import OMEGA
+
+    return build_equations(paper, approx_static, omega=OMEGA)
+
+
+@pytest.fixture(scope="session")
+def approx_tight(approx_eom):
+    from cablesim.dynamics.integrators import DOPRI5
+    from cablesim.dynamics.simulate import simulate
+    from helpers_dynamics import APPROX_DURATION, OUT_STEP
+
+    hist = simulate(approx_eom, DOPRI5(rtol=1e-10, atol=1e-12), APPROX_DURATION, OUT_STEP)
+    assert hist.completed, hist.message
+    return hist
+
+
+# ----------------------------------------------------------------------------------------------
+# Sweeps (test_steady, test_sweep, test_sweep_journal): one working folder, and the sweeps more
+# than one module reads, once per session. Helpers and settings are in helpers_sweep.py.
+# ----------------------------------------------------------------------------------------------
+@pytest.fixture(scope="session")
+def wdir(tmp_path_factory) -> Path:
+    return tmp_path_factory.mktemp("sweep")
+
+
+@pytest.fixture(scope="session")
+def linear(wdir):
+    """LIN_SWEEP (linear regime, two gammas, tight DOPRI5): ``(case, result, path)``."""
+    from helpers_sweep import LIN_SWEEP, TIGHT, do_sweep
+
+    out = wdir / "linear.h5"
+    case, text, res = do_sweep(out, LIN_SWEEP, xi=0.05, integrator=TIGHT)
+    return case, res, out
+
+
+@pytest.fixture(scope="session")
+def late(wdir):
+    """LATE_SWEEP (5.0 and 5.05 rad/s, 4000 s cap: the late jump): ``(result, path)``."""
+    from helpers_sweep import LATE_SWEEP, do_sweep
+
+    out = wdir / "late.h5"
+    _, _, res = do_sweep(out, LATE_SWEEP)
+    return res, out

@@ -154,3 +154,34 @@ def sweep_summary(case, res, wall: float) -> str:
         )
     lines.append(_table(["curve", "channel", "peak at (rad/s)", "peak amplitude (m)"], rows))
     return "\n".join(lines)
+
+
+def continuation_summary(case, res, wall: float) -> str:
+    """Summary of a continuation: branches, their stable parts, and the bifurcations found."""
+    unit = "rad/s" if res.parameter == "omega" else ""
+    fixed = f"gamma = {res.fixed:g}" if res.parameter == "omega" else f"omega = {res.fixed:g} rad/s"
+    cost = res.stats
+    lines = [
+        f"cablesim {__version__}: continuation of '{case.name}' in {res.parameter} from {res.start:g} to "
+        f"{res.stop:g} {unit} ({fixed}, {res.analysis} analysis)",
+        f"{len(res.branches)} branch(es), {res.n_points} periodic orbits in {wall:.3g} s wall time"
+        + (f" ({cost['evaluations']} shooting evaluations)" if "evaluations" in cost else ""),
+        "",
+    ]
+    rows = []
+    for b in res.branches:
+        peak = b.amplitude.max(axis=0) if b.amplitude.size else np.zeros(len(res.channels))
+        rows.append([b.name, str(b.period), f"{b.parameter.min():.5g} - {b.parameter.max():.5g}",
+                     str(b.parameter.size), f"{100.0 * b.stable.mean():.0f} %",
+                     ", ".join(f"{p:.4g}" for p in peak), b.end])
+    lines.append(_table(["branch", "period", f"range {unit}".strip(), "orbits", "stable",
+                         f"max {', '.join(res.channels)} (m)", "ended"], rows))
+    lines += ["", "Bifurcations:" if res.bifurcations else "No bifurcations in the range."]
+    if res.bifurcations:
+        rows = [[b.kind, f"{b.parameter:.6g}", res.branches[b.branch].name if b.branch < len(res.branches) else str(b.branch),
+                 str(b.period), ", ".join(f"{a:.4g}" for a in b.amplitude), f"{abs(b.multiplier):.4f}",
+                 ("" if b.located else "not located; ") + ("" if b.trusted else "multipliers not trusted")]
+                for b in sorted(res.bifurcations, key=lambda b: (b.branch, b.parameter))]
+        lines.append(_table(["kind", res.parameter, "branch", "period", f"{', '.join(res.channels)} (m)", "|mu|",
+                             "notes"], rows))
+    return "\n".join(lines)

@@ -1,0 +1,337 @@
+"""The sections of a case file (``cable:``, ``loads:``, ``sweep:``, ...), each a frozen pydantic model."""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from ..names import CONTINUATION_PARAMETERS, DIRECTIONS, INTEGRATORS
+
+#: Plain-words messages for pydantic's error types.
+HINTS = {
+    "extra_forbidden": "is not a known key; check its spelling and indentation "
+    "(`cablesim example` prints a complete case file)",
+    "missing": "is required; add it",
+    "finite_number": "must be a finite number, not NaN or infinity",
+}
+
+
+class StrictModel(BaseModel):
+    """A section of a case file: unknown keys are errors, values frozen, no NaN or infinity."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+
+def _finite(v: float, what: str) -> float:
+    if not math.isfinite(v):
+        raise ValueError(f"{what} must be a finite number")
+    return v
+
+
+class CableSpec(StrictModel):
+    """Geometry, axial rigidity and masses (section ``cable:``)."""
+
+    L: float = Field(gt=0, description="horizontal distance A->B, m")
+    H: float = Field(description="vertical distance A->B, m, positive = B below A")
+    S: tuple[float, ...] = Field(min_length=2, description="natural segment lengths, m (n+1)")
+    EA: float | None = Field(default=None, gt=0, description="axial rigidity, N")
+    E: float | None = Field(default=None, gt=0, description="Young's modulus, N/m^2")
+    A: float | None = Field(default=None, gt=0, description="cross-section area, m^2")
+    masses: tuple[float, ...] = Field(min_length=1, description="lumped nodal masses, kg (n)")
+
+    @field_validator("S", "masses")
+    @classmethod
+    def _positive(cls, v, info):
+        for i, x in enumerate(v):
+            if not math.isfinite(x) or x <= 0:
+                raise ValueError(f"every value must be a positive finite number; item {i + 1} is {x}")
+        return v
+
+    @model_validator(mode="after")
+    def _rigidity_and_sizes(self):
+        if self.EA is None and (self.E is None or self.A is None):
+            raise ValueError("give the axial rigidity as EA (N), or as both E (N/m^2) and A (m^2)")
+        if self.EA is not None and (self.E is not None or self.A is not None):
+            raise ValueError("give either EA or E and A, not both")
+        ea = self.axial_rigidity
+        if not math.isfinite(ea) or ea <= 0 or ea < 1e-300:
+            raise ValueError(
+                f"the axial rigidity E*A = {ea:g} N is out of range; give EA (N) or E and A whose "
+                "product is a positive finite number"
+            )
+        if len(self.masses) != len(self.S) - 1:
+            raise ValueError(
+                f"cable.masses has {len(self.masses)} values but cable.S has {len(self.S)} "
+                f"segments: n+1 segments need n = {len(self.S) - 1} masses, one per interior node"
+            )
+        return self
+
+    @property
+    def axial_rigidity(self) -> float:
+        """EA, N."""
+        return float(self.EA if self.EA is not None else self.E * self.A)
+
+    @property
+    def n_nodes(self) -> int:
+        """Number of interior nodes."""
+        return len(self.S) - 1
+
+
+class LoadsSpec(StrictModel):
+    """Sustained and harmonic nodal loads (section ``loads:``), N, 2n values each."""
+
+    F0: tuple[float, ...] = Field(description="sustained nodal loads, N")
+    FL: tuple[float, ...] | None = Field(default=None, description="peak harmonic loads, N")
+
+
+class DampingSpec(StrictModel):
+    """Rayleigh damping ``C = a0 M + a1 K0`` (section ``damping:``).
+
+    Either a damping ratio for two modes (default: 1 and 2) or the coefficients themselves.
+    """
+
+    ratio: float | None = Field(default=None, ge=0, lt=1, description="damping ratio xi")
+    modes: tuple[int, int] = Field(default=(1, 2), description="the two modes given ratio xi")
+    a0: float | None = Field(default=None, ge=0, description="mass-proportional coefficient, 1/s")
+    a1: float | None = Field(default=None, ge=0, description="stiffness-proportional coefficient, s")
+
+    @model_validator(mode="after")
+    def _one_way(self):
+        explicit = self.a0 is not None or self.a1 is not None
+        if explicit and self.ratio is not None:
+            raise ValueError("give damping either as ratio (with modes) or as a0 and a1, not both")
+        if explicit and (self.a0 is None or self.a1 is None):
+            raise ValueError("explicit Rayleigh damping needs both a0 and a1")
+        if not explicit and self.ratio is None:
+            raise ValueError("give damping.ratio (e.g. 0.01), or a0 and a1")
+        if self.modes[0] < 1 or self.modes[1] < 1 or self.modes[0] == self.modes[1]:
+            raise ValueError("damping.modes must be two different mode numbers counted from 1")
+        return self
+
+
+
+
+class IntegratorSpec(StrictModel):
+    """Time-integration scheme and its settings (section ``integrator:``).
+
+    Without a name cablesim chooses: ``dopri5`` for ordinary cables, ``generalized-alpha`` for
+    stiff ones (highest mode over 200 times the frequency of interest).
+    """
+
+    name: Literal[INTEGRATORS] | None = None
+    dt: float | None = Field(default=None, gt=0, description="fixed step, s (rk4, newmark, generalized-alpha)")
+    rtol: float | None = Field(default=None, gt=0, lt=1, description="relative tolerance (dopri5)")
+    atol: float | None = Field(default=None, gt=0, description="absolute displacement tolerance, m (dopri5)")
+    rho_inf: float | None = Field(default=None, ge=0, le=1, description="spectral radius (generalized-alpha)")
+
+    @model_validator(mode="after")
+    def _fits(self):
+        if self.name in ("rk4", "newmark", "generalized-alpha") and (self.rtol or self.atol):
+            raise ValueError(f"integrator.rtol and atol apply to dopri5, not {self.name} (it uses dt)")
+        if self.name == "dopri5" and self.dt is not None:
+            raise ValueError("dopri5 adapts its step; give rtol/atol instead of integrator.dt")
+        if self.rho_inf is not None and self.name not in (None, "generalized-alpha"):
+            raise ValueError("integrator.rho_inf applies to generalized-alpha only")
+        return self
+
+
+class HistorySpec(StrictModel):
+    """Forced response at one frequency (section ``history:``)."""
+
+    omega: float | None = Field(default=None, gt=0, description="forcing frequency, rad/s")
+    duration: float = Field(default=600.0, gt=0, description="simulated time, s")
+    output_step: float | None = Field(default=None, gt=0, description="interval between saved instants, s")
+    channels: tuple[str, ...] | None = Field(default=None, description="DOF to plot, e.g. [z2, z4]")
+
+
+class FreeVibrationSpec(StrictModel):
+    """Free vibration about the equilibrium (section ``free_vibration:``).
+
+    Either ``mode`` with ``peak_velocity``, or explicit initial conditions ``z0``/``v0``.
+    """
+
+    mode: int | None = Field(default=None, ge=1, description="linear mode giving the initial velocities")
+    peak_velocity: float | None = Field(default=None, gt=0, description="largest initial velocity, m/s")
+    z0: tuple[float, ...] | None = Field(default=None, description="initial displacement from equilibrium, m")
+    v0: tuple[float, ...] | None = Field(default=None, description="initial velocities, m/s")
+    damping_ratio: float | None = Field(default=None, ge=0, lt=1, description="overrides damping.ratio")
+    duration: float = Field(default=20.0, gt=0, description="simulated time, s")
+    output_step: float | None = Field(default=None, gt=0, description="interval between saved instants, s")
+    channels: tuple[str, ...] | None = Field(default=None, description="DOF to plot, e.g. [z2, z4]")
+
+    @model_validator(mode="after")
+    def _one_way(self):
+        explicit = self.z0 is not None or self.v0 is not None
+        if explicit and (self.mode is not None or self.peak_velocity is not None):
+            raise ValueError("give either mode with peak_velocity, or z0/v0, not both")
+        return self
+
+
+class OmegaGrid(StrictModel):
+    """An evenly spaced frequency grid, rad/s: ``num`` points from ``start`` to ``stop``."""
+
+    start: float = Field(gt=0, description="first frequency, rad/s")
+    stop: float = Field(gt=0, description="last frequency, rad/s")
+    num: int = Field(ge=1, le=1_000_000, description="number of points")
+
+    @model_validator(mode="after")
+    def _order(self):
+        if self.num > 1 and self.stop <= self.start:
+            raise ValueError("sweep.omega.stop must be greater than start")
+        return self
+
+
+class SweepSpec(StrictModel):
+    """Frequency-domain response sweep (section ``sweep:``)."""
+
+    omega: Any = Field(description="grid {start, stop, num} or a list, rad/s")
+    duration: float = Field(default=3000.0, gt=0, description="cap on simulated seconds per point")
+    window: float = Field(default=200.0, gt=0, description="seconds at the end used when not steady")
+    direction: Literal[DIRECTIONS] = "independent"
+    channels: tuple[str, ...] | None = Field(default=None, description="DOF reported, e.g. [z2, z4]")
+    gamma: tuple[float, ...] | None = Field(default=None, description="scales of FL, one curve each")
+    tol: float = Field(default=1e-5, gt=0, lt=0.1, description="relative periodicity tolerance")
+    max_period: int = Field(default=6, ge=1, le=50, description="largest response period sought")
+    floquet: bool = Field(default=True, description="check the stability of periodic responses")
+
+    @field_validator("omega", mode="before")
+    @classmethod
+    def _grid(cls, v):
+        # One of two forms; parse it here so that an error speaks of the form the user wrote.
+        if isinstance(v, dict):
+            try:
+                return OmegaGrid.model_validate(v)
+            except ValidationError as err:
+                e = err.errors()[0]
+                where = ".".join(str(x) for x in e["loc"])
+                msg = HINTS.get(e["type"], e["msg"].removeprefix("Value error, "))
+                raise ValueError(f"{where + ': ' if where else ''}{msg}") from None
+        if isinstance(v, (list, tuple)):
+            if len(v) == 0:
+                raise ValueError("the frequency list is empty; give at least one frequency")
+            out = []
+            for i, w in enumerate(v):
+                try:
+                    w = float(w)
+                except (TypeError, ValueError):
+                    raise ValueError(f"item {i + 1} ({w!r}) is not a number") from None
+                if not math.isfinite(w) or w <= 0:
+                    raise ValueError(f"frequencies must be positive (rad/s); item {i + 1} is {w}")
+                out.append(w)
+            return tuple(out)
+        raise ValueError("give a grid {start: .., stop: .., num: ..} or a list of frequencies in rad/s")
+
+    @field_validator("gamma")
+    @classmethod
+    def _gamma(cls, v):
+        if v is not None:
+            if len(v) == 0:
+                raise ValueError("gamma is empty; omit it or give at least one scale")
+            for i, g in enumerate(v):
+                if not math.isfinite(g) or g <= 0:
+                    raise ValueError(f"gamma values scale FL and must be positive; item {i + 1} is {g}")
+        return v
+
+    @model_validator(mode="after")
+    def _window(self):
+        if self.window > self.duration:
+            raise ValueError(
+                f"sweep.window ({self.window:g} s) is longer than sweep.duration ({self.duration:g} s); "
+                "the window is the final part of each point's run, so shorten it"
+            )
+        return self
+
+    def frequencies(self) -> np.ndarray:
+        """The frequency grid, rad/s (ascending for up/down sweeps)."""
+        if isinstance(self.omega, OmegaGrid):
+            g = self.omega
+            return np.linspace(g.start, g.stop, g.num)
+        w = np.array(self.omega, dtype=float)
+        return np.sort(w) if self.direction != "independent" else w
+
+
+class ParameterRange(StrictModel):
+    """A range of a continuation parameter: from ``start`` (where the first branch starts) to ``stop``."""
+
+    start: float = Field(gt=0, description="first value")
+    stop: float = Field(gt=0, description="last value")
+
+    @model_validator(mode="after")
+    def _distinct(self):
+        if self.stop == self.start:
+            raise ValueError("start and stop must differ")
+        return self
+
+
+class ContinuationSpec(StrictModel):
+    """Periodic responses by shooting and pseudo-arclength continuation (``continuation:``)."""
+
+    parameter: Literal[CONTINUATION_PARAMETERS] = Field(default="omega", description="omega | gamma")
+    omega: ParameterRange | float = Field(description="range (parameter omega) or value, rad/s")
+    gamma: ParameterRange | float = Field(default=1.0, description="range (parameter gamma) or value; scales FL")
+    period: int = Field(default=1, ge=1, le=16, description="period of the first branch, forcing periods")
+    switch_branches: bool = Field(default=True, description="follow every period doubling onto its 2p branch")
+    channels: tuple[str, ...] | None = Field(default=None, description="DOF reported, e.g. [z2, z4]")
+    start_from: Literal["linear", "history"] = Field(
+        default="linear", description="first orbit from the linear response, or integrated from rest")
+    segments: int = Field(default=1, ge=1, le=64, description="shooting segments per orbit (multiple shooting)")
+    max_period: int = Field(default=8, ge=1, le=64, description="no branch switching beyond this period")
+    max_points: int = Field(default=2000, ge=2, le=100_000, description="most points per branch")
+
+    @model_validator(mode="after")
+    def _ranges(self):
+        ranged = {k: isinstance(getattr(self, k), ParameterRange) for k in ("omega", "gamma")}
+        other = "gamma" if self.parameter == "omega" else "omega"
+        if not ranged[self.parameter]:
+            raise ValueError(
+                f"continuation.parameter is {self.parameter}, so continuation.{self.parameter} must be a "
+                f"range {{start: .., stop: ..}}"
+            )
+        if ranged[other]:
+            raise ValueError(f"continuation.{other} must be a single value when the parameter is {self.parameter}")
+        if not isinstance(getattr(self, other), ParameterRange) and not getattr(self, other) > 0:
+            raise ValueError(f"continuation.{other} must be positive")
+        return self
+
+    @property
+    def range(self) -> ParameterRange:
+        """The range of the continuation parameter."""
+        return getattr(self, self.parameter)
+
+    @property
+    def fixed(self) -> float:
+        """The value of the other parameter (omega in rad/s, or gamma)."""
+        return float(getattr(self, "gamma" if self.parameter == "omega" else "omega"))
+
+
+class OutputsSpec(StrictModel):
+    """What time-history files keep (section ``outputs:``): a scene saves only what it draws."""
+
+    channels: tuple[str, ...] | None = Field(default=None, description="DOF saved (default: all)")
+    split: bool = Field(default=True, description="compute and save the configurational/elastic split")
+
+
+FIGURE_KINDS = ("fdr", "waveform", "waveform_phase", "waveform_fft", "split", "lissajous_tension")
+
+
+class FigureSpec(StrictModel):
+    """A composite figure drawn from stored results by ``cablesim plot`` (section ``figure:``).
+
+    Kinds: ``fdr`` (frequency response from sweep files), ``waveform`` (z(t) of the channels),
+    ``waveform_phase`` (z(t) beside the phase plot z vs z'), ``waveform_fft`` (z(t) beside its
+    spectrum), ``split`` (z with its configurational and elastic parts), ``lissajous_tension``
+    (z_i vs z_j beside tension waveforms). Several result files make one column each.
+    """
+
+    kind: Literal["fdr", "waveform", "waveform_phase", "waveform_fft", "split", "lissajous_tension"]
+    title: str | None = Field(default=None, description="figure title")
+    channels: tuple[str, ...] | None = Field(default=None, description="DOF drawn, e.g. [z2]")
+    pair: tuple[str, str] | None = Field(default=None, description="Lissajous pair, e.g. [z2, z4]")
+    segments: tuple[int, ...] | None = Field(default=None, description="tension segments drawn (1-based)")
+    time_window: tuple[float, float] | None = Field(default=None, description="time axis limits, s")
+    labels: tuple[str, ...] | None = Field(default=None, description="one caption per result file")
+
+

@@ -257,10 +257,15 @@ def _orbit_point(system: OdeSystem, shooting: Shooting, cp, branch: int, index: 
     )
 
 
+def _lap_difference(u: np.ndarray, n: int, m_parent: int, scale: np.ndarray) -> np.ndarray:
+    """Scaled difference between the two laps of a period-doubled orbit's unknowns."""
+    S = u.reshape(2 * m_parent, n)
+    return ((S[:m_parent] - S[m_parent:]) / scale).ravel()
+
+
 def _separation(u: np.ndarray, n: int, m_parent: int, scale: np.ndarray) -> float:
     """Scaled max difference between the two laps of a period-doubled orbit's unknowns."""
-    S = u.reshape(2 * m_parent, n)
-    return float(np.abs((S[:m_parent] - S[m_parent:]) / scale).max())
+    return float(np.abs(_lap_difference(u, n, m_parent, scale)).max())
 
 
 def trace_branches(
@@ -356,30 +361,49 @@ def trace_branches(
         m_parent = sh.segments // 2 if parent is not None else 0
         partners = [] if parent is None else [q for q in diagram.branches[parent].points
                                               if q.special == "period-doubling"]
-        far = [False]
+        track = {"far": False, "D": None, "pending": []}
         merged = [None]
         for p in prefix:
             p.branch, p.index = idx, len(br.points)
             br.points.append(p)
 
-        def cb(cp):
-            op = _orbit_point(system, sh, cp, idx, len(br.points), st.residual_tol, liouville_tol)
+        def deliver(op) -> bool:
+            op.index = len(br.points)
             br.points.append(op)
-            stop_now = bool(callback(op)) if callback is not None else False
+            return bool(callback(op)) if callback is not None else False
+
+        def cb(cp):
+            op = _orbit_point(system, sh, cp, idx, -1, st.residual_tol, liouville_tol)
             if parent is not None:
-                # A doubled branch that comes back close to a period-p orbit (its two laps
-                # nearly coincide) rejoins the parent at a period doubling: end it there rather
-                # than continue through that branch point.
-                sep = _separation(cp.u, n, m_parent, state_scale)
-                far[0] = far[0] or sep > 2.0 * switch_size
-                if far[0] and sep < 0.5 * switch_size and partners:
+                # A doubled branch that comes back to a period-p orbit (its two laps coincide)
+                # rejoins the parent at a period doubling: end it there rather than continue
+                # through that branch point. Seen as the two laps nearly coinciding, or as their
+                # difference reversing between consecutive points (the step went through the
+                # branch point onto the mirror image: the same orbits shifted by p periods).
+                # Special points found in the step that crossed are artefacts of the pitchfork
+                # (a fold test trips there) and are dropped.
+                D = _lap_difference(cp.u, n, m_parent, state_scale)
+                sep = float(np.abs(D).max())
+                track["far"] = track["far"] or sep > 2.0 * switch_size
+                flipped = track["D"] is not None and float(D @ track["D"]) < 0.0
+                if track["far"] and partners and (flipped or sep < 0.5 * switch_size):
                     q = min(partners, key=lambda q: abs(q.parameter - cp.lam))
-                    end = replace(q, branch=idx, index=len(br.points), period=sh.period,
-                                  u=np.concatenate([q.u, q.u]),
+                    keep = [] if flipped else track["pending"] + ([op] if cp.special is None else [])
+                    for o in keep:
+                        deliver(o)
+                    end = replace(q, branch=idx, period=sh.period, u=np.concatenate([q.u, q.u]),
                                   multipliers=stability.sort_multipliers(q.multipliers**2))
-                    br.points.append(end)
+                    deliver(end)
                     merged[0] = q
                     return True
+                if cp.special is not None:
+                    track["pending"].append(op)  # delivered with the next regular point
+                    return False
+                track["D"] = D
+            stop_now = False
+            for o in track["pending"] + [op]:
+                stop_now = deliver(o) or stop_now
+            track["pending"] = []
             return stop_now
 
         res = continuation(problem, u_start, lam_start, st, callback=cb,

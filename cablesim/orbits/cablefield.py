@@ -19,7 +19,9 @@ constant, in both analyses.
 - Approximate analysis: ``P`` is defined implicitly by ``y = x(P) + u(P)``; an inner Newton
   iteration ``P <- P + N(P)^-1 (y - x(P) - u(P))`` (``N = D + f = dy/dP``), warm-started from the
   previous call, converges to round-off (one extra iteration after the correction falls below
-  1e-9 of ``|P|``); then ``K = N^-1``.
+  1e-9 of ``|P|``); then ``K = N^-1``. Each inner step solves the inextensible closure for
+  ``x(P)`` to round-off (:func:`polish_closure`), so the flow map does not depend on the warm
+  starts beyond round-off.
 
 The vector fields follow the contract of :mod:`cablesim.orbits.kernels` (``FIELD_SIG``): the
 model's constants are packed into one float array ``prm`` (layout in :func:`pack`), the scratch
@@ -234,6 +236,37 @@ def exact_field(theta, x, prm, work, dx, J, dp, ipar):
     return OK
 
 
+@njit(cache=True)
+def polish_closure(S, Q, L, H, F, steps):
+    """Plain Newton steps on the inextensible closure ``sum_k S_k e_k = (L, H)`` after
+    :func:`cablesim.dynamics.kernels.closure_solve`, whose stopping test leaves the segment
+    force accurate only to its tolerance: quadratic convergence takes it to round-off, so the
+    configuration ``x(P)`` no longer depends on the warm start."""
+    for _ in range(steps):
+        g0 = -L
+        g1 = -H
+        h00 = 0.0
+        h01 = 0.0
+        h11 = 0.0
+        for k in range(S.size):
+            f0 = F[0] - Q[k, 0]
+            f1 = F[1] - Q[k, 1]
+            T = np.sqrt(f0 * f0 + f1 * f1)
+            e0 = f0 / T
+            e1 = f1 / T
+            g0 += S[k] * e0
+            g1 += S[k] * e1
+            w = S[k] / T
+            h00 += w * e1 * e1
+            h01 -= w * e0 * e1
+            h11 += w * e0 * e0
+        det = h00 * h11 - h01 * h01
+        if not det > 0.0:
+            return
+        F[0] -= (h11 * g0 - h01 * g1) / det
+        F[1] -= (h00 * g1 - h01 * g0) / det
+
+
 @njit(FIELD_SIG, cache=True)
 def approximate_field(theta, x, prm, work, dx, J, dp, ipar):
     """Approximate analysis (module docstring)."""
@@ -296,6 +329,7 @@ def approximate_field(theta, x, prm, work, dx, J, dp, ipar):
         dk.cumulative_loads(P, Q)
         if dk.closure_solve(S, Q, 0.0, L, H, F1, tol, 60) < 0:
             return INNER_SOLVE
+        polish_closure(S, Q, L, H, F1, 2)
         dk.approximate_flexibility(S, EA, Q, F1, xx, u, T, N, fw)
         for i in range(nd):
             r[i] = y[i] - xx[i] - u[i]

@@ -373,8 +373,10 @@ def solve_orbit(
 
     The full Newton step is tried first; if the flow fails or the scaled residual does not
     decrease (``|r(u + a du)| < (1 - a/4) |r(u)|``), the step is halved (down to 1/1024).
-    Converged when the scaled Newton correction and the scaled residual are both below ``tol``;
-    the solution returned is the last *evaluated* point (its data are consistent with it).
+    Converged when, in every component, the Newton correction and the residual are below
+    ``tol`` times the component's scale or the system's round-off level
+    (:attr:`OdeSystem.noise`), whichever is larger; the solution returned is the last
+    *evaluated* point (its data are consistent with it).
 
     Parameters
     ----------
@@ -399,6 +401,9 @@ def solve_orbit(
     if scale is None:
         scale = np.full(n, max(float(np.abs(u).max()), 1e-12))
     sc = np.tile(np.asarray(scale, dtype=float), m)
+    # converged when every component is within tol (relative to its scale) or the round-off
+    # level of the flow map, whichever is larger
+    bound = tol * sc + np.tile(np.broadcast_to(np.asarray(shooting.system.noise, dtype=float), (n,)), m)
     ev = shooting.evaluate(u, lam)
     if ev.status != ok.OK:
         return OrbitSolution(u, None, SolveStatus.INTEGRATION_FAILED, 0, np.inf)
@@ -409,15 +414,14 @@ def solve_orbit(
             du = np.linalg.solve(ev.J_u, -ev.r)
         except np.linalg.LinAlgError:
             return OrbitSolution(u, ev, SolveStatus.SINGULAR, it, res, hist)
-        step = float(np.abs(du / sc).max())
-        if step <= tol and res <= tol:
+        if np.all(np.abs(du) <= bound) and np.all(np.abs(ev.r) <= bound):
             return OrbitSolution(u, ev, SolveStatus.CONVERGED, it, res, hist)
         a = 1.0
         while True:
             trial = shooting.evaluate(u + a * du, lam)
             if trial.status == ok.OK:
                 tres = float(np.abs(trial.r / sc).max())
-                if tres < (1.0 - 0.25 * a) * res or tres <= tol:
+                if tres < (1.0 - 0.25 * a) * res or np.all(np.abs(trial.r) <= bound):
                     break
             a *= 0.5
             if a < 1.0 / 1024:

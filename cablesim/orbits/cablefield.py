@@ -16,10 +16,12 @@ constant, in both analyses.
   ``d0`` and its change ``dd``, so the force follows a small ``z`` with full relative precision
   instead of the round-off of ``y0 + z`` (about 1e-14 of the coordinates). A slack segment stops
   the integration with :data:`~cablesim.dynamics.kernels.SLACK`.
-- Approximate analysis: ``P`` is defined implicitly by ``y = x(P) + u(P)``; an inner Newton
-  iteration ``P <- P + N(P)^-1 (y - x(P) - u(P))`` (``N = D + f = dy/dP``), warm-started from the
-  previous call, converges to round-off (one extra iteration after the correction falls below
-  1e-9 of ``|P|``); then ``K = N^-1``. Each inner step solves the inextensible closure for
+- Approximate analysis: ``P`` is defined implicitly by ``y = x(P) + u(P)``; an inner damped
+  Newton iteration ``P <- P + a N(P)^-1 (y - x(P) - u(P))`` (``N = D + f = dy/dP``), warm-started
+  from the previous call, converges to round-off (one extra iteration after the correction falls
+  below 1e-9 of ``|P|``; :func:`solve_loads`); from too far away (the first call of an
+  integration starts at the equilibrium's ``F0``) it walks from the warm start's configuration
+  to ``y`` in 16 steps. Then ``K = N^-1``. Each inner step solves the inextensible closure for
   ``x(P)`` to round-off (:func:`polish_closure`), so the flow map does not depend on the warm
   starts beyond round-off.
 
@@ -105,9 +107,9 @@ def approximate_work(eom) -> np.ndarray:
 
 def _approx_size(nd):
     nn = nd // 2
-    # y, P, F1, Q, x, u, T, N, LU, r, d, e_k, a, b, e, gt, W, acc
+    # y, P, F1, Q, x, u, T, N, LU, r, d, e_k, a, b, e, gt, W, acc, Pt, Pw, yt, F1t, F1w
     return nd + nd + 2 + 2 * (nn + 1) + nd + nd + (nn + 1) + nd * nd + nd * nd + nd + nd + nd \
-        + 2 * (nn + 1) * nd + 2 * (nn + 1) + (nn + 1) + 4 * nd
+        + 2 * (nn + 1) * nd + 2 * (nn + 1) + (nn + 1) + 4 * nd + 3 * nd + 4
 
 
 @njit(cache=True)
@@ -267,6 +269,83 @@ def polish_closure(S, Q, L, H, F, steps):
         F[1] -= (h00 * g1 - h01 * g0) / det
 
 
+@njit(cache=True)
+def _inner_state(P, F1, S, EA, L, H, tol, Q, xx, u, T, N, fw):
+    """Inextensible closure (to round-off) and ``x, u, T, N`` at loads P; False if it fails
+    (no closure, or a slack segment)."""
+    dk.cumulative_loads(P, Q)
+    if dk.closure_solve(S, Q, 0.0, L, H, F1, tol, 60) < 0:
+        return False
+    polish_closure(S, Q, L, H, F1, 2)
+    dk.approximate_flexibility(S, EA, Q, F1, xx, u, T, N, fw)
+    for k in range(T.size):
+        if not T[k] > 0.0:
+            return False
+    return True
+
+
+@njit(cache=True)
+def _residual(yt, xx, u, r):
+    big = 0.0
+    for i in range(yt.size):
+        r[i] = yt[i] - xx[i] - u[i]
+        big = max(big, abs(r[i]))
+    return big
+
+
+@njit(cache=True)
+def solve_loads(yt, P, F1, S, EA, L, H, tol, maxit, Q, xx, u, T, N, fw, LU, r, d, Pt, F1t):
+    """Damped Newton for the loads ``P`` with ``x(P) + u(P) = yt``, from ``(P, F1)`` (updated).
+
+    The step is halved until the residual decreases (the configuration ``x(P)`` turns fast with
+    the direction of P: full steps from far away overshoot). Once a full step is below 1e-9 of
+    ``|P|`` one more is taken (quadratic convergence: round-off). ``N`` (and ``x, u, T``) belong
+    to the last iterate before that final step. Returns True on convergence.
+    """
+    nd = P.size
+    if not _inner_state(P, F1, S, EA, L, H, tol, Q, xx, u, T, N, fw):
+        return False
+    rn = _residual(yt, xx, u, r)
+    done = False
+    for it in range(maxit):
+        if not dk.solve_small(N, r, d, LU):
+            return False
+        dmax = 0.0
+        pmax = 0.0
+        for i in range(nd):
+            dmax = max(dmax, abs(d[i]))
+            pmax = max(pmax, abs(P[i]))
+        if not np.isfinite(dmax):
+            return False
+        if done or dmax <= 1e-12 * pmax:
+            for i in range(nd):
+                P[i] += d[i]
+            return True
+        a = 1.0
+        accepted = False
+        for ls in range(30):
+            for i in range(nd):
+                Pt[i] = P[i] + a * d[i]
+            F1t[0] = F1[0]
+            F1t[1] = F1[1]
+            if _inner_state(Pt, F1t, S, EA, L, H, tol, Q, xx, u, T, N, fw):
+                rt = _residual(yt, xx, u, r)
+                if rt < (1.0 - 0.25 * a) * rn:
+                    accepted = True
+                    rn = rt
+                    break
+            a *= 0.5
+        if not accepted:
+            return False
+        for i in range(nd):
+            P[i] = Pt[i]
+        F1[0] = F1t[0]
+        F1[1] = F1t[1]
+        if a == 1.0 and dmax <= 1e-9 * pmax:
+            done = True
+    return False
+
+
 @njit(FIELD_SIG, cache=True)
 def approximate_field(theta, x, prm, work, dx, J, dp, ipar):
     """Approximate analysis (module docstring)."""
@@ -320,36 +399,41 @@ def approximate_field(theta, x, prm, work, dx, J, dp, ipar):
     fW = work[o : o + 2 * nd].reshape((2, nd))
     o += 2 * nd
     facc = work[o : o + 2 * nd].reshape((2, nd))
+    o += 2 * nd
     fw = (fa, fb, fe, fgt, fW, facc)
+    Pt = work[o : o + nd]
+    o += nd
+    Pw = work[o : o + nd]
+    o += nd
+    yt = work[o : o + nd]
+    o += nd
+    F1t = work[o : o + 2]
+    o += 2
+    F1w = work[o : o + 2]
+    o += 2
+    assert o <= work.size
     for i in range(nd):
         y[i] = prm[o_y0 + i] + x[i]
-    done = False
-    converged = False
-    for it in range(40):
-        dk.cumulative_loads(P, Q)
-        if dk.closure_solve(S, Q, 0.0, L, H, F1, tol, 60) < 0:
-            return INNER_SOLVE
-        polish_closure(S, Q, L, H, F1, 2)
-        dk.approximate_flexibility(S, EA, Q, F1, xx, u, T, N, fw)
+        Pw[i] = P[i]
+    F1w[0] = F1[0]
+    F1w[1] = F1[1]
+    if not solve_loads(y, P, F1, S, EA, L, H, tol, 40, Q, xx, u, T, N, fw, LU, r, d, Pt, F1t):
+        # far from the warm start: walk there from the warm start's own configuration
         for i in range(nd):
-            r[i] = y[i] - xx[i] - u[i]
-        if not dk.solve_small(N, r, d, LU):
+            P[i] = Pw[i]
+        F1[0] = F1w[0]
+        F1[1] = F1w[1]
+        if not _inner_state(P, F1, S, EA, L, H, tol, Q, xx, u, T, N, fw):
             return INNER_SOLVE
-        dmax = 0.0
-        pmax = 0.0
         for i in range(nd):
-            dmax = max(dmax, abs(d[i]))
-            pmax = max(pmax, abs(P[i]))
-            P[i] += d[i]
-        if not np.isfinite(dmax):
-            return INNER_SOLVE
-        if done:
-            converged = True
-            break
-        if dmax <= 1e-9 * pmax:
-            done = True
-    if not converged:
-        return INNER_SOLVE
+            Pw[i] = xx[i] + u[i]  # y of the warm start (Pw reused)
+        K = 16
+        for k in range(1, K + 1):
+            f = k / K
+            for i in range(nd):
+                yt[i] = Pw[i] + f * (y[i] - Pw[i])
+            if not solve_loads(yt, P, F1, S, EA, L, H, tol, 40, Q, xx, u, T, N, fw, LU, r, d, Pt, F1t):
+                return INNER_SOLVE
     for k in range(nn + 1):
         if T[k] <= 0.0:
             return SLACK

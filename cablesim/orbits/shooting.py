@@ -32,7 +32,7 @@ from .systems import OdeSystem
 from .tableaux import TABLEAUX
 
 #: Default fixed-step settings per scheme: (steps per forcing period, h * fastest_rate).
-DEFAULT_STEPS = {"rk8": (48, 1.5), "rk4": (256, 0.5)}
+DEFAULT_STEPS = {"rk8": (48, 1.5), "rk4": (256, 0.15)}
 
 _EMPTY_REC = np.zeros((0, 0))
 

@@ -23,12 +23,12 @@ from .branches import (
     trace_branches,
 )
 from .continuation import Branch, Point, Settings, Status, continuation
-from .shooting import Evaluation, OrbitSolution, Shooting, SolveStatus, solve_orbit
+from .shooting import Evaluation, FlowStatus, OrbitSolution, Shooting, SolveStatus, solve_orbit
 from .starting import integrate_to_steady, linear_response, linear_response_state, state_from_history
 from .systems import OdeSystem, cable_system
 
 __all__ = [
-    "Bifurcation", "Branch", "BranchEnd", "Evaluation", "OdeSystem", "OrbitBranch", "OrbitPoint", "OrbitProblem",
+    "Bifurcation", "Branch", "BranchEnd", "Evaluation", "FlowStatus", "OdeSystem", "OrbitBranch", "OrbitPoint", "OrbitProblem",
     "OrbitSolution", "Point", "ResponseDiagram", "Settings", "Shooting", "SolveStatus", "Status", "cable_scales",
     "cable_system", "continuation", "continue_branches", "integrate_to_steady", "linear_response",
     "linear_response_state", "solve_orbit", "state_from_history", "trace_branches",

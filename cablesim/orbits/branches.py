@@ -36,7 +36,7 @@ import numpy as np
 from . import kernels as ok
 from . import stability
 from .continuation import Settings, Status, continuation
-from .shooting import Evaluation, Shooting, solve_orbit
+from .shooting import Evaluation, FlowStatus, Shooting, solve_orbit
 from .starting import integrate_to_steady, linear_response, linear_response_state
 from .systems import OdeSystem, cable_system
 
@@ -156,7 +156,28 @@ class Bifurcation:
 
 @dataclass
 class OrbitBranch:
-    """A branch of periodic orbits of one period."""
+    """A branch of periodic orbits of one period.
+
+    Attributes
+    ----------
+    index, period, parameter
+        Position in the diagram, orbit period (forcing periods), continuation parameter.
+    points : list of OrbitPoint
+        In continuation order (located bifurcations included, flagged by ``special``).
+    end : BranchEnd
+        Why the branch ended.
+    parent : int or None
+        Branch it was switched from (period doubling), with ``origin`` the bifurcation.
+    evaluations : int
+        Shooting evaluations spent on it.
+    segments : int
+        Shooting segments used.
+    merged_at : OrbitPoint or None
+        For a period-doubled branch that rejoined its parent: the parent's period doubling.
+    failure : FlowStatus or None
+        When the step fell below its minimum or the start failed: why the last refused flow
+        failed (a slack segment, a failed inner solve), if a flow failed at all.
+    """
 
     index: int
     period: int
@@ -168,6 +189,7 @@ class OrbitBranch:
     evaluations: int = 0
     segments: int = 1
     merged_at: OrbitPoint | None = None
+    failure: FlowStatus | None = None
 
     @property
     def values(self) -> np.ndarray:
@@ -225,12 +247,17 @@ class OrbitProblem:
 
     def __init__(self, shooting: Shooting, state_scale: np.ndarray, lam_scale: float):
         self.shooting = shooting
+        #: Status of the last flow that failed (why a step was refused), if any.
+        self.last_failure: FlowStatus | None = None
         self.u_scale = np.tile(np.asarray(state_scale, dtype=float), shooting.segments)
         self.lam_scale = float(lam_scale)
 
     def evaluate(self, u, lam):
         ev = self.shooting.evaluate(u, lam)
-        return ev if ev.status == ok.OK else None
+        if ev.status != ok.OK:
+            self.last_failure = ev.status
+            return None
+        return ev
 
     def test_functions(self, ev: Evaluation) -> np.ndarray:
         return stability.test_functions(ev.multipliers)
@@ -411,6 +438,8 @@ def trace_branches(
         br.evaluations = res.evaluations
         br.end = BranchEnd.MERGED if merged[0] is not None else BranchEnd(int(res.status))
         br.merged_at = merged[0]
+        if br.end in (BranchEnd.STEP_TOO_SMALL, BranchEnd.START_FAILED):
+            br.failure = problem.last_failure
         return br
 
     def switch(br: OrbitBranch, p: OrbitPoint, bif: Bifurcation):
@@ -448,7 +477,8 @@ def trace_branches(
         if x is not None:
             sol = solve_orbit(sh, x, start, scale=state_scale)
     if not sol.converged:
-        diagram.branches.append(OrbitBranch(index=0, period=period, parameter=parameter, end=BranchEnd.START_FAILED))
+        diagram.branches.append(OrbitBranch(index=0, period=period, parameter=parameter, end=BranchEnd.START_FAILED,
+                                            failure=sol.flow_status if sol.flow_status != FlowStatus.OK else None))
     else:
         run_branch(sh, sol.u, start, None, None, None, [])
 
@@ -518,9 +548,9 @@ def cable_scales(eom, parameter: str, start: float, stop: float, gamma: float = 
 
 def continue_branches(
     eom,
-    parameter: str = "omega",
-    start: float = 0.5,
-    stop: float = 6.0,
+    parameter: str,
+    start: float,
+    stop: float,
     period: int = 1,
     switch_branches: bool = True,
     callback: Callable[[OrbitPoint], bool | None] | None = None,

@@ -32,9 +32,18 @@ from .systems import OdeSystem
 from .tableaux import TABLEAUX
 
 #: Default fixed-step settings per scheme: (steps per forcing period, h * fastest_rate).
-DEFAULT_STEPS = {"rk8": (48, 1.5), "rk4": (256, 0.15)}
+DEFAULT_STEPS = {"rk8": (48, 1.25), "rk4": (256, 0.15)}
 
 _EMPTY_REC = np.zeros((0, 0))
+
+
+class FlowStatus(IntEnum):
+    """Outcome of one flow integration (the codes of :mod:`cablesim.orbits.kernels`)."""
+
+    OK = ok.OK
+    NONFINITE = ok.NONFINITE
+    SLACK = ok.SLACK
+    INNER_SOLVE = ok.INNER_SOLVE
 
 
 class SolveStatus(IntEnum):
@@ -82,8 +91,9 @@ class Evaluation:
         ``int_0^T tr(df/dx) dt`` along the discrete orbit.
     xmax, xmin : ndarray (n,)
         Extremes of every state component over the orbit.
-    status : int
-        :data:`cablesim.orbits.kernels.OK` or the field's failure code.
+    status : FlowStatus
+        ``OK`` or why the flow could not be computed (a slack segment, a failed inner solve,
+        a non-finite state).
     """
 
     u: np.ndarray
@@ -102,7 +112,7 @@ class Evaluation:
     divergence: float
     xmax: np.ndarray
     xmin: np.ndarray
-    status: int = ok.OK
+    status: FlowStatus = FlowStatus.OK
 
     @property
     def liouville(self) -> float:
@@ -267,7 +277,7 @@ class Shooting:
                 sign *= seg["info"][2]
         if status != ok.OK:
             return Evaluation(u, lam, omega, self.period, T, np.full(n * m, np.nan), None, None, ends, None, None,
-                              None, np.nan, np.nan, xmax, xmin, status)
+                              None, np.nan, np.nan, xmax, xmin, FlowStatus(status))
         r = (ends - np.roll(S, -1, axis=0)).ravel()
         J_u = J_lam = mono = mu = None
         if jac:
@@ -347,6 +357,8 @@ class OrbitSolution:
         ``max |r_i| / scale_i`` at ``u``.
     history : list of float
         Scaled residual per iteration.
+    flow_status : FlowStatus
+        Why the flow failed at the start, if it did.
     """
 
     u: np.ndarray
@@ -355,6 +367,7 @@ class OrbitSolution:
     iterations: int
     residual: float
     history: list = field(default_factory=list)
+    flow_status: FlowStatus = FlowStatus.OK
 
     @property
     def converged(self) -> bool:
@@ -406,7 +419,7 @@ def solve_orbit(
     bound = tol * sc + np.tile(np.broadcast_to(np.asarray(shooting.system.noise, dtype=float), (n,)), m)
     ev = shooting.evaluate(u, lam)
     if ev.status != ok.OK:
-        return OrbitSolution(u, None, SolveStatus.INTEGRATION_FAILED, 0, np.inf)
+        return OrbitSolution(u, None, SolveStatus.INTEGRATION_FAILED, 0, np.inf, flow_status=ev.status)
     res = float(np.abs(ev.r / sc).max())
     hist = [res]
     for it in range(1, max_iter + 1):

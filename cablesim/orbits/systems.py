@@ -10,7 +10,8 @@ cables.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
+from dataclasses import field as dc_field
 
 import numpy as np
 
@@ -58,9 +59,9 @@ class OdeSystem:
     prm: np.ndarray
     work: np.ndarray
     omega: float
-    parameters: dict = field(default_factory=dict)
+    parameters: dict = dc_field(default_factory=dict)
     fastest_rate: float = 0.0
-    displacements: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    displacements: np.ndarray = dc_field(default_factory=lambda: np.zeros(0, dtype=int))
     divergence: float | None = None
     noise: object = 0.0
     names: tuple = ()
@@ -75,11 +76,6 @@ class OdeSystem:
         prm = self.prm.copy()
         prm[index] = value
         return replace(self, prm=prm)
-
-
-def c_len(eom) -> float:
-    """Chord length of the cable, m."""
-    return float(eom.cable.chord_length)
 
 
 def cable_system(eom, gamma: float = 1.0) -> OdeSystem:
@@ -120,7 +116,7 @@ def cable_system(eom, gamma: float = 1.0) -> OdeSystem:
     # analysis); the approximate analysis works on absolute coordinates (y0 + z) and inner
     # solves: 1e-13 of the chord.
     w1 = float(w[0])
-    level = (1e-15 if eom.analysis == "exact" else 1e-13) * c_len(eom)
+    level = (1e-15 if eom.analysis == "exact" else 1e-13) * float(eom.cable.chord_length)
     noise = np.concatenate([np.full(nd, level), np.full(nd, level * w1)])
     # The sustained load is taken as the resisting force at y0 itself, so that z = 0 is an exact
     # equilibrium of the field (the static solve leaves |P(y0) - F0| at its tolerance, which

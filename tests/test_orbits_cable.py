@@ -7,8 +7,8 @@ References (none of them from the orbit code under test):
 - the package's own time integration (DOPRI5 on the third-order state, tight tolerances):
   orbits return to themselves, unstable ones leave at the rate of the largest multiplier, a
   finite-difference monodromy gives the
-  same multipliers (central differences), and the brute-force steady state (:func:`~cablesim.dynamics.steady.steady_response`)
-  lies on the stable branch;
+  same multipliers (central differences), and the brute-force steady state
+  (:func:`~cablesim.dynamics.steady.steady_response`) lies on the stable branch;
 - the located period doublings and folds carry a multiplier -1 / +1 in that independent
   finite-difference monodromy.
 """
@@ -145,8 +145,8 @@ def test_multipliers_match_finite_difference_monodromy(paper):
         mu = sol.evaluation.multipliers
         # the variational equations are the exact derivative of the discrete flow map
         u = sol.u
-        J = np.column_stack([(sh.evaluate(u + e, w, jac=False).ends[0] - sh.evaluate(u - e, w, jac=False).ends[0]) / 2e-7
-                             for e in 1e-7 * np.eye(8)])
+        flow = lambda x: sh.evaluate(x, w, jac=False).ends[0]  # noqa: E731
+        J = np.column_stack([(flow(u + e) - flow(u - e)) / 2e-7 for e in 1e-7 * np.eye(8)])
         assert np.abs(J - sol.evaluation.monodromy).max() < 1e-6 * np.abs(J).max()
         # independent: central differences through the package's DOPRI5. The slow modes agree
         # to 3e-9; the fast ones (|mu| 0.06 .. 0.5, modes at 27 and 52 rad/s) carry the default
@@ -221,7 +221,8 @@ def test_paper_period_doubling_pair(paper, diagram):
     # between the pair the period-1 orbit is unstable, outside it stable
     inside = (br.values > lo + 1e-6) & (br.values < hi - 1e-6)
     assert inside.any() and not br.stable[inside].any()
-    assert br.stable[(br.values > 4.5) & ~inside & (np.abs(br.values - lo) > 1e-6) & (np.abs(br.values - hi) > 1e-6)].all()
+    outside = (br.values > 4.5) & ~inside & (np.abs(br.values - lo) > 1e-6) & (np.abs(br.values - hi) > 1e-6)
+    assert br.stable[outside].all()
 
 
 def test_paper_period_two_branch_and_brute_force(paper, diagram):

@@ -30,7 +30,7 @@ from numba import njit
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq, minimize_scalar, root
 
-from cablesim.orbits import OdeSystem, Shooting, solve_orbit, trace_branches
+from cablesim.orbits import OdeSystem, Shooting, trace_branches
 from cablesim.orbits.kernels import FIELD_SIG
 
 RTOL = dict(rtol=1e-12, atol=1e-13, method="DOP853")
@@ -97,7 +97,8 @@ class HarmonicBalance:
 
     def peak(self, c):
         def x(th):
-            return np.cos(np.outer(np.atleast_1d(th), self.k)) @ c[: self.K] + np.sin(np.outer(np.atleast_1d(th), self.k)) @ c[self.K :]
+            arg = np.outer(np.atleast_1d(th), self.k)
+            return np.cos(arg) @ c[: self.K] + np.sin(arg) @ c[self.K :]
 
         th = np.linspace(0, 2 * np.pi, 4097)
         i = int(np.argmax(np.abs(x(th))))

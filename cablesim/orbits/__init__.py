@@ -28,8 +28,8 @@ from .starting import integrate_to_steady, linear_response, linear_response_stat
 from .systems import OdeSystem, cable_system
 
 __all__ = [
-    "Bifurcation", "Branch", "BranchEnd", "Evaluation", "FlowStatus", "OdeSystem", "OrbitBranch", "OrbitPoint", "OrbitProblem",
-    "OrbitSolution", "Point", "ResponseDiagram", "Settings", "Shooting", "SolveStatus", "Status", "cable_scales",
-    "cable_system", "continuation", "continue_branches", "integrate_to_steady", "linear_response",
+    "Bifurcation", "Branch", "BranchEnd", "Evaluation", "FlowStatus", "OdeSystem", "OrbitBranch", "OrbitPoint",
+    "OrbitProblem", "OrbitSolution", "Point", "ResponseDiagram", "Settings", "Shooting", "SolveStatus", "Status",
+    "cable_scales", "cable_system", "continuation", "continue_branches", "integrate_to_steady", "linear_response",
     "linear_response_state", "solve_orbit", "state_from_history", "trace_branches",
 ]

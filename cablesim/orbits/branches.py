@@ -35,7 +35,7 @@ import numpy as np
 
 from . import kernels as ok
 from . import stability
-from .continuation import Settings, Status, continuation
+from .continuation import Settings, continuation
 from .shooting import Evaluation, FlowStatus, Shooting, solve_orbit
 from .starting import integrate_to_steady, linear_response, linear_response_state
 from .systems import OdeSystem, cable_system

@@ -114,7 +114,8 @@ def _hermite_extremes(xa, xb, da, db, h, i, xmax, xmin):
         if 0.0 < s < 1.0:
             s2 = s * s
             s3 = s2 * s
-            p = (2.0 * s3 - 3.0 * s2 + 1.0) * xa + (s3 - 2.0 * s2 + s) * ha + (-2.0 * s3 + 3.0 * s2) * xb + (s3 - s2) * hb
+            p = ((2.0 * s3 - 3.0 * s2 + 1.0) * xa + (s3 - 2.0 * s2 + s) * ha
+                 + (-2.0 * s3 + 3.0 * s2) * xb + (s3 - s2) * hb)
             if p > xmax[i]:
                 xmax[i] = p
             if p < xmin[i]:

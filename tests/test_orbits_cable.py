@@ -27,6 +27,7 @@ from cablesim.orbits import (
     continue_branches,
     linear_response_state,
     solve_orbit,
+    state_from_history,
 )
 
 CONFIG = Path(__file__).resolve().parents[1] / "configs" / "paper-example.yaml"
@@ -41,13 +42,13 @@ def _package():
     from cablesim.dynamics.steady import SteadyCriterion, steady_response
 
     try:
-        from cablesim.dynamics.simulate import build_equations
+        from cablesim.dynamics.simulate import build_equations, simulate
     except ImportError:
-        from cablesim.dynamics.history import build_equations
-    return parse_case, run_static, build_equations, DOPRI5, SteadyCriterion, steady_response
+        from cablesim.dynamics.history import build_equations, simulate
+    return parse_case, run_static, build_equations, simulate, DOPRI5, SteadyCriterion, steady_response
 
 
-parse_case, run_static, build_equations, DOPRI5, SteadyCriterion, steady_response = _package()
+parse_case, run_static, build_equations, simulate, DOPRI5, SteadyCriterion, steady_response = _package()
 
 
 @pytest.fixture(scope="module")
@@ -196,6 +197,21 @@ def test_orbit_returns_under_time_integration(paper):
     s0 = third_order(eom, sol.u)
     out = strobe(eom, s0, 20)
     assert np.abs(out[:, :8] - sol.u).max() < 1e-8 * np.abs(sol.u).max()  # measured 2.4e-10
+
+
+def test_start_from_time_integration(paper):
+    """A state from the package's time integration (after the transient) starts Newton on the
+    same orbit as the linear response does."""
+    w = 2.3
+    eom = equations(paper, w)
+    T = 2 * np.pi / w
+    hist = simulate(eom, dopri(eom, 1e-8), duration=30 * T, output_step=T, split=False)
+    s_end = np.concatenate([hist.z[-1], hist.v[-1]])
+    sh = Shooting(cable_system(eom))
+    from_history = solve_orbit(sh, state_from_history(s_end, eom.n_dof), w)
+    from_linear = solve_orbit(sh, linear_response_state(eom, w), w)
+    assert from_history.converged and from_linear.converged
+    assert np.abs(from_history.u - from_linear.u).max() < 1e-9 * np.abs(from_linear.u).max()
 
 
 @pytest.fixture(scope="module")

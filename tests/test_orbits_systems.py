@@ -3,6 +3,8 @@
 The vector fields are written here; every reference is computed here without the code under
 test:
 
+0. The continuation algorithm on its own, on an algebraic S-curve ``u^3 - u = lam`` whose folds
+   (``lam = -/+ 2 / (3 sqrt 3)``) are known in closed form.
 1. Duffing oscillator ``x'' + 2 zeta x' + x + alpha x^3 = F cos(w t)``: its two folds from a
    high-order harmonic balance (21 odd harmonics, the fold found from the Moore-Spence extended
    system, started from the one-harmonic backbone); a stable orbit returns to itself and an
@@ -24,16 +26,58 @@ test:
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 from numba import njit
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq, minimize_scalar, root
 
-from cablesim.orbits import OdeSystem, Shooting, trace_branches
+from cablesim.orbits import OdeSystem, Settings, Shooting, Status, continuation, trace_branches
 from cablesim.orbits.kernels import FIELD_SIG
 
 RTOL = dict(rtol=1e-12, atol=1e-13, method="DOP853")
+
+
+# ----------------------------------------------------------------------------------------------
+# 0. The continuation algorithm alone, on an algebraic problem
+# ----------------------------------------------------------------------------------------------
+class SCurve:
+    """``r(u, lam) = u^3 - u - lam`` (two components, decoupled copies scaled by 1 and 2), with
+    a test function ``u`` (zero crossing at the middle of the S)."""
+
+    u_scale = np.array([1.0, 2.0])
+    lam_scale = 1.0
+    test_names = ("u-zero",)
+
+    def evaluate(self, u, lam):
+        v = u / self.u_scale
+        ev = SimpleNamespace(u=u)
+        ev.r = (v**3 - v - lam) * self.u_scale
+        ev.J_u = np.diag(3 * v**2 - 1)
+        ev.J_lam = -self.u_scale
+        return ev
+
+    def test_functions(self, ev):
+        return np.array([ev.u[0]])
+
+
+def test_continuation_algorithm_on_s_curve():
+    seen = []
+    br = continuation(SCurve(), np.array([-1.2, -2.4]), -0.528, Settings(lam_min=-1.0, lam_max=1.0, ds_max=0.1),
+                      callback=lambda p: seen.append(p) and False)
+    assert br.status == Status.BOUND_REACHED
+    assert seen == br.points and br.points[-1].lam == 1.0
+    folds = [p for p in br.points if p.special == "fold"]
+    zero = [p for p in br.points if p.special == "u-zero"]
+    ref = 2 / (3 * np.sqrt(3))
+    assert [round(p.lam, 12) for p in folds] == [round(ref, 12), round(-ref, 12)]
+    assert abs(abs(folds[0].u[0]) - 1 / np.sqrt(3)) < 1e-6  # lam is quadratic in u at a fold
+    assert len(zero) == 1 and abs(zero[0].u[0]) < 1e-9 and abs(zero[0].lam) < 1e-9
+    for p in br.points:
+        v = p.u / SCurve.u_scale
+        assert np.abs(v**3 - v - p.lam).max() < 1e-9
 
 
 # ----------------------------------------------------------------------------------------------

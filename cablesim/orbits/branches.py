@@ -19,9 +19,11 @@ eigenvector ``v`` (multiplier -1): the ``2p`` unknowns are the parent's segment 
 by ``+eps w_k`` on the first lap and ``-eps w_k`` on the second (``w_0 = v``,
 ``w_{k+1} = G_k w_k``), corrected on the hyperplane normal to that direction, and continued away
 from the parent; if that start fails, ``-eps`` is tried (the two signs give the same orbit
-shifted by ``p`` forcing periods). A ``2p`` branch that reaches a branch point where its two laps
-coincide has rejoined a period-``p`` orbit (at the other period doubling of a pair): it ends
-there (:attr:`BranchEnd.MERGED`) and that period doubling is not switched at again.
+shifted by ``p`` forcing periods, so one of them suffices). A ``2p`` branch whose two laps come
+back together (or whose lap difference reverses between two points: the step went through the
+branch point onto the mirror image) has rejoined a period-``p`` orbit at the other period
+doubling of a pair: it ends there (:attr:`BranchEnd.MERGED`, the parent's period doubling as
+its last point) and that period doubling is not switched at again.
 """
 
 from __future__ import annotations
@@ -332,8 +334,9 @@ def trace_branches(
     period : int
         Period of the first branch, in forcing periods.
     segments : int
-        Shooting segments per forcing period of the orbit... per orbit of period ``period``
-        (doubled with the period on switched branches).
+        Shooting segments over one orbit of the first branch (multiple shooting for long or
+        strongly unstable orbits); doubled with the period on switched branches, so that a
+        segment always spans the same time.
     state_scale : ndarray (n,), optional
         Typical size of each state component (default: from ``u0``).
     lam_scale : float, optional

@@ -195,17 +195,17 @@ def _second_order(theta, x, prm, P, dx, J, dp, ipar, nd, o_m, o_C, o_F0, o_FL, o
     g = prm[o_g]
     for i in range(nd):
         dx[i] = x[nd + i]
-        mi = prm[o_m + i]
+        rm = 1.0 / prm[o_m + i]
         acc = prm[o_F0 + i] + g * prm[o_FL + i] * sn - P[i]
         for j in range(nd):
             cij = prm[o_C + i * nd + j]
             acc -= cij * x[nd + j]
-            J[nd + i, nd + j] = -cij / mi
-            J[nd + i, j] = -J[nd + i, j] / mi
+            J[nd + i, nd + j] = -cij * rm
+            J[nd + i, j] = -J[nd + i, j] * rm
             J[i, j] = 0.0
             J[i, nd + j] = 0.0
         J[i, nd + i] = 1.0
-        dx[nd + i] = acc / mi
+        dx[nd + i] = acc * rm
     if ipar == o_g:
         for i in range(nd):
             dp[i] = 0.0

@@ -230,7 +230,8 @@ def _tangent(Jfull: np.ndarray, ref: np.ndarray) -> np.ndarray | None:
 
 
 def _correct(sp: _Scaled, v_pred, normal, offset, st: Settings, radius: float):
-    """Newton on ``r = 0`` and ``normal . v = offset``; returns (v, ev, its, residual) or None."""
+    """Newton on ``r = 0`` and ``normal . v = offset``; returns ``(v, ev, iterations, residual,
+    [J_u J_lam])`` in scaled variables, or None."""
     v = v_pred.copy()
     prev = np.inf
     for it in range(1, st.max_newton + 1):

@@ -259,7 +259,7 @@ def test_paper_period_two_branch_and_brute_force(paper, diagram):
     assert sol.converged
     d = cable_system(eom).displacements
     amp = np.maximum(np.abs(sol.evaluation.xmax[d]), np.abs(sol.evaluation.xmin[d]))
-    assert np.abs(amp - brute.amplitude).max() < 1e-3 * amp.max()
+    assert np.abs(amp - brute.amplitude).max() < 1e-3 * amp.max()  # measured 1e-4 (the sweep's sampling)
     assert np.abs(sol.evaluation.multipliers).max() < 1
 
 
@@ -273,7 +273,7 @@ def test_paper_brute_force_on_stable_branch(paper, diagram):
         sol = solve_orbit(Shooting(cable_system(eom)), br.points[i].state, w)
         ev = sol.evaluation
         amp = np.maximum(np.abs(ev.xmax[:4]), np.abs(ev.xmin[:4]))
-        assert np.abs(amp - brute.amplitude).max() < 1e-3 * amp.max()
+        assert np.abs(amp - brute.amplitude).max() < 1e-3 * amp.max()  # measured 6e-5, 7e-5
         assert np.abs(ev.multipliers).max() < 1
         # and the branch itself passes through it
         j = np.searchsorted(br.values, w)
@@ -313,7 +313,7 @@ def test_fold_pair_at_larger_load(paper):
     kk = np.arange(1, 61)
     rate = np.exp(np.polyfit(kk[10:], np.log(dev[10:]), 1)[0])
     assert mu > 1.01
-    assert rate == pytest.approx(mu, rel=2e-3)
+    assert rate == pytest.approx(mu, rel=2e-3)  # measured 6e-7 (mu = 1.0545)
 
 
 def test_load_factor_continuation_meets_the_frequency_fold(paper):

@@ -1,0 +1,490 @@
+"""Pseudo-arclength continuation of solution branches of ``r(u, lambda) = 0``.
+
+The algorithm knows neither the physics nor the output: a *problem* object supplies the residual
+and its derivatives, and a *callback* receives every converged point.
+
+Problem protocol
+----------------
+``evaluate(u, lam)``
+    Returns an object with attributes ``r`` (residual, shape (N,)), ``J_u`` ((N, N)) and
+    ``J_lam`` ((N,)), or None (or an object whose ``r`` is not finite) when the residual
+    cannot be evaluated there (the step is then shortened).
+``u_scale`` (ndarray (N,)), ``lam_scale`` (float)
+    Typical sizes of the unknowns and of the parameter. Every norm, the arclength and the
+    tangent are taken in the scaled variables ``u / u_scale``, ``lam / lam_scale`` (residuals
+    in ``r / r_scale``, ``r_scale`` defaulting to ``u_scale``), so that the step mixes state
+    and parameter sensibly.
+Optional: ``test_names`` (tuple of str) and ``test_functions(ev) -> ndarray``
+    Real test functions evaluated at every point (``ev`` is what ``evaluate`` returned); a sign
+    change between consecutive points marks a special point, located by the secant method
+    (Illinois variant) on the arclength between them, re-solving the branch at every trial.
+    The algorithm itself watches the parameter component of the tangent (``"fold"``: a turning
+    point). Tests named in the optional ``fold_tests`` duplicate the turning point (for example
+    ``det(J_u)``): they are ignored in an interval where the tangent's parameter component also
+    changes sign.
+Optional: ``step_ratio(ev_a, ev_b) -> float``
+    A problem-specific measure of the change between consecutive points (for instance of the
+    quantities the test functions depend on); a step with a ratio above 1 is rejected and
+    halved, one below 1/4 lets the step grow.
+Optional: ``confirm(name, ev) -> str or None``
+    Final label of a located special point (None discards it, for instance a neutral saddle
+    that a Neimark-Sacker test cannot tell from a genuine crossing).
+
+Algorithm
+---------
+Predictor: tangent step ``v + ds t`` in scaled variables ``v = (u, lam)``. Corrector: Newton
+on ``r = 0`` bordered by the hyperplane through the prediction orthogonal to ``t`` (Keller).
+A point is accepted when the scaled Newton correction and residual fall below the tolerances;
+the data of the last *evaluated* iterate are kept, so everything reported belongs to one
+evaluation. Step control: after an accepted step the next one aims at a tangent turn of
+``max_angle / 2`` and at half the problem's ``step_ratio`` limit, growing by at most ``grow``
+and shrinking by ``shrink`` (also after a correction that took more than ``target_newton``
+iterations); a step is halved and retried after a failure, a correction that wanders farther
+than the step, a turn of the tangent by more than ``max_angle`` or a ``step_ratio`` above 1. The
+step stays within ``[ds_min, ds_max]``. Continuation stops
+at the parameter bounds (the last point is solved exactly at the bound), after ``max_points``,
+when the step falls below ``ds_min``, or when the callback returns True.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import IntEnum
+from typing import Any, Callable
+
+import numpy as np
+
+
+class Status(IntEnum):
+    """Why a branch ended."""
+
+    BOUND_REACHED = 0
+    MAX_POINTS = 1
+    STEP_TOO_SMALL = 2
+    STOPPED_BY_CALLBACK = 3
+    START_FAILED = 4
+
+
+@dataclass(frozen=True)
+class Settings:
+    """Continuation settings (steps in scaled arclength).
+
+    Attributes
+    ----------
+    ds, ds_min, ds_max : float
+        Initial, smallest and largest step.
+    max_points : int
+        Most points on the branch (special points included).
+    newton_tol : float
+        Scaled Newton correction (max norm) for convergence.
+    residual_tol : float
+        Scaled residual (max norm) for convergence.
+    max_newton : int
+        Corrector iterations before the step is rejected.
+    target_newton : int
+        Iterations of a "comfortable" correction (step kept).
+    grow, shrink : float
+        Step factors after easy / hard corrections.
+    max_angle : float
+        Largest angle between consecutive tangents, rad.
+    lam_min, lam_max : float
+        Parameter bounds.
+    locate : bool
+        Locate special points (else they are only detected between points).
+    locate_tol : float
+        Arclength bracket width at which a special point counts as located.
+    max_locate : int
+        Secant iterations per special point.
+    """
+
+    ds: float = 0.01
+    ds_min: float = 1e-7
+    ds_max: float = 0.05
+    max_points: int = 1000
+    newton_tol: float = 1e-9
+    residual_tol: float = 1e-9
+    max_newton: int = 8
+    target_newton: int = 3
+    grow: float = 1.5
+    shrink: float = 0.6
+    max_angle: float = 0.35
+    lam_min: float = -np.inf
+    lam_max: float = np.inf
+    locate: bool = True
+    locate_tol: float = 1e-9
+    max_locate: int = 40
+
+
+@dataclass
+class Point:
+    """A converged point of a branch.
+
+    Attributes
+    ----------
+    u : ndarray
+        Unknowns.
+    lam : float
+        Parameter.
+    tangent : ndarray (N + 1,)
+        Unit tangent in scaled variables, ``(du, dlam)``, oriented along the continuation.
+    evaluation : object
+        What ``problem.evaluate`` returned at this point.
+    tests : ndarray
+        Values of the test functions (fold test first: the tangent's parameter component).
+    iterations : int
+        Corrector iterations.
+    residual : float
+        Scaled residual max norm.
+    special : str or None
+        Label of a located special point (``"fold"``, a problem test name or what
+        ``confirm`` returned), None for a regular point.
+    located : bool
+        For a special point: whether the location converged to ``locate_tol``.
+    arclength : float
+        Scaled arclength from the start (along the chords between points).
+    """
+
+    u: np.ndarray
+    lam: float
+    tangent: np.ndarray
+    evaluation: Any
+    tests: np.ndarray
+    iterations: int
+    residual: float
+    special: str | None = None
+    located: bool = True
+    arclength: float = 0.0
+
+
+@dataclass
+class Branch:
+    """Result of :func:`continuation`: the points in order and why it stopped."""
+
+    points: list = field(default_factory=list)
+    status: Status = Status.MAX_POINTS
+    steps_rejected: int = 0
+    evaluations: int = 0
+
+    @property
+    def special_points(self) -> list:
+        return [p for p in self.points if p.special is not None]
+
+
+class _Scaled:
+    """The problem in scaled variables ``v = (u / u_scale, lam / lam_scale)``."""
+
+    def __init__(self, problem):
+        self.p = problem
+        self.us = np.asarray(problem.u_scale, dtype=float)
+        self.ls = float(problem.lam_scale)
+        self.rs = np.asarray(getattr(problem, "r_scale", self.us), dtype=float)
+        self.N = self.us.size
+        self.names = tuple(getattr(problem, "test_names", ()))
+        self.fold_like = set(getattr(problem, "fold_tests", ()))
+        self.count = 0
+
+    def unscale(self, v):
+        return v[:-1] * self.us, float(v[-1] * self.ls)
+
+    def scale(self, u, lam):
+        return np.concatenate([np.asarray(u, dtype=float) / self.us, [lam / self.ls]])
+
+    def evaluate(self, v):
+        u, lam = self.unscale(v)
+        self.count += 1
+        try:
+            ev = self.p.evaluate(u, lam)
+        except (FloatingPointError, np.linalg.LinAlgError, ValueError):
+            return None
+        if ev is None or not np.all(np.isfinite(ev.r)):
+            return None
+        return ev
+
+    def blocks(self, ev):
+        """Scaled residual and Jacobian ``[J_u J_lam]``."""
+        R = ev.r / self.rs
+        Ju = ev.J_u * (self.us[None, :] / self.rs[:, None])
+        Jl = ev.J_lam * (self.ls / self.rs)
+        return R, np.hstack([Ju, Jl[:, None]])
+
+    def tests(self, ev):
+        if not self.names:
+            return np.zeros(0)
+        return np.asarray(self.p.test_functions(ev), dtype=float)
+
+
+def _tangent(Jfull: np.ndarray, ref: np.ndarray) -> np.ndarray | None:
+    """Unit null vector of ``[J_u J_lam]`` with positive projection on ``ref``."""
+    A = np.vstack([Jfull, ref[None, :]])
+    rhs = np.zeros(A.shape[0])
+    rhs[-1] = 1.0
+    try:
+        t = np.linalg.solve(A, rhs)
+    except np.linalg.LinAlgError:
+        return None
+    nt = np.linalg.norm(t)
+    if not np.isfinite(nt) or nt == 0.0:
+        return None
+    t /= nt
+    return t if t @ ref >= 0 else -t
+
+
+def _correct(sp: _Scaled, v_pred, normal, offset, st: Settings, radius: float):
+    """Newton on ``r = 0`` and ``normal . v = offset``; returns ``(v, ev, iterations, residual,
+    [J_u J_lam])`` in scaled variables, or None."""
+    v = v_pred.copy()
+    prev = np.inf
+    for it in range(1, st.max_newton + 1):
+        ev = sp.evaluate(v)
+        if ev is None:
+            return None
+        R, Jf = sp.blocks(ev)
+        A = np.vstack([Jf, normal[None, :]])
+        rhs = -np.concatenate([R, [normal @ v - offset]])
+        try:
+            dv = np.linalg.solve(A, rhs)
+        except np.linalg.LinAlgError:
+            return None
+        step = float(np.abs(dv).max())
+        res = float(np.abs(R).max())
+        if not np.isfinite(step):
+            return None
+        if step <= st.newton_tol and res <= st.residual_tol:
+            return v, ev, it, res, Jf
+        if it >= 3 and step > 0.5 * prev:  # not contracting
+            return None
+        prev = step
+        v = v + dv
+        if np.linalg.norm(v - v_pred) > radius:
+            return None
+    return None
+
+
+def _point(sp, v, ev, its, res, Jf, ref, special=None, arclength=0.0):
+    t = _tangent(Jf, ref)
+    if t is None:
+        return None
+    u, lam = sp.unscale(v)
+    tests = np.concatenate([[t[-1]], sp.tests(ev)])
+    return Point(u=u, lam=lam, tangent=t, evaluation=ev, tests=tests, iterations=its, residual=res,
+                 special=special, arclength=arclength)
+
+
+def _v(sp, p: Point):
+    return sp.scale(p.u, p.lam)
+
+
+def _solve_at(sp, a: Point, sigma: float, st: Settings, special=None):
+    """The branch point at projected arclength ``sigma`` beyond ``a`` (along ``a.tangent``)."""
+    va = _v(sp, a)
+    pred = va + sigma * a.tangent
+    out = _correct(sp, pred, a.tangent, a.tangent @ va + sigma, st, radius=max(2.0 * abs(sigma), 1e-12) + 1.0)
+    if out is None:
+        return None
+    v, ev, its, res, Jf = out
+    return _point(sp, v, ev, its, res, Jf, a.tangent, special, a.arclength + abs(sigma))
+
+
+def _solve_at_lam(sp, a: Point, b: Point, lam_b: float, st: Settings):
+    """The branch point at parameter ``lam_b`` between a and b (natural-parameter corrector)."""
+    va, vb = _v(sp, a), _v(sp, b)
+    x = lam_b / sp.ls
+    f = (x - va[-1]) / (vb[-1] - va[-1])
+    pred = va + f * (vb - va)
+    e = np.zeros(va.size)
+    e[-1] = 1.0
+    out = _correct(sp, pred, e, x, st, radius=np.linalg.norm(vb - va) + 1.0)
+    if out is None:
+        return None
+    v, ev, its, res, Jf = out
+    return _point(sp, v, ev, its, res, Jf, a.tangent, None, a.arclength + np.linalg.norm(v - va))
+
+
+def _locate(sp, a: Point, b: Point, k: int, name: str, st: Settings):
+    """Zero of test ``k`` between a and b by the Illinois secant method on the arclength."""
+    va, vb = _v(sp, a), _v(sp, b)
+    s_lo, s_hi = 0.0, float(a.tangent @ (vb - va))
+    f_lo, f_hi = a.tests[k], b.tests[k]
+    best = None
+    side = 0
+    for _ in range(st.max_locate):
+        if abs(s_hi - s_lo) <= st.locate_tol:
+            break
+        s = (s_lo * f_hi - s_hi * f_lo) / (f_hi - f_lo)
+        width = s_hi - s_lo  # s_lo < s_hi throughout (a at 0, b beyond)
+        if not np.isfinite(s):
+            s = 0.5 * (s_lo + s_hi)
+        # keep the trial off the bracket ends, where secant steps stall
+        s = min(max(s, s_lo + 1e-3 * width), s_hi - 1e-3 * width)
+        p = _solve_at(sp, a, s, st, special=name)
+        if p is None:
+            return best, False
+        fs = p.tests[k]
+        best = p
+        if fs == 0.0:
+            return p, True
+        if np.sign(fs) == np.sign(f_lo):
+            s_lo, f_lo = s, fs
+            if side == -1:
+                f_hi *= 0.5
+            side = -1
+        else:
+            s_hi, f_hi = s, fs
+            if side == 1:
+                f_lo *= 0.5
+            side = 1
+    return best, best is not None and abs(s_hi - s_lo) <= st.locate_tol * 10
+
+
+def continuation(
+    problem,
+    u0: np.ndarray,
+    lam0: float,
+    settings: Settings = Settings(),
+    callback: Callable[[Point], bool | None] | None = None,
+    direction: float = 1.0,
+    tangent: np.ndarray | None = None,
+) -> Branch:
+    """Continue the branch through ``(u0, lam0)`` (see the module docstring).
+
+    Parameters
+    ----------
+    problem : object
+        See the module docstring.
+    u0, lam0 : ndarray, float
+        Starting point (corrected at fixed ``lam0`` first).
+    settings : Settings
+    callback : callable, optional
+        ``callback(point)`` for every converged point in order (special points included);
+        returning True stops the continuation.
+    direction : float
+        +1 to start towards increasing ``lam``, -1 towards decreasing (ignored if ``tangent``).
+    tangent : ndarray, optional
+        Initial direction ``(du, dlam)`` in *unscaled* variables (for branch switching); the
+        start is then corrected on the hyperplane through ``(u0, lam0)`` normal to it.
+
+    Returns
+    -------
+    Branch
+    """
+    st = settings
+    sp = _Scaled(problem)
+    branch = Branch()
+    v0 = sp.scale(u0, lam0)
+    if tangent is None:
+        ref = np.zeros(v0.size)
+        ref[-1] = np.sign(direction) or 1.0
+        out = _correct(sp, v0, ref, v0[-1] * ref[-1], st, radius=np.inf)
+    else:
+        ref = np.concatenate([np.asarray(tangent[:-1], float) / sp.us, [tangent[-1] / sp.ls]])
+        ref /= np.linalg.norm(ref)
+        out = _correct(sp, v0, ref, ref @ v0, st, radius=np.inf)
+    if out is None:
+        branch.status = Status.START_FAILED
+        branch.evaluations = sp.count
+        return branch
+    v, ev, its, res, Jf = out
+    p = _point(sp, v, ev, its, res, Jf, ref)
+    if p is None:
+        branch.status = Status.START_FAILED
+        branch.evaluations = sp.count
+        return branch
+    branch.points.append(p)
+    if callback is not None and callback(p):
+        branch.status = Status.STOPPED_BY_CALLBACK
+        branch.evaluations = sp.count
+        return branch
+    ds = st.ds
+    cos_min = np.cos(st.max_angle)
+    while True:
+        if len(branch.points) >= st.max_points:
+            branch.status = Status.MAX_POINTS
+            break
+        a = branch.points[-1]
+        va = _v(sp, a)
+        pred = va + ds * a.tangent
+        out = _correct(sp, pred, a.tangent, a.tangent @ pred, st, radius=ds)
+        b = None
+        if out is not None:
+            v, ev, its, res, Jf = out
+            b = _point(sp, v, ev, its, res, Jf, a.tangent, arclength=a.arclength + float(np.linalg.norm(v - va)))
+        ratio = 0.0
+        if b is not None and hasattr(problem, "step_ratio"):
+            ratio = float(problem.step_ratio(a.evaluation, b.evaluation))
+        if b is None or ((b.tangent @ a.tangent < cos_min or ratio > 1.0) and ds > st.ds_min):
+            branch.steps_rejected += 1
+            ds *= 0.5
+            if ds < st.ds_min:
+                branch.status = Status.STEP_TOO_SMALL
+                break
+            continue
+        # parameter bounds: finish exactly on the bound
+        bound = None
+        if b.lam > st.lam_max and a.lam <= st.lam_max:
+            bound = st.lam_max
+        elif b.lam < st.lam_min and a.lam >= st.lam_min:
+            bound = st.lam_min
+        if bound is not None:
+            e = _solve_at_lam(sp, a, b, bound, st)
+            if e is None:
+                ds *= 0.5
+                branch.steps_rejected += 1
+                if ds < st.ds_min:
+                    branch.status = Status.STEP_TOO_SMALL
+                    break
+                continue
+            b = e
+        stop = _accept(sp, branch, a, b, st, callback)
+        if stop:
+            branch.status = Status.STOPPED_BY_CALLBACK
+            break
+        if bound is not None:
+            branch.status = Status.BOUND_REACHED
+            break
+        # next step: aim at half the largest tangent turn and half the problem's ratio limit
+        angle = float(np.arccos(np.clip(a.tangent @ b.tangent, -1.0, 1.0)))
+        factor = min(st.grow, 0.5 * st.max_angle / max(angle, 1e-12), 0.5 / max(ratio, 1e-12))
+        if b.iterations > st.target_newton:
+            factor = min(factor, st.shrink)
+        ds = float(np.clip(ds * max(factor, st.shrink), st.ds_min, st.ds_max))
+    branch.evaluations = sp.count
+    return branch
+
+
+def _accept(sp, branch, a: Point, b: Point, st: Settings, callback) -> bool:
+    """Locate special points between a and b, append them and b; True if the callback stops."""
+    specials = []
+    names = ("fold",) + sp.names
+    fold_flip = np.sign(a.tests[0]) * np.sign(b.tests[0]) < 0
+    for k, name in enumerate(names):
+        fa, fb = a.tests[k], b.tests[k]
+        if not (np.isfinite(fa) and np.isfinite(fb)) or np.sign(fa) * np.sign(fb) >= 0:
+            continue
+        if k > 0 and fold_flip and name in sp.fold_like:
+            continue
+        if st.locate:
+            p, ok = _locate(sp, a, b, k, name, st)
+        else:
+            p, ok = None, False
+        if p is None:  # not located: report the interval end that is nearer in test value
+            p = _copy_as_special(a if abs(fa) < abs(fb) else b, name)
+            ok = False
+        p.located = ok
+        label = name
+        if name != "fold" and hasattr(sp.p, "confirm"):
+            label = sp.p.confirm(name, p.evaluation)
+        if label is None:
+            continue
+        p.special = label
+        specials.append(p)
+    specials.sort(key=lambda p: p.arclength)
+    for p in specials + [b]:
+        branch.points.append(p)
+        if callback is not None and callback(p):
+            return True
+    return False
+
+
+def _copy_as_special(p: Point, name: str) -> Point:
+    return Point(u=p.u.copy(), lam=p.lam, tangent=p.tangent.copy(), evaluation=p.evaluation, tests=p.tests.copy(),
+                 iterations=p.iterations, residual=p.residual, special=name, located=False, arclength=p.arclength)

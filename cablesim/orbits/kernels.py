@@ -1,0 +1,319 @@
+"""Compiled kernels of the shooting method: one flow segment with its variational equations.
+
+A *vector field* is a numba function with the signature :data:`FIELD_SIG`::
+
+    field(theta, x, prm, work, dx, J, dp, ipar) -> status
+
+It fills ``dx = f(x, theta)``, the Jacobian ``J = df/dx`` and, when ``ipar >= 0``,
+``dp = df/dprm[ipar]``; it returns :data:`OK` (0) or a failure code. Time enters only through
+the forcing phase ``theta = omega t``. ``prm`` holds the model's constants (a flat float
+array: a continuation parameter other than ``omega`` is one of its entries, set by the caller),
+``work`` is the field's scratch space (and warm starts of inner solves).
+
+:func:`flow_segment` integrates ``x' = f(x, omega t)`` over a time interval with a fixed-step
+explicit Runge-Kutta scheme, together with
+
+- the variational equations ``Y' = J Y`` (``Y(0) = I``): the Jacobian of the discrete map;
+- the derivative with respect to the parameter: ``eta' = J eta + g`` with ``g = dp`` for a
+  parameter in ``prm``, or ``g = -f / omega`` for ``omega`` itself (the segment spans a fixed
+  fraction of the forcing period, so ``omega`` acts by scaling time: ``t = tau T(omega)``,
+  ``dT/domega = -T/omega``);
+- the divergence integral ``q = int tr J dt`` (Liouville: ``det Y = exp q`` for the exact flow);
+- the extremes of every component over the segment, from the cubic Hermite interpolant
+  between steps (the samples and their rates).
+
+Because the augmented system is integrated by the same scheme, ``Y`` and ``eta`` are the exact
+derivatives of the discrete flow map. The Jacobian is propagated in *chunks*, restarted from the
+identity whenever the divergence integral over the chunk exceeds :data:`CHUNK_DIVERGENCE` in
+modulus, and the chunks are multiplied; the log-determinant is accumulated chunk by chunk, so it
+stays accurate when the monodromy is nearly singular (strongly damped modes).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, types
+
+from ..dynamics import kernels as dk
+
+OK = dk.OK
+NONFINITE = dk.NONFINITE
+SLACK = dk.SLACK
+INNER_SOLVE = dk.INNER_SOLVE
+
+#: Parameter modes of :func:`flow_segment`.
+PARAM_NONE = 0
+PARAM_OMEGA = 1
+PARAM_PRM = 2
+
+#: Restart the propagated Jacobian when ``|int tr J dt|`` over a chunk exceeds this.
+CHUNK_DIVERGENCE = 2.0
+
+_f8 = types.float64
+_i8 = types.int64
+_v = types.float64[::1]
+_m = types.float64[:, ::1]
+
+#: Signature every vector field is compiled with.
+FIELD_SIG = _i8(_f8, _v, _v, _v, _v, _m, _v, _i8)
+FIELD_TYPE = types.FunctionType(FIELD_SIG)
+
+FLOW_SIG = _i8(
+    FIELD_TYPE,  # field
+    _v,  # prm
+    _v,  # work
+    _v,  # x0
+    _f8,  # theta0
+    _f8,  # omega
+    _f8,  # duration
+    _i8,  # nsteps
+    _m,  # A
+    _v,  # b
+    _v,  # c
+    _i8,  # ipar
+    _i8,  # pmode
+    types.boolean,  # jac
+    _v,  # xend (n)
+    _m,  # Mout (n, n)
+    _v,  # pout (n)
+    _v,  # xmax (n)
+    _v,  # xmin (n)
+    _m,  # rec (nsteps + 1, 2n) or (0, 0)
+    _v,  # info (4): divergence integral, log|det|, sign(det), chunks
+)
+
+
+@njit(cache=True)
+def _hermite_extremes(xa, xb, da, db, h, i, xmax, xmin):
+    """Update ``xmax[i]``, ``xmin[i]`` with the interior extremes of the cubic Hermite
+    interpolant through ``(xa, da)`` and ``(xb, db)`` over a step ``h``."""
+    ha = h * da
+    hb = h * db
+    # p'(s) = a s^2 + b s + c on s in [0, 1]
+    a = 6.0 * xa + 3.0 * ha - 6.0 * xb + 3.0 * hb
+    b = -6.0 * xa - 4.0 * ha + 6.0 * xb - 2.0 * hb
+    c = ha
+    r0 = -1.0
+    r1 = -1.0
+    scale = abs(a) + abs(b) + abs(c)
+    if scale == 0.0:
+        return
+    if abs(a) <= 1e-12 * scale:
+        if b != 0.0:
+            r0 = -c / b
+    else:
+        disc = b * b - 4.0 * a * c
+        if disc >= 0.0:
+            sq = np.sqrt(disc)
+            q = -0.5 * (b + sq) if b >= 0.0 else -0.5 * (b - sq)
+            r0 = q / a
+            if q != 0.0:
+                r1 = c / q
+    for r in range(2):
+        s = r0 if r == 0 else r1
+        if 0.0 < s < 1.0:
+            s2 = s * s
+            s3 = s2 * s
+            p = ((2.0 * s3 - 3.0 * s2 + 1.0) * xa + (s3 - 2.0 * s2 + s) * ha
+                 + (-2.0 * s3 + 3.0 * s2) * xb + (s3 - s2) * hb)
+            if p > xmax[i]:
+                xmax[i] = p
+            if p < xmin[i]:
+                xmin[i] = p
+
+
+@njit(cache=True)
+def _logdet(Y, n, LU):
+    """``(log|det|, sign)`` of the leading n x n block of Y (partial pivoting)."""
+    for i in range(n):
+        for j in range(n):
+            LU[i, j] = Y[i, j]
+    logdet = 0.0
+    sign = 1.0
+    for k in range(n):
+        p = k
+        big = abs(LU[k, k])
+        for i in range(k + 1, n):
+            if abs(LU[i, k]) > big:
+                big = abs(LU[i, k])
+                p = i
+        if big == 0.0:
+            return -np.inf, 0.0
+        if p != k:
+            sign = -sign
+            for j in range(n):
+                tmp = LU[k, j]
+                LU[k, j] = LU[p, j]
+                LU[p, j] = tmp
+        piv = LU[k, k]
+        if piv < 0.0:
+            sign = -sign
+        logdet += np.log(abs(piv))
+        for i in range(k + 1, n):
+            f = LU[i, k] / piv
+            if f != 0.0:
+                for j in range(k + 1, n):
+                    LU[i, j] -= f * LU[k, j]
+    return logdet, sign
+
+
+@njit(cache=True)
+def _close_chunk(Y, n, ncol, Mtot, ptot, tmpM, tmpp, LU, info, first):
+    """Fold the chunk's Jacobian ``Y`` into the totals and restart it from the identity."""
+    ld, sg = _logdet(Y, n, LU)
+    info[1] += ld
+    info[2] *= sg
+    info[3] += 1.0
+    if first:
+        for i in range(n):
+            for j in range(n):
+                Mtot[i, j] = Y[i, j]
+            ptot[i] = Y[i, n] if ncol > n else 0.0
+    else:
+        for i in range(n):
+            for j in range(n):
+                acc = 0.0
+                for k in range(n):
+                    acc += Y[i, k] * Mtot[k, j]
+                tmpM[i, j] = acc
+            acc = Y[i, n] if ncol > n else 0.0
+            for k in range(n):
+                acc += Y[i, k] * ptot[k]
+            tmpp[i] = acc
+        for i in range(n):
+            ptot[i] = tmpp[i]
+            for j in range(n):
+                Mtot[i, j] = tmpM[i, j]
+    for i in range(n):
+        for j in range(ncol):
+            Y[i, j] = 0.0
+        Y[i, i] = 1.0
+
+
+@njit(FLOW_SIG, cache=True)
+def flow_segment(field, prm, work, x0, theta0, omega, duration, nsteps, A, b, c, ipar, pmode, jac,
+                 xend, Mout, pout, xmax, xmin, rec, info):
+    """Integrate one segment (see the module docstring). Returns a status code.
+
+    Outputs: ``xend`` the final state; with ``jac``: ``Mout`` the Jacobian of the discrete map,
+    ``pout`` its derivative with respect to the parameter (zero when ``pmode`` is
+    :data:`PARAM_NONE`), ``info = (int tr J dt, log|det Mout|, sign det Mout, chunks)``;
+    always: ``xmax``, ``xmin`` (extremes of each component), and, if ``rec`` has rows, the
+    state and its rate at every step (``rec[k, :n]``, ``rec[k, n:]``).
+    """
+    n = x0.size
+    s = b.size
+    h = duration / nsteps
+    ncol = n + 1 if (jac and pmode != PARAM_NONE) else n
+    ipar_f = ipar if pmode == PARAM_PRM else -1
+    x = x0.copy()
+    xs = np.empty(n)
+    K = np.empty((s, n))
+    dx = np.empty(n)
+    dp = np.zeros(n)
+    J = np.zeros((n, n))
+    nY = n * ncol
+    Y = np.zeros((n, ncol))
+    Ys = np.empty((n, ncol))
+    KY = np.empty((s, n, ncol))
+    Yf = Y.reshape(nY)  # flat views for the stage combinations
+    Ysf = Ys.reshape(nY)
+    KYf = KY.reshape((s, nY))
+    tmpM = np.empty((n, n))
+    tmpp = np.empty(n)
+    LU = np.empty((n, n))
+    xprev = np.empty(n)
+    dprev = np.empty(n)
+    record = rec.shape[0] > 0
+    for i in range(n):
+        Y[i, i] = 1.0
+        xmax[i] = x[i]
+        xmin[i] = x[i]
+    info[0] = 0.0
+    info[1] = 0.0
+    info[2] = 1.0
+    info[3] = 0.0
+    q_chunk = 0.0
+    first_chunk = True
+    for k in range(nsteps + 1):
+        last = k == nsteps
+        for st in range(s if not last else 1):
+            # stage state: xs = x + h sum_r A[st, r] K[r] (and the same for Y)
+            for i in range(n):
+                xs[i] = x[i]
+            if jac and not last:
+                for i in range(nY):
+                    Ysf[i] = Yf[i]
+            for r in range(st):
+                a = h * A[st, r]
+                if a != 0.0:
+                    for i in range(n):
+                        xs[i] += a * K[r, i]
+                    if jac and not last:
+                        for i in range(nY):
+                            Ysf[i] += a * KYf[r, i]
+            theta = theta0 + omega * h * (k + c[st])
+            code = field(theta, xs, prm, work, dx, J, dp, ipar_f)
+            if code != OK:
+                return code
+            for i in range(n):
+                if not np.isfinite(dx[i]):
+                    return NONFINITE
+                K[st, i] = dx[i]
+            if jac and not last:
+                tr = 0.0
+                for i in range(n):
+                    tr += J[i, i]
+                    for j in range(ncol):
+                        KY[st, i, j] = 0.0
+                    for r in range(n):
+                        jr = J[i, r]
+                        if jr != 0.0:
+                            for j in range(ncol):
+                                KY[st, i, j] += jr * Ys[r, j]
+                if ncol > n:
+                    for i in range(n):
+                        if pmode == PARAM_OMEGA:
+                            KY[st, i, n] -= dx[i] / omega
+                        else:
+                            KY[st, i, n] += dp[i]
+                info[0] += h * b[st] * tr
+        # the rate at x_k is K[0]: finish the interval [k-1, k]
+        if k > 0:
+            for i in range(n):
+                _hermite_extremes(xprev[i], x[i], dprev[i], K[0, i], h, i, xmax, xmin)
+        for i in range(n):
+            if x[i] > xmax[i]:
+                xmax[i] = x[i]
+            if x[i] < xmin[i]:
+                xmin[i] = x[i]
+        if record:
+            for i in range(n):
+                rec[k, i] = x[i]
+                rec[k, n + i] = K[0, i]
+        if last:
+            break
+        for i in range(n):
+            xprev[i] = x[i]
+            dprev[i] = K[0, i]
+            acc = 0.0
+            for st in range(s):
+                acc += b[st] * K[st, i]
+            x[i] += h * acc
+            if not np.isfinite(x[i]):
+                return NONFINITE
+        if jac:
+            for st in range(s):
+                hb = h * b[st]
+                if hb != 0.0:
+                    for i in range(nY):
+                        Yf[i] += hb * KYf[st, i]
+            if abs(info[0] - q_chunk) > CHUNK_DIVERGENCE and k < nsteps - 1:
+                _close_chunk(Y, n, ncol, Mout, pout, tmpM, tmpp, LU, info, first_chunk)
+                first_chunk = False
+                q_chunk = info[0]
+    for i in range(n):
+        xend[i] = x[i]
+    if jac:
+        _close_chunk(Y, n, ncol, Mout, pout, tmpM, tmpp, LU, info, first_chunk)
+    return OK

@@ -1,0 +1,454 @@
+"""Shooting for periodic orbits of periodically forced systems, and their Floquet multipliers.
+
+A periodic orbit of period ``T = p 2 pi / omega`` (``p`` forcing periods) is a fixed point of
+the flow map over ``T``. With ``m`` shooting segments of ``T / m`` each, the unknowns are the
+states ``s_0 .. s_{m-1}`` at the forcing phases ``2 pi p k / m`` and the residual is::
+
+    r_k = Phi_k(s_k) - s_{k+1}        (k = 0 .. m-1, s_m = s_0)
+
+``Phi_k`` is the flow over segment ``k``, computed by a fixed-step explicit Runge-Kutta scheme
+(:mod:`cablesim.orbits.tableaux`) together with its variational equations, so the Jacobian
+blocks ``G_k = dPhi_k/ds_k`` and the parameter derivatives ``dPhi_k/dlambda`` are exact
+derivatives of the discrete map (:mod:`cablesim.orbits.kernels`). The monodromy matrix is
+``G_{m-1} ... G_0``; its eigenvalues are the Floquet multipliers. Liouville's formula
+``det(monodromy) = exp(int tr(df/dx) dt)`` is reported as a check of the integration
+(:attr:`Evaluation.liouville`).
+
+The step: ``steps_per_period`` per forcing period at least, and never more than
+``step_rate / fastest_rate`` seconds (the scheme's accuracy on the system's fastest mode; the
+stability limits are ``h |lambda| < 2.8`` for rk4, ``< 5.9`` for rk8). The step count is an
+integer, so as ``omega`` varies the discrete map changes by jumps of the size of the
+integration error (about 1e-10 with the defaults), which Newton's method and the continuation
+do not notice.
+
+Defaults (:data:`DEFAULT_STEPS`), measured on the paper's cable at 2.45 rad/s against a
+4000-steps-per-period solution (orbit error / slow multipliers / Liouville mismatch):
+rk8, 48 steps per period and ``h * rate <= 1.25`` (107 steps): 1.5e-10 / 3e-12 / 1.6e-5;
+rk4, 256 and 0.15 (888 steps): 1.1e-9 / 4e-10 / 5e-5, for about three times the work. The Liouville mismatch is set by the
+fastest (axial) mode, whose multiplier is far inside the unit circle.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import IntEnum
+
+import numpy as np
+
+from . import kernels as ok
+from .stability import sort_multipliers
+from .systems import OdeSystem
+from .tableaux import TABLEAUX
+
+#: Default fixed-step settings per scheme: (steps per forcing period, h * fastest_rate).
+DEFAULT_STEPS = {"rk8": (48, 1.25), "rk4": (256, 0.15)}
+
+_EMPTY_REC = np.zeros((0, 0))
+
+
+class FlowStatus(IntEnum):
+    """Outcome of one flow integration (the codes of :mod:`cablesim.orbits.kernels`)."""
+
+    OK = ok.OK
+    NONFINITE = ok.NONFINITE
+    SLACK = ok.SLACK
+    INNER_SOLVE = ok.INNER_SOLVE
+
+
+class SolveStatus(IntEnum):
+    """Outcome of :func:`solve_orbit`."""
+
+    CONVERGED = 0
+    MAX_ITERATIONS = 1
+    INTEGRATION_FAILED = 2
+    LINE_SEARCH_FAILED = 3
+    SINGULAR = 4
+
+
+@dataclass
+class Evaluation:
+    """The shooting residual and its derivatives at one ``(u, lambda)``.
+
+    Attributes
+    ----------
+    u : ndarray (m n,)
+        Stacked segment start states.
+    lam : float
+        Parameter value.
+    omega : float
+        Forcing frequency used, rad/s.
+    period : int
+        Orbit period in forcing periods.
+    T : float
+        Orbit period, s.
+    r : ndarray (m n,)
+        Residual ``Phi_k(s_k) - s_{k+1}``.
+    J_u : ndarray (m n, m n)
+        ``dr/du`` (None if not computed).
+    J_lam : ndarray (m n,)
+        ``dr/dlambda`` (None if not computed).
+    ends : ndarray (m, n)
+        ``Phi_k(s_k)``.
+    G : ndarray (m, n, n)
+        Segment Jacobians.
+    monodromy : ndarray (n, n)
+    multipliers : ndarray (n,) complex
+        Sorted by decreasing modulus.
+    logdet : float
+        ``log |det(monodromy)|`` accumulated over well-conditioned chunks.
+    divergence : float
+        ``int_0^T tr(df/dx) dt`` along the discrete orbit.
+    xmax, xmin : ndarray (n,)
+        Extremes of every state component over the orbit.
+    status : FlowStatus
+        ``OK`` or why the flow could not be computed (a slack segment, a failed inner solve,
+        a non-finite state).
+    """
+
+    u: np.ndarray
+    lam: float
+    omega: float
+    period: int
+    T: float
+    r: np.ndarray
+    J_u: np.ndarray | None
+    J_lam: np.ndarray | None
+    ends: np.ndarray
+    G: np.ndarray | None
+    monodromy: np.ndarray | None
+    multipliers: np.ndarray | None
+    logdet: float
+    divergence: float
+    xmax: np.ndarray
+    xmin: np.ndarray
+    status: FlowStatus = FlowStatus.OK
+
+    @property
+    def liouville(self) -> float:
+        """``|log det(monodromy) - int tr(df/dx) dt|``: zero for exact integration (relative
+        error of the determinant)."""
+        return abs(self.logdet - self.divergence)
+
+    @property
+    def spectral_radius(self) -> float:
+        return float(np.abs(self.multipliers[0])) if self.multipliers is not None else np.nan
+
+
+class Shooting:
+    """Flow maps over the ``m`` segments of a ``p``-periodic orbit of an :class:`OdeSystem`.
+
+    Parameters
+    ----------
+    system : OdeSystem
+    period : int
+        ``p``: orbit period in forcing periods.
+    segments : int
+        ``m``: shooting segments (1: single shooting).
+    parameter : str
+        ``"omega"`` or a name in ``system.parameters``.
+    scheme : str
+        ``"rk8"`` (default) or ``"rk4"``.
+    steps_per_period : int, optional
+        Fixed steps per forcing period (minimum; the default depends on the scheme, see
+        :data:`DEFAULT_STEPS`).
+    step_rate : float, optional
+        Upper bound of ``h * fastest_rate``.
+    """
+
+    def __init__(
+        self,
+        system: OdeSystem,
+        period: int = 1,
+        segments: int = 1,
+        parameter: str = "omega",
+        scheme: str = "rk8",
+        steps_per_period: int | None = None,
+        step_rate: float | None = None,
+    ):
+        if period < 1 or segments < 1:
+            raise ValueError("period and segments must be positive")
+        if parameter != "omega" and parameter not in system.parameters:
+            raise ValueError(f"unknown parameter {parameter!r}: 'omega' or one of {sorted(system.parameters)}")
+        if scheme not in TABLEAUX:
+            raise ValueError(f"unknown scheme {scheme!r}: one of {sorted(TABLEAUX)}")
+        self.system = system
+        self.period = int(period)
+        self.segments = int(segments)
+        self.parameter = parameter
+        self.scheme = scheme
+        self.tableau = TABLEAUX[scheme]
+        spp, rate = DEFAULT_STEPS[scheme]
+        self.steps_per_period = int(steps_per_period if steps_per_period is not None else spp)
+        self.step_rate = float(step_rate if step_rate is not None else rate)
+        self.n = system.dim
+        self._A = np.ascontiguousarray(self.tableau.A)
+        self._b = np.ascontiguousarray(self.tableau.b)
+        self._c = np.ascontiguousarray(self.tableau.c)
+        self._ipar = -1 if parameter == "omega" else int(system.parameters[parameter])
+        self._pmode = ok.PARAM_OMEGA if parameter == "omega" else ok.PARAM_PRM
+        #: Counters: flow-segment integrations and Runge-Kutta steps taken.
+        self.calls = 0
+        self.steps_taken = 0
+
+    # ------------------------------------------------------------------------------------------
+    def omega_of(self, lam: float) -> float:
+        """Forcing frequency at parameter value ``lam``."""
+        return float(lam) if self.parameter == "omega" else self.system.omega
+
+    def default_lam(self) -> float:
+        """The system's own value of the parameter."""
+        if self.parameter == "omega":
+            return self.system.omega
+        return float(self.system.prm[self._ipar])
+
+    def segment_steps(self, omega: float) -> int:
+        """Fixed steps per segment at forcing frequency ``omega``."""
+        tf = 2.0 * np.pi / omega
+        per_period = max(self.steps_per_period, int(np.ceil(tf * self.system.fastest_rate / self.step_rate)))
+        return max(1, int(np.ceil(per_period * self.period / self.segments)))
+
+    def _prm(self, lam: float) -> np.ndarray:
+        if self.parameter == "omega":
+            return self.system.prm
+        prm = self.system.prm.copy()
+        prm[self._ipar] = lam
+        return prm
+
+    def segment(self, k: int, x0: np.ndarray, lam: float, jac: bool = True, record: bool = False):
+        """Integrate segment ``k`` from ``x0``.
+
+        Returns
+        -------
+        dict with ``status``, ``x`` (end state), ``G``, ``dp`` (with ``jac``), ``info``,
+        ``xmax``, ``xmin`` and, with ``record``, ``t`` (times from the segment start) and
+        ``rec`` (state and rate at every step).
+        """
+        omega = self.omega_of(lam)
+        if not omega > 0.0:
+            return {"status": ok.NONFINITE}
+        n = self.n
+        T = self.period * 2.0 * np.pi / omega
+        dur = T / self.segments
+        theta0 = 2.0 * np.pi * self.period * k / self.segments
+        ns = self.segment_steps(omega)
+        xend = np.empty(n)
+        G = np.empty((n, n))
+        dp = np.zeros(n)
+        xmax = np.empty(n)
+        xmin = np.empty(n)
+        info = np.zeros(4)
+        rec = np.empty((ns + 1, 2 * n)) if record else _EMPTY_REC
+        work = self.system.work.copy()
+        code = ok.flow_segment(
+            self.system.field, self._prm(lam), work, np.ascontiguousarray(x0, dtype=float), theta0, omega, dur,
+            ns, self._A, self._b, self._c, self._ipar, self._pmode, jac, xend, G, dp, xmax, xmin, rec, info,
+        )
+        self.calls += 1
+        self.steps_taken += ns
+        out = {"status": int(code), "x": xend, "xmax": xmax, "xmin": xmin, "info": info, "steps": ns}
+        if jac:
+            out["G"] = G
+            out["dp"] = dp
+        if record:
+            out["t"] = np.arange(ns + 1) * (dur / ns)
+            out["rec"] = rec
+        return out
+
+    def evaluate(self, u: np.ndarray, lam: float, jac: bool = True) -> Evaluation:
+        """Residual (and derivatives) at ``(u, lam)``; ``status`` says whether it succeeded."""
+        n, m = self.n, self.segments
+        u = np.asarray(u, dtype=float)
+        S = u.reshape(m, n)
+        omega = self.omega_of(lam)
+        T = self.period * 2.0 * np.pi / omega if omega > 0 else np.nan
+        ends = np.empty((m, n))
+        G = np.empty((m, n, n)) if jac else None
+        dp = np.empty((m, n)) if jac else None
+        xmax = np.full(n, -np.inf)
+        xmin = np.full(n, np.inf)
+        logdet = 0.0
+        sign = 1.0
+        div = 0.0
+        status = ok.OK
+        for k in range(m):
+            seg = self.segment(k, S[k], lam, jac=jac)
+            if seg["status"] != ok.OK:
+                status = seg["status"]
+                break
+            ends[k] = seg["x"]
+            np.maximum(xmax, seg["xmax"], out=xmax)
+            np.minimum(xmin, seg["xmin"], out=xmin)
+            if jac:
+                G[k] = seg["G"]
+                dp[k] = seg["dp"]
+                div += seg["info"][0]
+                logdet += seg["info"][1]
+                sign *= seg["info"][2]
+        if status != ok.OK:
+            return Evaluation(u, lam, omega, self.period, T, np.full(n * m, np.nan), None, None, ends, None, None,
+                              None, np.nan, np.nan, xmax, xmin, FlowStatus(status))
+        r = (ends - np.roll(S, -1, axis=0)).ravel()
+        J_u = J_lam = mono = mu = None
+        if jac:
+            J_u = np.zeros((m * n, m * n))
+            for k in range(m):
+                J_u[k * n : (k + 1) * n, k * n : (k + 1) * n] = G[k]
+                kk = (k + 1) % m
+                J_u[k * n : (k + 1) * n, kk * n : (kk + 1) * n] -= np.eye(n)
+            J_lam = dp.ravel().copy()
+            mono = G[0].copy()
+            for k in range(1, m):
+                mono = G[k] @ mono
+            mu = np.linalg.eigvals(mono)
+            mu = sort_multipliers(mu)
+        return Evaluation(u.copy(), float(lam), omega, self.period, T, r, J_u, J_lam, ends, G, mono, mu, logdet,
+                          div, xmax, xmin, status)
+
+    # ------------------------------------------------------------------------------------------
+    def spread(self, s0: np.ndarray, lam: float) -> np.ndarray | None:
+        """Multiple-shooting unknowns from one start state: integrate through the segments."""
+        S = [np.asarray(s0, dtype=float)]
+        for k in range(self.segments - 1):
+            seg = self.segment(k, S[-1], lam, jac=False)
+            if seg["status"] != ok.OK:
+                return None
+            S.append(seg["x"])
+        return np.concatenate(S)
+
+    def trajectory(self, u: np.ndarray, lam: float, samples_per_period: int = 256):
+        """The orbit sampled uniformly: ``(t, x)`` over one orbit period, from the cubic Hermite
+        interpolant between steps (``t`` in s from forcing phase 0, ``x`` of shape (N, n))."""
+        n, m = self.n, self.segments
+        S = np.asarray(u, dtype=float).reshape(m, n)
+        omega = self.omega_of(lam)
+        T = self.period * 2.0 * np.pi / omega
+        N = samples_per_period * self.period
+        t_all = np.arange(N + 1) * (T / N)
+        x_all = np.empty((N + 1, n))
+        dur = T / m
+        for k in range(m):
+            seg = self.segment(k, S[k], lam, jac=False, record=True)
+            if seg["status"] != ok.OK:
+                raise FloatingPointError(f"integration failed (status {seg['status']})")
+            ts, rec = seg["t"], seg["rec"]
+            lo = k * dur
+            sel = (t_all >= lo - 1e-12 * T) & (t_all <= lo + dur + 1e-12 * T)
+            tt = np.clip(t_all[sel] - lo, 0.0, dur)
+            x_all[sel] = hermite_sample(ts, rec[:, :n], rec[:, n:], tt)
+        return t_all, x_all
+
+
+def hermite_sample(ts: np.ndarray, x: np.ndarray, dx: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Cubic Hermite interpolation of samples ``x`` with rates ``dx`` at times ``ts``."""
+    h = ts[1] - ts[0]
+    j = np.clip(np.floor(t / h).astype(int), 0, ts.size - 2)
+    th = ((t - ts[j]) / h)[:, None]
+    th2 = th * th
+    th3 = th2 * th
+    return ((2 * th3 - 3 * th2 + 1) * x[j] + (th3 - 2 * th2 + th) * h * dx[j]
+            + (-2 * th3 + 3 * th2) * x[j + 1] + (th3 - th2) * h * dx[j + 1])
+
+
+@dataclass
+class OrbitSolution:
+    """Result of :func:`solve_orbit`.
+
+    Attributes
+    ----------
+    u : ndarray
+        Converged (or last) unknowns.
+    evaluation : Evaluation
+        At ``u`` (with derivatives and multipliers), or None if the flow failed.
+    status : SolveStatus
+    iterations : int
+        Newton iterations (Jacobian evaluations).
+    residual : float
+        ``max |r_i| / scale_i`` at ``u``.
+    history : list of float
+        Scaled residual per iteration.
+    flow_status : FlowStatus
+        Why the flow failed at the start, if it did.
+    """
+
+    u: np.ndarray
+    evaluation: Evaluation | None
+    status: SolveStatus
+    iterations: int
+    residual: float
+    history: list = field(default_factory=list)
+    flow_status: FlowStatus = FlowStatus.OK
+
+    @property
+    def converged(self) -> bool:
+        return self.status == SolveStatus.CONVERGED
+
+
+def solve_orbit(
+    shooting: Shooting,
+    u0: np.ndarray,
+    lam: float | None = None,
+    scale: np.ndarray | None = None,
+    tol: float = 1e-10,
+    max_iter: int = 30,
+) -> OrbitSolution:
+    """Damped Newton's method on the periodicity condition at a fixed parameter value.
+
+    The full Newton step is tried first; if the flow fails or the scaled residual does not
+    decrease (``|r(u + a du)| < (1 - a/4) |r(u)|``), the step is halved (down to 1/1024).
+    Converged when, in every component, the Newton correction and the residual are below
+    ``tol`` times the component's scale or the system's round-off level
+    (:attr:`OdeSystem.noise`), whichever is larger; the solution returned is the last
+    *evaluated* point (its data are consistent with it).
+
+    Parameters
+    ----------
+    shooting : Shooting
+    u0 : ndarray
+        Initial guess (``m n`` values; a single state is spread over the segments).
+    lam : float, optional
+        Parameter value (default: the system's own).
+    scale : ndarray, optional
+        Scale of each state component (default: ``max(|u0|)`` for all, floored).
+    tol : float
+    max_iter : int
+    """
+    n, m = shooting.n, shooting.segments
+    lam = shooting.default_lam() if lam is None else float(lam)
+    u = np.asarray(u0, dtype=float).copy()
+    if u.size == n and m > 1:
+        spread = shooting.spread(u, lam)
+        if spread is None:
+            return OrbitSolution(u, None, SolveStatus.INTEGRATION_FAILED, 0, np.inf)
+        u = spread
+    if scale is None:
+        scale = np.full(n, max(float(np.abs(u).max()), 1e-12))
+    sc = np.tile(np.asarray(scale, dtype=float), m)
+    # converged when every component is within tol (relative to its scale) or the round-off
+    # level of the flow map, whichever is larger
+    bound = tol * sc + np.tile(np.broadcast_to(np.asarray(shooting.system.noise, dtype=float), (n,)), m)
+    ev = shooting.evaluate(u, lam)
+    if ev.status != ok.OK:
+        return OrbitSolution(u, None, SolveStatus.INTEGRATION_FAILED, 0, np.inf, flow_status=ev.status)
+    res = float(np.abs(ev.r / sc).max())
+    hist = [res]
+    for it in range(1, max_iter + 1):
+        try:
+            du = np.linalg.solve(ev.J_u, -ev.r)
+        except np.linalg.LinAlgError:
+            return OrbitSolution(u, ev, SolveStatus.SINGULAR, it, res, hist)
+        if np.all(np.abs(du) <= bound) and np.all(np.abs(ev.r) <= bound):
+            return OrbitSolution(u, ev, SolveStatus.CONVERGED, it, res, hist)
+        a = 1.0
+        while True:
+            trial = shooting.evaluate(u + a * du, lam)
+            if trial.status == ok.OK:
+                tres = float(np.abs(trial.r / sc).max())
+                if tres < (1.0 - 0.25 * a) * res or np.all(np.abs(trial.r) <= bound):
+                    break
+            a *= 0.5
+            if a < 1.0 / 1024:
+                return OrbitSolution(u, ev, SolveStatus.LINE_SEARCH_FAILED, it, res, hist)
+        u = u + a * du
+        ev, res = trial, tres
+        hist.append(res)
+    return OrbitSolution(u, ev, SolveStatus.MAX_ITERATIONS, max_iter, res, hist)

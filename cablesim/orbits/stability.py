@@ -1,0 +1,91 @@
+"""Floquet multipliers: stability, bifurcation test functions and their classification.
+
+For a periodic orbit with monodromy matrix ``Phi`` and multipliers ``mu_i``:
+
+- fold (turning point): a real multiplier through +1. Along a branch this is where the
+  parameter component of the tangent changes sign (watched by the continuation algorithm);
+  ``det(Phi - I) = prod(mu_i - 1)`` changes sign too. A sign change of ``det(Phi - I)``
+  *without* a turning point is a branch point (symmetry breaking, or a period-``2p`` branch
+  rejoining a period-``p`` orbit).
+- period doubling: a real multiplier through -1: ``prod(1 + mu_i)`` changes sign.
+- Neimark-Sacker: a complex pair through the unit circle: the product
+  ``prod_{i<j} (mu_i mu_j - 1)`` changes sign. It also changes sign when two *real* multipliers
+  pass through ``mu_i mu_j = 1`` (a neutral saddle, no bifurcation): :func:`confirm` tells the
+  two apart at the located point.
+
+All three test functions are real (complex multipliers come in conjugate pairs) and continuous
+in the monodromy matrix, so they are robust to multipliers colliding and leaving the real axis.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+TEST_NAMES = ("period-doubling", "neimark-sacker", "branch-point")
+#: Tests that duplicate a turning point (ignored where the fold test changes sign too).
+FOLD_TESTS = ("branch-point",)
+
+
+def sort_multipliers(mu: np.ndarray) -> np.ndarray:
+    """By decreasing modulus, conjugate pairs with positive imaginary part first."""
+    mu = np.asarray(mu, dtype=complex)
+    return mu[np.lexsort((-mu.imag, -np.abs(mu)))]
+
+
+def test_functions(mu: np.ndarray) -> np.ndarray:
+    """``[prod(1 + mu), prod_{i<j}(mu_i mu_j - 1), prod(mu - 1)]`` (real parts)."""
+    mu = np.asarray(mu, dtype=complex)
+    pd = np.prod(1.0 + mu).real
+    i, j = np.triu_indices(mu.size, k=1)
+    ns = np.prod(mu[i] * mu[j] - 1.0).real
+    bp = np.prod(mu - 1.0).real
+    return np.array([pd, ns, bp])
+
+
+def confirm(name: str, mu: np.ndarray, imag_tol: float = 1e-6) -> str | None:
+    """Label of a special point located by test ``name`` at multipliers ``mu``.
+
+    ``"neimark-sacker"`` only if the pair whose product is nearest to 1 is a complex-conjugate
+    pair (else a neutral saddle: None).
+    """
+    mu = np.asarray(mu, dtype=complex)
+    if name == "neimark-sacker":
+        i, j = np.triu_indices(mu.size, k=1)
+        k = int(np.argmin(np.abs(mu[i] * mu[j] - 1.0)))
+        a, b = mu[i[k]], mu[j[k]]
+        if abs(a.imag) > imag_tol and abs(a - np.conj(b)) <= 1e-6 * max(abs(a), 1.0) + 1e-9:
+            return "neimark-sacker"
+        return None
+    return name
+
+
+def critical_multiplier(kind: str, mu: np.ndarray) -> complex:
+    """The multiplier that crosses the unit circle at a bifurcation of this kind."""
+    mu = np.asarray(mu, dtype=complex)
+    if kind in ("fold", "branch-point"):
+        return mu[int(np.argmin(np.abs(mu - 1.0)))]
+    if kind == "period-doubling":
+        return mu[int(np.argmin(np.abs(mu + 1.0)))]
+    k = int(np.argmin(np.abs(np.abs(mu) - 1.0) + (np.abs(mu.imag) < 1e-9)))
+    return mu[k]
+
+
+def step_ratio(mu_a: np.ndarray, mu_b: np.ndarray, floor: float = 0.005) -> float:
+    """How far the multiplier moduli moved between two points, relative to how close the first
+    point is to the unit circle: ``max |d|mu|| / max(crit / 2, floor)``, moduli sorted, ``crit``
+    the smallest ``||mu| - 1||``.
+
+    Moduli, not multipliers: near a bifurcation only the distance to the unit circle matters
+    (lightly damped multipliers spin fast around the origin as the frequency changes, without
+    approaching it). A narrow period-doubling pair, where a complex pair near -1 splits into two
+    real multipliers for a short parameter interval, shows up as a jump of the sorted moduli.
+    """
+    ma = np.sort(np.abs(np.asarray(mu_a)))
+    mb = np.sort(np.abs(np.asarray(mu_b)))
+    crit = float(np.abs(ma - 1.0).min())
+    return float(np.abs(mb - ma).max()) / max(0.5 * crit, floor)
+
+
+def is_stable(mu: np.ndarray) -> bool:
+    """All multipliers strictly inside the unit circle."""
+    return bool(np.abs(mu).max() < 1.0)

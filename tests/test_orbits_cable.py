@@ -41,10 +41,8 @@ def _package():
     from cablesim.dynamics.integrators import DOPRI5
     from cablesim.dynamics.steady import SteadyCriterion, steady_response
 
-    try:
-        from cablesim.dynamics.simulate import build_equations, simulate
-    except ImportError:
-        from cablesim.dynamics.history import build_equations, simulate
+    from cablesim.analyses.setup import build_equations
+    from cablesim.dynamics.simulate import simulate
     return parse_case, run_static, build_equations, simulate, DOPRI5, SteadyCriterion, steady_response
 
 

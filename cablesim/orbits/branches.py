@@ -534,9 +534,7 @@ def cable_scales(eom, parameter: str, start: float, stop: float, gamma: float = 
     Displacements: the largest linear-response amplitude over the parameter range (a grid of
     64 values), floored at 1e-6 of the chord; velocities: that times the fundamental frequency.
     """
-    from ..modal import modal_analysis
-
-    w1 = float(modal_analysis(eom.K0, eom.mass).omega[0])
+    w1 = float(eom.frequencies[0])
     if parameter == "omega":
         grid = np.linspace(min(start, stop), max(start, stop), 64)
         amp = max(float(np.abs(linear_response(eom, w, gamma)).max()) for w in grid)

@@ -15,7 +15,7 @@ from dataclasses import field as dc_field
 
 import numpy as np
 
-from ..modal import fastest_rate, modal_analysis
+from ..modal import fastest_rate
 from . import cablefield
 
 
@@ -101,7 +101,7 @@ def cable_system(eom, gamma: float = 1.0) -> OdeSystem:
         fld, work = cablefield.exact_field, cablefield.exact_work(eom)
     else:
         fld, work = cablefield.approximate_field, cablefield.approximate_work(eom)
-    w = modal_analysis(eom.K0, eom.mass).omega
+    w = eom.frequencies
     rate = fastest_rate(w, eom.a0, eom.a1)
     # Non-Rayleigh damping: bound the rate by the largest |eigenvalue| of the linear system.
     nd2 = 2 * nd

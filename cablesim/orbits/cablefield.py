@@ -346,23 +346,12 @@ def solve_loads(yt, P, F1, S, EA, L, H, tol, maxit, Q, xx, u, T, N, fw, LU, r, d
     return False
 
 
-@njit(FIELD_SIG, cache=True)
-def approximate_field(theta, x, prm, work, dx, J, dp, ipar):
-    """Approximate analysis (module docstring)."""
-    nd = int(prm[0])
+@njit(cache=True)
+def _approximate_scratch(work, nd):
+    """Views of :func:`approximate_field`'s scratch space, in the order of :func:`_approx_size`:
+    ``(y, P, F1, Q, xx, u, T, N, LU, r, d, ek, fw, Pt, Pw, yt, F1t, F1w)``, ``fw`` the workspace
+    of :func:`cablesim.dynamics.kernels.approximate_flexibility`."""
     nn = nd // 2
-    o_S = 1
-    o_EA = o_S + nn + 1
-    o_m = o_EA + 3
-    o_C = o_m + nd
-    o_F0 = o_C + nd * nd
-    o_FL = o_F0 + nd
-    o_g = o_FL + nd
-    o_y0 = o_g + 1
-    o_tol = o_y0 + nd
-    S = prm[o_S : o_S + nn + 1]
-    EA, L, H = prm[o_EA], prm[o_EA + 1], prm[o_EA + 2]
-    tol = prm[o_tol]
     o = 0
     y = work[o : o + nd]
     o += nd
@@ -412,28 +401,59 @@ def approximate_field(theta, x, prm, work, dx, J, dp, ipar):
     F1w = work[o : o + 2]
     o += 2
     assert o <= work.size
+    return y, P, F1, Q, xx, u, T, N, LU, r, d, ek, fw, Pt, Pw, yt, F1t, F1w
+
+
+@njit(cache=True)
+def _walk_to_loads(y, P, F1, Pw, F1w, S, EA, L, H, tol, Q, xx, u, T, N, fw, LU, r, d, Pt, F1t, yt):
+    """Loads at ``y`` from far away: restart from the warm start ``(Pw, F1w)`` and walk from its
+    own configuration to ``y`` in 16 steps, each solved by :func:`solve_loads`; False if any
+    step fails."""
+    nd = P.size
+    for i in range(nd):
+        P[i] = Pw[i]
+    F1[0] = F1w[0]
+    F1[1] = F1w[1]
+    if not _inner_state(P, F1, S, EA, L, H, tol, Q, xx, u, T, N, fw):
+        return False
+    for i in range(nd):
+        Pw[i] = xx[i] + u[i]  # y of the warm start (Pw reused)
+    K = 16
+    for k in range(1, K + 1):
+        f = k / K
+        for i in range(nd):
+            yt[i] = Pw[i] + f * (y[i] - Pw[i])
+        if not solve_loads(yt, P, F1, S, EA, L, H, tol, 40, Q, xx, u, T, N, fw, LU, r, d, Pt, F1t):
+            return False
+    return True
+
+
+@njit(FIELD_SIG, cache=True)
+def approximate_field(theta, x, prm, work, dx, J, dp, ipar):
+    """Approximate analysis (module docstring)."""
+    nd = int(prm[0])
+    nn = nd // 2
+    o_S = 1
+    o_EA = o_S + nn + 1
+    o_m = o_EA + 3
+    o_C = o_m + nd
+    o_F0 = o_C + nd * nd
+    o_FL = o_F0 + nd
+    o_g = o_FL + nd
+    o_y0 = o_g + 1
+    o_tol = o_y0 + nd
+    S = prm[o_S : o_S + nn + 1]
+    EA, L, H = prm[o_EA], prm[o_EA + 1], prm[o_EA + 2]
+    tol = prm[o_tol]
+    y, P, F1, Q, xx, u, T, N, LU, r, d, ek, fw, Pt, Pw, yt, F1t, F1w = _approximate_scratch(work, nd)
     for i in range(nd):
         y[i] = prm[o_y0 + i] + x[i]
         Pw[i] = P[i]
     F1w[0] = F1[0]
     F1w[1] = F1[1]
     if not solve_loads(y, P, F1, S, EA, L, H, tol, 40, Q, xx, u, T, N, fw, LU, r, d, Pt, F1t):
-        # far from the warm start: walk there from the warm start's own configuration
-        for i in range(nd):
-            P[i] = Pw[i]
-        F1[0] = F1w[0]
-        F1[1] = F1w[1]
-        if not _inner_state(P, F1, S, EA, L, H, tol, Q, xx, u, T, N, fw):
+        if not _walk_to_loads(y, P, F1, Pw, F1w, S, EA, L, H, tol, Q, xx, u, T, N, fw, LU, r, d, Pt, F1t, yt):
             return INNER_SOLVE
-        for i in range(nd):
-            Pw[i] = xx[i] + u[i]  # y of the warm start (Pw reused)
-        K = 16
-        for k in range(1, K + 1):
-            f = k / K
-            for i in range(nd):
-                yt[i] = Pw[i] + f * (y[i] - Pw[i])
-            if not solve_loads(yt, P, F1, S, EA, L, H, tol, 40, Q, xx, u, T, N, fw, LU, r, d, Pt, F1t):
-                return INNER_SOLVE
     for k in range(nn + 1):
         if T[k] <= 0.0:
             return SLACK

@@ -190,6 +190,108 @@ def _close_chunk(Y, n, ncol, Mtot, ptot, tmpM, tmpp, LU, info, first):
         Y[i, i] = 1.0
 
 
+@njit(cache=True)
+def _start_segment(x, Y, xmax, xmin, info):
+    """Jacobian chunk from the identity, extremes at the start state, ``info`` cleared."""
+    for i in range(x.size):
+        Y[i, i] = 1.0
+        xmax[i] = x[i]
+        xmin[i] = x[i]
+    info[0] = 0.0
+    info[1] = 0.0
+    info[2] = 1.0
+    info[3] = 0.0
+
+
+@njit(cache=True)
+def _stage_state(x, K, Yf, KYf, xs, Ysf, A, st, h, with_jac):
+    """Stage state ``xs = x + h sum_r A[st, r] K[r]`` (and the same for the flat ``Y``)."""
+    n = x.size
+    nY = Yf.size
+    for i in range(n):
+        xs[i] = x[i]
+    if with_jac:
+        for i in range(nY):
+            Ysf[i] = Yf[i]
+    for r in range(st):
+        a = h * A[st, r]
+        if a != 0.0:
+            for i in range(n):
+                xs[i] += a * K[r, i]
+            if with_jac:
+                for i in range(nY):
+                    Ysf[i] += a * KYf[r, i]
+
+
+@njit(cache=True)
+def _variational_rate(J, Ys, dx, dp, KYst, omega, pmode):
+    """Stage rate of the variational equations, ``KYst = J Ys`` plus the parameter forcing in
+    the extra column; returns ``tr J`` (for the divergence integral)."""
+    n, ncol = Ys.shape
+    tr = 0.0
+    for i in range(n):
+        tr += J[i, i]
+        for j in range(ncol):
+            KYst[i, j] = 0.0
+        for r in range(n):
+            jr = J[i, r]
+            if jr != 0.0:
+                for j in range(ncol):
+                    KYst[i, j] += jr * Ys[r, j]
+    if ncol > n:
+        for i in range(n):
+            if pmode == PARAM_OMEGA:
+                KYst[i, n] -= dx[i] / omega
+            else:
+                KYst[i, n] += dp[i]
+    return tr
+
+
+@njit(cache=True)
+def _sample_step(k, x, K, xprev, dprev, h, xmax, xmin, rec):
+    """Extremes over the interval ending at sample ``k`` (the rate at ``x_k`` is ``K[0]``) and,
+    if ``rec`` has rows, the sample and its rate."""
+    n = x.size
+    if k > 0:
+        for i in range(n):
+            _hermite_extremes(xprev[i], x[i], dprev[i], K[0, i], h, i, xmax, xmin)
+    for i in range(n):
+        if x[i] > xmax[i]:
+            xmax[i] = x[i]
+        if x[i] < xmin[i]:
+            xmin[i] = x[i]
+    if rec.shape[0] > 0:
+        for i in range(n):
+            rec[k, i] = x[i]
+            rec[k, n + i] = K[0, i]
+
+
+@njit(cache=True)
+def _advance_state(x, K, b, h, xprev, dprev):
+    """``x += h sum_st b[st] K[st]``, keeping the sample and its rate for the interpolant;
+    False when the new state is not finite."""
+    for i in range(x.size):
+        xprev[i] = x[i]
+        dprev[i] = K[0, i]
+        acc = 0.0
+        for st in range(b.size):
+            acc += b[st] * K[st, i]
+        x[i] += h * acc
+        if not np.isfinite(x[i]):
+            return False
+    return True
+
+
+@njit(cache=True)
+def _advance_jacobian(Yf, KYf, b, h):
+    """``Y += h sum_st b[st] KY[st]`` on the flat views."""
+    for st in range(b.size):
+        hb = h * b[st]
+        if hb != 0.0:
+            for i in range(Yf.size):
+                Yf[i] += hb * KYf[st, i]
+
+
 @njit(FLOW_SIG, cache=True)
 def flow_segment(field, prm, work, x0, theta0, omega, duration, nsteps, A, b, c, ipar, pmode, jac,
                  xend, Mout, pout, xmax, xmin, rec, info):
@@ -224,34 +326,15 @@ def flow_segment(field, prm, work, x0, theta0, omega, duration, nsteps, A, b, c,
     LU = np.empty((n, n))
     xprev = np.empty(n)
     dprev = np.empty(n)
-    record = rec.shape[0] > 0
-    for i in range(n):
-        Y[i, i] = 1.0
-        xmax[i] = x[i]
-        xmin[i] = x[i]
-    info[0] = 0.0
-    info[1] = 0.0
-    info[2] = 1.0
-    info[3] = 0.0
+    _start_segment(x, Y, xmax, xmin, info)
     q_chunk = 0.0
     first_chunk = True
     for k in range(nsteps + 1):
         last = k == nsteps
+        # the last sample needs only its rate (first stage), not a step
+        stage_jac = jac and not last
         for st in range(s if not last else 1):
-            # stage state: xs = x + h sum_r A[st, r] K[r] (and the same for Y)
-            for i in range(n):
-                xs[i] = x[i]
-            if jac and not last:
-                for i in range(nY):
-                    Ysf[i] = Yf[i]
-            for r in range(st):
-                a = h * A[st, r]
-                if a != 0.0:
-                    for i in range(n):
-                        xs[i] += a * K[r, i]
-                    if jac and not last:
-                        for i in range(nY):
-                            Ysf[i] += a * KYf[r, i]
+            _stage_state(x, K, Yf, KYf, xs, Ysf, A, st, h, stage_jac)
             theta = theta0 + omega * h * (k + c[st])
             code = field(theta, xs, prm, work, dx, J, dp, ipar_f)
             if code != OK:
@@ -260,54 +343,16 @@ def flow_segment(field, prm, work, x0, theta0, omega, duration, nsteps, A, b, c,
                 if not np.isfinite(dx[i]):
                     return NONFINITE
                 K[st, i] = dx[i]
-            if jac and not last:
-                tr = 0.0
-                for i in range(n):
-                    tr += J[i, i]
-                    for j in range(ncol):
-                        KY[st, i, j] = 0.0
-                    for r in range(n):
-                        jr = J[i, r]
-                        if jr != 0.0:
-                            for j in range(ncol):
-                                KY[st, i, j] += jr * Ys[r, j]
-                if ncol > n:
-                    for i in range(n):
-                        if pmode == PARAM_OMEGA:
-                            KY[st, i, n] -= dx[i] / omega
-                        else:
-                            KY[st, i, n] += dp[i]
+            if stage_jac:
+                tr = _variational_rate(J, Ys, dx, dp, KY[st], omega, pmode)
                 info[0] += h * b[st] * tr
-        # the rate at x_k is K[0]: finish the interval [k-1, k]
-        if k > 0:
-            for i in range(n):
-                _hermite_extremes(xprev[i], x[i], dprev[i], K[0, i], h, i, xmax, xmin)
-        for i in range(n):
-            if x[i] > xmax[i]:
-                xmax[i] = x[i]
-            if x[i] < xmin[i]:
-                xmin[i] = x[i]
-        if record:
-            for i in range(n):
-                rec[k, i] = x[i]
-                rec[k, n + i] = K[0, i]
+        _sample_step(k, x, K, xprev, dprev, h, xmax, xmin, rec)
         if last:
             break
-        for i in range(n):
-            xprev[i] = x[i]
-            dprev[i] = K[0, i]
-            acc = 0.0
-            for st in range(s):
-                acc += b[st] * K[st, i]
-            x[i] += h * acc
-            if not np.isfinite(x[i]):
-                return NONFINITE
+        if not _advance_state(x, K, b, h, xprev, dprev):
+            return NONFINITE
         if jac:
-            for st in range(s):
-                hb = h * b[st]
-                if hb != 0.0:
-                    for i in range(nY):
-                        Yf[i] += hb * KYf[st, i]
+            _advance_jacobian(Yf, KYf, b, h)
             if abs(info[0] - q_chunk) > CHUNK_DIVERGENCE and k < nsteps - 1:
                 _close_chunk(Y, n, ncol, Mout, pout, tmpM, tmpp, LU, info, first_chunk)
                 first_chunk = False

@@ -370,6 +370,22 @@ def continuation(
     st = settings
     sp = _Scaled(problem)
     branch = Branch()
+    p = _first_point(sp, u0, lam0, st, direction, tangent)
+    if p is None:
+        branch.status = Status.START_FAILED
+    else:
+        branch.points.append(p)
+        if callback is not None and callback(p):
+            branch.status = Status.STOPPED_BY_CALLBACK
+        else:
+            branch.status = _march(sp, branch, st, callback)
+    branch.evaluations = sp.count
+    return branch
+
+
+def _first_point(sp: _Scaled, u0, lam0, st: Settings, direction: float, tangent) -> Point | None:
+    """The starting point, corrected at fixed ``lam0`` or, given a tangent, on the hyperplane
+    through ``(u0, lam0)`` normal to it; None if the correction fails."""
     v0 = sp.scale(u0, lam0)
     if tangent is None:
         ref = np.zeros(v0.size)
@@ -380,26 +396,19 @@ def continuation(
         ref /= np.linalg.norm(ref)
         out = _correct(sp, v0, ref, ref @ v0, st, radius=np.inf)
     if out is None:
-        branch.status = Status.START_FAILED
-        branch.evaluations = sp.count
-        return branch
+        return None
     v, ev, its, res, Jf = out
-    p = _point(sp, v, ev, its, res, Jf, ref)
-    if p is None:
-        branch.status = Status.START_FAILED
-        branch.evaluations = sp.count
-        return branch
-    branch.points.append(p)
-    if callback is not None and callback(p):
-        branch.status = Status.STOPPED_BY_CALLBACK
-        branch.evaluations = sp.count
-        return branch
+    return _point(sp, v, ev, its, res, Jf, ref)
+
+
+def _march(sp: _Scaled, branch: Branch, st: Settings, callback) -> Status:
+    """Predictor-corrector steps from the branch's last point until a stop (module docstring);
+    returns why it stopped."""
     ds = st.ds
     cos_min = np.cos(st.max_angle)
     while True:
         if len(branch.points) >= st.max_points:
-            branch.status = Status.MAX_POINTS
-            break
+            return Status.MAX_POINTS
         a = branch.points[-1]
         va = _v(sp, a)
         pred = va + ds * a.tangent
@@ -409,46 +418,48 @@ def continuation(
             v, ev, its, res, Jf = out
             b = _point(sp, v, ev, its, res, Jf, a.tangent, arclength=a.arclength + float(np.linalg.norm(v - va)))
         ratio = 0.0
-        if b is not None and hasattr(problem, "step_ratio"):
-            ratio = float(problem.step_ratio(a.evaluation, b.evaluation))
+        if b is not None and hasattr(sp.p, "step_ratio"):
+            ratio = float(sp.p.step_ratio(a.evaluation, b.evaluation))
         if b is None or ((b.tangent @ a.tangent < cos_min or ratio > 1.0) and ds > st.ds_min):
             branch.steps_rejected += 1
             ds *= 0.5
             if ds < st.ds_min:
-                branch.status = Status.STEP_TOO_SMALL
-                break
+                return Status.STEP_TOO_SMALL
             continue
-        # parameter bounds: finish exactly on the bound
-        bound = None
-        if b.lam > st.lam_max and a.lam <= st.lam_max:
-            bound = st.lam_max
-        elif b.lam < st.lam_min and a.lam >= st.lam_min:
-            bound = st.lam_min
-        if bound is not None:
+        bound = _bound_crossed(a, b, st)
+        if bound is not None:  # finish exactly on the bound
             e = _solve_at_lam(sp, a, b, bound, st)
             if e is None:
                 ds *= 0.5
                 branch.steps_rejected += 1
                 if ds < st.ds_min:
-                    branch.status = Status.STEP_TOO_SMALL
-                    break
+                    return Status.STEP_TOO_SMALL
                 continue
             b = e
-        stop = _accept(sp, branch, a, b, st, callback)
-        if stop:
-            branch.status = Status.STOPPED_BY_CALLBACK
-            break
+        if _accept(sp, branch, a, b, st, callback):
+            return Status.STOPPED_BY_CALLBACK
         if bound is not None:
-            branch.status = Status.BOUND_REACHED
-            break
-        # next step: aim at half the largest tangent turn and half the problem's ratio limit
-        angle = float(np.arccos(np.clip(a.tangent @ b.tangent, -1.0, 1.0)))
-        factor = min(st.grow, 0.5 * st.max_angle / max(angle, 1e-12), 0.5 / max(ratio, 1e-12))
-        if b.iterations > st.target_newton:
-            factor = min(factor, st.shrink)
-        ds = float(np.clip(ds * max(factor, st.shrink), st.ds_min, st.ds_max))
-    branch.evaluations = sp.count
-    return branch
+            return Status.BOUND_REACHED
+        ds = _next_step(ds, a, b, ratio, st)
+
+
+def _bound_crossed(a: Point, b: Point, st: Settings) -> float | None:
+    """The parameter bound crossed by the step from a to b, if any."""
+    if b.lam > st.lam_max and a.lam <= st.lam_max:
+        return st.lam_max
+    if b.lam < st.lam_min and a.lam >= st.lam_min:
+        return st.lam_min
+    return None
+
+
+def _next_step(ds: float, a: Point, b: Point, ratio: float, st: Settings) -> float:
+    """Step after an accepted step from a to b: aim at half the largest tangent turn and half the
+    problem's ratio limit."""
+    angle = float(np.arccos(np.clip(a.tangent @ b.tangent, -1.0, 1.0)))
+    factor = min(st.grow, 0.5 * st.max_angle / max(angle, 1e-12), 0.5 / max(ratio, 1e-12))
+    if b.iterations > st.target_newton:
+        factor = min(factor, st.shrink)
+    return float(np.clip(ds * max(factor, st.shrink), st.ds_min, st.ds_max))
 
 
 def _accept(sp, branch, a: Point, b: Point, st: Settings, callback) -> bool:

@@ -7,7 +7,8 @@
 - :mod:`~cablesim.orbits.stability`: multiplier test functions for folds, period doublings and
   Neimark-Sacker bifurcations;
 - :mod:`~cablesim.orbits.branches`: branches of periodic orbits with amplitudes, stability and
-  branch switching at period doublings; :func:`continue_branches` for the cable;
+  branch switching at period doublings (:mod:`~cablesim.orbits.switching`); results in
+  :mod:`~cablesim.orbits.diagram`; :func:`continue_branches` for the cable;
 - :mod:`~cablesim.orbits.systems`, :mod:`~cablesim.orbits.cablefield`: the vector fields;
   :mod:`~cablesim.orbits.starting`: starting states.
 

@@ -15,22 +15,16 @@ believed.
 Bifurcations (fold, period doubling, Neimark-Sacker, branch point) are located on the branch
 (:mod:`cablesim.orbits.continuation`). At every located period doubling of a period-``p``
 branch (``2p <= max_period``) the period-``2p`` branch is started from the critical
-eigenvector ``v`` (multiplier -1): the ``2p`` unknowns are the parent's segment states perturbed
-by ``+eps w_k`` on the first lap and ``-eps w_k`` on the second (``w_0 = v``,
-``w_{k+1} = G_k w_k``), corrected on the hyperplane normal to that direction, and continued away
-from the parent; if that start fails, ``-eps`` is tried (the two signs give the same orbit
-shifted by ``p`` forcing periods, so one of them suffices). A ``2p`` branch whose two laps come
-back together (or whose lap difference reverses between two points: the step went through the
-branch point onto the mirror image) has rejoined a period-``p`` orbit at the other period
-doubling of a pair: it ends there (:attr:`BranchEnd.MERGED`, the parent's period doubling as
-its last point) and that period doubling is not switched at again.
+eigenvector and continued away from the parent; a ``2p`` branch that rejoins a period-``p``
+orbit at the other period doubling of a pair ends there (:attr:`BranchEnd.MERGED`, the parent's
+period doubling as its last point) and that period doubling is not switched at again
+(:mod:`cablesim.orbits.switching`).
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field, replace
-from enum import IntEnum
+from dataclasses import replace
 from typing import Callable
 
 import numpy as np
@@ -38,207 +32,11 @@ import numpy as np
 from . import kernels as ok
 from . import stability
 from .continuation import Settings, continuation
+from .diagram import Bifurcation, BranchEnd, OrbitBranch, OrbitPoint, ResponseDiagram
 from .shooting import Evaluation, FlowStatus, Shooting, solve_orbit
 from .starting import integrate_to_steady, linear_response, linear_response_state
+from .switching import MergeWatch, doubled_point, doubling_direction, lap_separation
 from .systems import OdeSystem, cable_system
-
-
-class BranchEnd(IntEnum):
-    """Why a branch ended (the continuation's :class:`~cablesim.orbits.continuation.Status`
-    plus :attr:`MERGED`)."""
-
-    BOUND_REACHED = 0
-    MAX_POINTS = 1
-    STEP_TOO_SMALL = 2
-    STOPPED_BY_CALLBACK = 3
-    START_FAILED = 4
-    MERGED = 5
-
-
-@dataclass
-class OrbitPoint:
-    """One periodic orbit on a branch.
-
-    Attributes
-    ----------
-    branch : int
-        Index of its branch in :attr:`ResponseDiagram.branches`.
-    index : int
-        Position on the branch.
-    parameter : float
-        Value of the continuation parameter.
-    omega : float
-        Forcing frequency, rad/s.
-    period : int
-        Orbit period in forcing periods.
-    state : ndarray (n,)
-        State at forcing phase 0 (for the cable ``(z, v)``).
-    u : ndarray (m n,)
-        All shooting unknowns (segment start states).
-    amplitude : ndarray
-        Largest ``|x_i|`` over the orbit, per displacement component.
-    halfrange : ndarray
-        Half the peak-to-peak range, per displacement component.
-    multipliers : ndarray (n,) complex
-        Floquet multipliers, by decreasing modulus.
-    stable : bool
-        All multipliers inside the unit circle.
-    trusted : bool
-        Residual and Liouville checks passed (module docstring).
-    residual : float
-        Scaled Newton residual (max norm).
-    liouville : float
-        ``|log det(monodromy) - int tr J dt|``.
-    special : str or None
-        ``"fold"``, ``"period-doubling"``, ``"neimark-sacker"``, ``"branch-point"`` at a located
-        bifurcation, else None.
-    located : bool
-        For a special point: whether the location converged.
-    """
-
-    branch: int
-    index: int
-    parameter: float
-    omega: float
-    period: int
-    state: np.ndarray
-    u: np.ndarray
-    amplitude: np.ndarray
-    halfrange: np.ndarray
-    multipliers: np.ndarray
-    stable: bool
-    trusted: bool
-    residual: float
-    liouville: float
-    special: str | None = None
-    located: bool = True
-
-
-@dataclass
-class Bifurcation:
-    """A located bifurcation.
-
-    Attributes
-    ----------
-    kind : str
-        ``"fold"``, ``"period-doubling"``, ``"neimark-sacker"`` or ``"branch-point"``.
-    parameter : float
-    branch : int
-        Branch on which it was found.
-    period : int
-        Period (forcing periods) of the orbit that bifurcates.
-    amplitude, halfrange : ndarray
-        Of that orbit, per displacement component.
-    state : ndarray
-    multiplier : complex
-        The critical multiplier (near +1, -1 or on the unit circle).
-    multipliers : ndarray
-    located : bool
-    trusted : bool
-    point : int
-        Index of the point on its branch.
-    child : int or None
-        Branch started here (period doubling), if any.
-    """
-
-    kind: str
-    parameter: float
-    branch: int
-    period: int
-    amplitude: np.ndarray
-    halfrange: np.ndarray
-    state: np.ndarray
-    multiplier: complex
-    multipliers: np.ndarray
-    located: bool
-    trusted: bool
-    point: int
-    child: int | None = None
-
-
-@dataclass
-class OrbitBranch:
-    """A branch of periodic orbits of one period.
-
-    Attributes
-    ----------
-    index, period, parameter
-        Position in the diagram, orbit period (forcing periods), continuation parameter.
-    points : list of OrbitPoint
-        In continuation order (located bifurcations included, flagged by ``special``).
-    end : BranchEnd
-        Why the branch ended.
-    parent : int or None
-        Branch it was switched from (period doubling), with ``origin`` the bifurcation.
-    evaluations : int
-        Shooting evaluations spent on it.
-    segments : int
-        Shooting segments used.
-    merged_at : OrbitPoint or None
-        For a period-doubled branch that rejoined its parent: the parent's period doubling.
-    failure : FlowStatus or None
-        When the step fell below its minimum or the start failed: why the last refused flow
-        failed (a slack segment, a failed inner solve), if a flow failed at all.
-    """
-
-    index: int
-    period: int
-    parameter: str
-    points: list = field(default_factory=list)
-    end: BranchEnd = BranchEnd.MAX_POINTS
-    parent: int | None = None
-    origin: Bifurcation | None = None
-    evaluations: int = 0
-    segments: int = 1
-    merged_at: OrbitPoint | None = None
-    failure: FlowStatus | None = None
-
-    @property
-    def values(self) -> np.ndarray:
-        """Parameter values of the points."""
-        return np.array([p.parameter for p in self.points])
-
-    @property
-    def amplitude(self) -> np.ndarray:
-        """(points, components) largest |x| per displacement component."""
-        return np.array([p.amplitude for p in self.points])
-
-    @property
-    def halfrange(self) -> np.ndarray:
-        return np.array([p.halfrange for p in self.points])
-
-    @property
-    def stable(self) -> np.ndarray:
-        return np.array([p.stable for p in self.points], dtype=bool)
-
-    @property
-    def trusted(self) -> np.ndarray:
-        return np.array([p.trusted for p in self.points], dtype=bool)
-
-    @property
-    def states(self) -> np.ndarray:
-        return np.array([p.state for p in self.points])
-
-    @property
-    def multipliers(self) -> np.ndarray:
-        return np.array([p.multipliers for p in self.points])
-
-
-@dataclass
-class ResponseDiagram:
-    """Every branch and bifurcation found, with cost counters.
-
-    ``stats``: ``evaluations`` (shooting residual + Jacobian evaluations), ``segments``
-    (segment integrations), ``steps`` (Runge-Kutta steps), ``points``, ``seconds``.
-    """
-
-    parameter: str
-    branches: list = field(default_factory=list)
-    bifurcations: list = field(default_factory=list)
-    stats: dict = field(default_factory=dict)
-
-    def of_kind(self, kind: str) -> list:
-        return [b for b in self.bifurcations if b.kind == kind]
 
 
 class OrbitProblem:
@@ -286,15 +84,169 @@ def _orbit_point(system: OdeSystem, shooting: Shooting, cp, branch: int, index: 
     )
 
 
-def _lap_difference(u: np.ndarray, n: int, m_parent: int, scale: np.ndarray) -> np.ndarray:
-    """Scaled difference between the two laps of a period-doubled orbit's unknowns."""
-    S = u.reshape(2 * m_parent, n)
-    return ((S[:m_parent] - S[m_parent:]) / scale).ravel()
+def _bifurcation(p: OrbitPoint, branch: int) -> Bifurcation:
+    """The bifurcation at special point ``p`` of branch ``branch``."""
+    return Bifurcation(
+        kind=p.special, parameter=p.parameter, branch=branch, period=p.period,
+        amplitude=p.amplitude, halfrange=p.halfrange, state=p.state,
+        multiplier=stability.critical_multiplier(p.special, p.multipliers), multipliers=p.multipliers,
+        located=p.located, trusted=p.trusted, point=p.index,
+    )
 
 
-def _separation(u: np.ndarray, n: int, m_parent: int, scale: np.ndarray) -> float:
-    """Scaled max difference between the two laps of a period-doubled orbit's unknowns."""
-    return float(np.abs(_lap_difference(u, n, m_parent, scale)).max())
+class _Tracer:
+    """The branches of one :func:`trace_branches` call: shootings (one per period and segment
+    count, shared by the branches), the continuation of each branch and the switching at
+    period doublings, all recorded in :attr:`diagram`."""
+
+    def __init__(self, system: OdeSystem, parameter: str, settings: Settings, direction: float,
+                 state_scale: np.ndarray, lam_scale: float, callback, integration: dict,
+                 liouville_tol: float, switch_size: float):
+        self.system = system
+        self.n = system.dim
+        self.parameter = parameter
+        self.settings = settings
+        self.direction = direction
+        self.state_scale = state_scale
+        self.lam_scale = lam_scale
+        self.callback = callback
+        self.integration = integration
+        self.liouville_tol = liouville_tol
+        self.switch_size = switch_size
+        self.diagram = ResponseDiagram(parameter=parameter)
+        self.shootings: dict = {}
+
+    def shooting(self, period: int, segments: int) -> Shooting:
+        """The shooting of period-``period`` orbits on ``segments`` segments."""
+        key = (period, segments)
+        if key not in self.shootings:
+            self.shootings[key] = Shooting(self.system, period=period, segments=segments, parameter=self.parameter,
+                                           **self.integration)
+        return self.shootings[key]
+
+    def first_branch(self, u0: np.ndarray, start: float, period: int, segments: int) -> None:
+        """Solve the orbit near ``u0`` at ``start`` (from a steady state of the time integration
+        if Newton's method fails from ``u0``) and continue its branch."""
+        sh = self.shooting(period, segments)
+        sol = solve_orbit(sh, u0, start, scale=self.state_scale)
+        if not sol.converged:
+            x = integrate_to_steady(sh, np.asarray(u0, dtype=float)[: self.n], start, periods=100)
+            if x is not None:
+                sol = solve_orbit(sh, x, start, scale=self.state_scale)
+        if not sol.converged:
+            failure = sol.flow_status if sol.flow_status != FlowStatus.OK else None
+            self.diagram.branches.append(OrbitBranch(index=0, period=period, parameter=self.parameter,
+                                                     end=BranchEnd.START_FAILED, failure=failure))
+        else:
+            self.run_branch(sh, sol.u, start, None, None, None, [])
+
+    def run_branch(self, sh: Shooting, u_start: np.ndarray, lam_start: float, tangent: np.ndarray | None,
+                   parent: int | None, origin: Bifurcation | None, prefix: list) -> OrbitBranch:
+        """Continue one branch from ``(u_start, lam_start)`` and append it to the diagram.
+
+        ``tangent``, ``parent`` and ``origin`` are given for a period-doubled branch (its start
+        direction, the parent branch and the period doubling); ``prefix`` are points recorded
+        before the continuation's first (the parent's period doubling)."""
+        idx = len(self.diagram.branches)
+        br = OrbitBranch(index=idx, period=sh.period, parameter=self.parameter, parent=parent, origin=origin)
+        br.segments = sh.segments
+        self.diagram.branches.append(br)
+        problem = OrbitProblem(sh, self.state_scale, self.lam_scale)
+        watch = None
+        if parent is not None:
+            partners = [q for q in self.diagram.branches[parent].points if q.special == "period-doubling"]
+            watch = MergeWatch(partners, idx, sh.period, self.n, sh.segments // 2, self.state_scale,
+                               self.switch_size)
+        for p in prefix:
+            p.branch, p.index = idx, len(br.points)
+            br.points.append(p)
+
+        def deliver(op: OrbitPoint) -> bool:
+            op.index = len(br.points)
+            br.points.append(op)
+            return bool(self.callback(op)) if self.callback is not None else False
+
+        def on_point(cp) -> bool:
+            op = _orbit_point(self.system, sh, cp, idx, -1, self.settings.residual_tol, self.liouville_tol)
+            return deliver(op) if watch is None else watch.observe(cp, op, deliver)
+
+        res = continuation(problem, u_start, lam_start, self.settings, callback=on_point, direction=self.direction,
+                           tangent=tangent)
+        br.evaluations = res.evaluations
+        br.merged_at = watch.merged_at if watch is not None else None
+        br.end = BranchEnd.MERGED if br.merged_at is not None else BranchEnd(int(res.status))
+        if br.end in (BranchEnd.STEP_TOO_SMALL, BranchEnd.START_FAILED):
+            br.failure = problem.last_failure
+        return br
+
+    def switch(self, br: OrbitBranch, p: OrbitPoint, bif: Bifurcation) -> OrbitBranch | None:
+        """Start the period-doubled branch at period doubling ``p`` of branch ``br``
+        (:mod:`cablesim.orbits.switching`); None if neither sign of the perturbation leads
+        away from the parent."""
+        m1 = br.segments
+        ev = self.shooting(br.period, m1).evaluate(p.u, p.parameter)
+        if ev.status != ok.OK:
+            return None
+        dirn, eps = doubling_direction(ev, m1, self.state_scale, self.switch_size)
+        sh2 = self.shooting(2 * br.period, 2 * m1)
+        base = np.concatenate([p.u, p.u])
+        for sign in (1.0, -1.0):
+            doubled = doubled_point(p, 2 * br.period, base.copy())
+            child = self.run_branch(sh2, base + sign * eps * dirn, p.parameter, np.concatenate([sign * dirn, [0.0]]),
+                                    br.index, bif, [doubled])
+            if child.end != BranchEnd.START_FAILED and len(child.points) > 1 \
+                    and lap_separation(child.points[1].u, self.n, m1, self.state_scale) > 0.1 * self.switch_size:
+                return child
+            self.diagram.branches.pop()  # a failed attempt leaves no branch behind
+        return None
+
+    def is_own_bifurcation(self, br: OrbitBranch, p: OrbitPoint) -> bool:
+        """Whether special point ``p`` of ``br`` is a bifurcation recorded on ``br`` (the ends
+        of a period-doubled branch are recorded on its parent)."""
+        if p.special is None:
+            return False
+        if p.index == 0 and br.origin is not None:
+            return False  # the branch's own origin
+        if br.end == BranchEnd.MERGED and (p is br.points[-1] or (
+                p.index >= len(br.points) - 4
+                and lap_separation(p.u, self.n, br.segments // 2, self.state_scale) < 2.0 * self.switch_size)):
+            # where a doubled branch rejoins its parent; the pitchfork there may also have
+            # tripped the fold test just before
+            return False
+        return True
+
+    def collect_bifurcations(self, switch_branches: bool, max_period: int) -> None:
+        """Record the bifurcations of every branch, breadth first, switching at the period
+        doublings (the new branches are visited in turn)."""
+        done_pd: set = set()
+        k = 0
+        while k < len(self.diagram.branches):
+            br = self.diagram.branches[k]
+            k += 1
+            for p in list(br.points):
+                if not self.is_own_bifurcation(br, p):
+                    continue
+                bif = _bifurcation(p, br.index)
+                self.diagram.bifurcations.append(bif)
+                if not (switch_branches and p.special == "period-doubling" and 2 * br.period <= max_period):
+                    continue
+                if (br.index, p.index) in done_pd:
+                    continue
+                child = self.switch(br, p, bif)
+                if child is not None:
+                    bif.child = child.index
+                    if child.merged_at is not None:
+                        done_pd.add((br.index, child.merged_at.index))
+
+    def stats(self, seconds: float) -> dict:
+        """Cost counters of :attr:`ResponseDiagram.stats`."""
+        return {
+            "evaluations": sum(b.evaluations for b in self.diagram.branches),
+            "segments": sum(sh.calls for sh in self.shootings.values()),
+            "steps": sum(sh.steps_taken for sh in self.shootings.values()),
+            "points": sum(len(b.points) for b in self.diagram.branches),
+            "seconds": seconds,
+        }
 
 
 def trace_branches(
@@ -372,160 +324,13 @@ def trace_branches(
         amp = float(np.abs(u0).max()) if np.size(u0) else 1.0
         state_scale = np.full(n, max(amp, 1e-12))
     state_scale = np.asarray(state_scale, dtype=float)
-    diagram = ResponseDiagram(parameter=parameter)
-    shootings: dict = {}
-
-    def make_shooting(p, m):
-        key = (p, m)
-        if key not in shootings:
-            shootings[key] = Shooting(system, period=p, segments=m, parameter=parameter, scheme=scheme,
-                                      steps_per_period=steps_per_period, step_rate=step_rate)
-        return shootings[key]
-
-    def run_branch(sh, u_start, lam_start, tangent, parent, origin, prefix):
-        idx = len(diagram.branches)
-        br = OrbitBranch(index=idx, period=sh.period, parameter=parameter, parent=parent, origin=origin)
-        br.segments = sh.segments
-        diagram.branches.append(br)
-        problem = OrbitProblem(sh, state_scale, lam_scale)
-        m_parent = sh.segments // 2 if parent is not None else 0
-        partners = [] if parent is None else [q for q in diagram.branches[parent].points
-                                              if q.special == "period-doubling"]
-        track = {"far": False, "D": None, "pending": []}
-        merged = [None]
-        for p in prefix:
-            p.branch, p.index = idx, len(br.points)
-            br.points.append(p)
-
-        def deliver(op) -> bool:
-            op.index = len(br.points)
-            br.points.append(op)
-            return bool(callback(op)) if callback is not None else False
-
-        def cb(cp):
-            op = _orbit_point(system, sh, cp, idx, -1, st.residual_tol, liouville_tol)
-            if parent is not None:
-                # A doubled branch that comes back to a period-p orbit (its two laps coincide)
-                # rejoins the parent at a period doubling: end it there rather than continue
-                # through that branch point. Seen as the two laps nearly coinciding, or as their
-                # difference reversing between consecutive points (the step went through the
-                # branch point onto the mirror image: the same orbits shifted by p periods).
-                # Special points found in the step that crossed are artefacts of the pitchfork
-                # (a fold test trips there) and are dropped.
-                D = _lap_difference(cp.u, n, m_parent, state_scale)
-                sep = float(np.abs(D).max())
-                track["far"] = track["far"] or sep > 2.0 * switch_size
-                flipped = track["D"] is not None and float(D @ track["D"]) < 0.0
-                if track["far"] and partners and (flipped or sep < 0.5 * switch_size):
-                    q = min(partners, key=lambda q: abs(q.parameter - cp.lam))
-                    keep = [] if flipped else track["pending"] + ([op] if cp.special is None else [])
-                    for o in keep:
-                        deliver(o)
-                    end = replace(q, branch=idx, period=sh.period, u=np.concatenate([q.u, q.u]),
-                                  multipliers=stability.sort_multipliers(q.multipliers**2))
-                    deliver(end)
-                    merged[0] = q
-                    return True
-                if cp.special is not None:
-                    track["pending"].append(op)  # delivered with the next regular point
-                    return False
-                track["D"] = D
-            stop_now = False
-            for o in track["pending"] + [op]:
-                stop_now = deliver(o) or stop_now
-            track["pending"] = []
-            return stop_now
-
-        res = continuation(problem, u_start, lam_start, st, callback=cb,
-                           direction=np.sign(stop - start) or 1.0, tangent=tangent)
-        br.evaluations = res.evaluations
-        br.end = BranchEnd.MERGED if merged[0] is not None else BranchEnd(int(res.status))
-        br.merged_at = merged[0]
-        if br.end in (BranchEnd.STEP_TOO_SMALL, BranchEnd.START_FAILED):
-            br.failure = problem.last_failure
-        return br
-
-    def switch(br: OrbitBranch, p: OrbitPoint, bif: Bifurcation):
-        """Start the period-doubled branch at period doubling ``p`` of branch ``br``."""
-        m1 = br.segments
-        ev = make_shooting(br.period, m1).evaluate(p.u, p.parameter)
-        if ev.status != ok.OK:
-            return None
-        mu, V = np.linalg.eig(ev.monodromy)
-        j = int(np.argmin(np.abs(mu + 1.0)))
-        W = [np.real(V[:, j])]
-        for kk in range(m1 - 1):
-            W.append(ev.G[kk] @ W[-1])
-        W = np.array(W)
-        dirn = np.concatenate([W.ravel(), -W.ravel()])
-        eps = switch_size / np.linalg.norm(dirn / np.tile(state_scale, 2 * m1))
-        sh2 = make_shooting(2 * br.period, 2 * m1)
-        base = np.concatenate([p.u, p.u])
-        for sign in (1.0, -1.0):
-            doubled = replace(p, period=2 * br.period, u=base.copy(), special="period-doubling",
-                              multipliers=stability.sort_multipliers(p.multipliers**2))
-            child = run_branch(sh2, base + sign * eps * dirn, p.parameter, np.concatenate([sign * dirn, [0.0]]),
-                               br.index, bif, [doubled])
-            if child.end != BranchEnd.START_FAILED and len(child.points) > 1 \
-                    and _separation(child.points[1].u, n, m1, state_scale) > 0.1 * switch_size:
-                return child
-            diagram.branches.pop()  # a failed attempt leaves no branch behind
-        return None
-
-    # first branch
-    sh = make_shooting(period, segments)
-    sol = solve_orbit(sh, u0, start, scale=state_scale)
-    if not sol.converged:
-        x = integrate_to_steady(sh, np.asarray(u0, dtype=float)[:n], start, periods=100)
-        if x is not None:
-            sol = solve_orbit(sh, x, start, scale=state_scale)
-    if not sol.converged:
-        diagram.branches.append(OrbitBranch(index=0, period=period, parameter=parameter, end=BranchEnd.START_FAILED,
-                                            failure=sol.flow_status if sol.flow_status != FlowStatus.OK else None))
-    else:
-        run_branch(sh, sol.u, start, None, None, None, [])
-
-    # bifurcations and branch switching, breadth first
-    done_pd: set = set()
-    k = 0
-    while k < len(diagram.branches):
-        br = diagram.branches[k]
-        k += 1
-        for p in list(br.points):
-            if p.special is None:
-                continue
-            if p.index == 0 and br.origin is not None:
-                continue  # the branch's own origin, recorded on the parent
-            if br.end == BranchEnd.MERGED and (p is br.points[-1] or (
-                    p.index >= len(br.points) - 4
-                    and _separation(p.u, n, br.segments // 2, state_scale) < 2.0 * switch_size)):
-                # where a doubled branch rejoins its parent (recorded on the parent); the
-                # pitchfork there may also have tripped the fold test just before
-                continue
-            bif = Bifurcation(
-                kind=p.special, parameter=p.parameter, branch=br.index, period=p.period,
-                amplitude=p.amplitude, halfrange=p.halfrange, state=p.state,
-                multiplier=stability.critical_multiplier(p.special, p.multipliers), multipliers=p.multipliers,
-                located=p.located, trusted=p.trusted, point=p.index,
-            )
-            diagram.bifurcations.append(bif)
-            if not (switch_branches and p.special == "period-doubling" and 2 * br.period <= max_period):
-                continue
-            if (br.index, p.index) in done_pd:
-                continue
-            child = switch(br, p, bif)
-            if child is not None:
-                bif.child = child.index
-                if child.merged_at is not None:
-                    done_pd.add((br.index, child.merged_at.index))
-    diagram.stats = {
-        "evaluations": sum(b.evaluations for b in diagram.branches),
-        "segments": sum(sh.calls for sh in shootings.values()),
-        "steps": sum(sh.steps_taken for sh in shootings.values()),
-        "points": sum(len(b.points) for b in diagram.branches),
-        "seconds": time.perf_counter() - t_start,
-    }
-    return diagram
+    integration = dict(scheme=scheme, steps_per_period=steps_per_period, step_rate=step_rate)
+    tracer = _Tracer(system, parameter, st, np.sign(stop - start) or 1.0, state_scale, lam_scale, callback,
+                     integration, liouville_tol, switch_size)
+    tracer.first_branch(u0, start, period, segments)
+    tracer.collect_bifurcations(switch_branches, max_period)
+    tracer.diagram.stats = tracer.stats(time.perf_counter() - t_start)
+    return tracer.diagram
 
 
 def cable_scales(eom, parameter: str, start: float, stop: float, gamma: float = 1.0):

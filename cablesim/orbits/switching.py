@@ -1,0 +1,163 @@
+"""Branch switching at period doublings, and the return of a period-doubled branch to its parent.
+
+At a located period doubling of a period-``p`` branch, the period-``2p`` branch is started from
+the critical eigenvector ``v`` (multiplier -1): the ``2p`` unknowns are the parent's segment
+states perturbed by ``+eps w_k`` on the first lap and ``-eps w_k`` on the second (``w_0 = v``,
+``w_{k+1} = G_k w_k``; :func:`doubling_direction`), corrected on the hyperplane normal to that
+direction, and continued away from the parent; if that start fails, ``-eps`` is tried (the two
+signs give the same orbit shifted by ``p`` forcing periods, so one of them suffices).
+
+A ``2p`` branch whose two laps come back together (or whose lap difference reverses between two
+points: the step went through the branch point onto the mirror image) has rejoined a
+period-``p`` orbit at the other period doubling of a pair (:class:`MergeWatch`): it ends there,
+with the parent's period doubling as its last point, and that period doubling is not switched
+at again.
+
+The continuation runs and the branch bookkeeping belong to :mod:`cablesim.orbits.branches`; this
+module holds the geometry of the two laps and the watch for the merge.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Callable
+
+import numpy as np
+
+from . import stability
+from .shooting import Evaluation
+
+
+def lap_difference(u: np.ndarray, n: int, m_parent: int, scale: np.ndarray) -> np.ndarray:
+    """Scaled difference between the two laps of a period-doubled orbit's unknowns.
+
+    Parameters
+    ----------
+    u : ndarray (2 m_parent n,)
+        Shooting unknowns of the period-doubled orbit (segment start states).
+    n : int
+        State dimension.
+    m_parent : int
+        Shooting segments of the parent orbit (one lap).
+    scale : ndarray (n,)
+        Typical size of each state component.
+
+    Returns
+    -------
+    ndarray (m_parent n,)
+    """
+    S = u.reshape(2 * m_parent, n)
+    return ((S[:m_parent] - S[m_parent:]) / scale).ravel()
+
+
+def lap_separation(u: np.ndarray, n: int, m_parent: int, scale: np.ndarray) -> float:
+    """Scaled max difference between the two laps of a period-doubled orbit's unknowns (the
+    arguments of :func:`lap_difference`)."""
+    return float(np.abs(lap_difference(u, n, m_parent, scale)).max())
+
+
+def doubling_direction(ev: Evaluation, segments: int, state_scale: np.ndarray,
+                       switch_size: float) -> tuple[np.ndarray, float]:
+    """Direction into the period-doubled branch at a period doubling, and the step along it.
+
+    Parameters
+    ----------
+    ev : Evaluation
+        Shooting evaluation of the parent orbit at its period doubling.
+    segments : int
+        Shooting segments of the parent orbit.
+    state_scale : ndarray (n,)
+        Typical size of each state component.
+    switch_size : float
+        Scaled size of the perturbation.
+
+    Returns
+    -------
+    direction : ndarray (2 segments n,)
+        ``(w_0, ..., w_{m-1}, -w_0, ..., -w_{m-1})`` (module docstring).
+    eps : float
+        Step along ``direction`` of scaled size ``switch_size``.
+    """
+    mu, V = np.linalg.eig(ev.monodromy)
+    j = int(np.argmin(np.abs(mu + 1.0)))
+    W = [np.real(V[:, j])]
+    for k in range(segments - 1):
+        W.append(ev.G[k] @ W[-1])
+    W = np.array(W)
+    direction = np.concatenate([W.ravel(), -W.ravel()])
+    eps = switch_size / np.linalg.norm(direction / np.tile(state_scale, 2 * segments))
+    return direction, eps
+
+
+def doubled_point(p, period: int, u: np.ndarray, **changes):
+    """A period doubling ``p`` (an :class:`~cablesim.orbits.diagram.OrbitPoint`) of a
+    period-``period / 2`` branch seen as a period-``period`` orbit (two laps of unknowns ``u``,
+    multipliers squared): the first or last point of the doubled branch; ``changes`` replace
+    further fields."""
+    return replace(p, period=period, u=u, special="period-doubling",
+                   multipliers=stability.sort_multipliers(p.multipliers**2), **changes)
+
+
+class MergeWatch:
+    """Watches a period-doubled branch for its return to a period-``p`` orbit (module docstring).
+
+    Special points are held back until the next regular point: those found in the step that
+    crosses the branch point are artefacts of the pitchfork (a fold test trips there) and are
+    dropped with it.
+
+    Parameters
+    ----------
+    partners : list of OrbitPoint
+        The parent's period doublings (where the branch may rejoin it).
+    branch, period : int
+        Index and period of the doubled branch.
+    n, m_parent : int
+        State dimension and shooting segments of one lap.
+    state_scale : ndarray (n,)
+    switch_size : float
+        Scaled size of the perturbation that started the branch.
+    """
+
+    def __init__(self, partners: list, branch: int, period: int, n: int, m_parent: int,
+                 state_scale: np.ndarray, switch_size: float):
+        self.partners = partners
+        self.branch = branch
+        self.period = period
+        self.n = n
+        self.m_parent = m_parent
+        self.state_scale = state_scale
+        self.switch_size = switch_size
+        #: The laps have been well apart (a merge is only looked for after that).
+        self.far = False
+        #: Lap difference at the last regular point.
+        self.previous: np.ndarray | None = None
+        #: Special points waiting for the next regular point.
+        self.pending: list = []
+        #: The parent's period doubling where the branch rejoined it, if it did.
+        self.merged_at = None
+
+    def observe(self, cp, op, deliver: Callable[[object], bool]) -> bool:
+        """Pass the continuation point ``cp`` (as orbit point ``op``) on to ``deliver``, or hold
+        it back, or end the branch at the parent; True ends the branch."""
+        D = lap_difference(cp.u, self.n, self.m_parent, self.state_scale)
+        sep = float(np.abs(D).max())
+        self.far = self.far or sep > 2.0 * self.switch_size
+        # past the branch point the step lands on the mirror image: the lap difference reverses
+        flipped = self.previous is not None and float(D @ self.previous) < 0.0
+        if self.far and self.partners and (flipped or sep < 0.5 * self.switch_size):
+            q = min(self.partners, key=lambda q: abs(q.parameter - cp.lam))
+            keep = [] if flipped else self.pending + ([op] if cp.special is None else [])
+            for o in keep:
+                deliver(o)
+            deliver(doubled_point(q, self.period, np.concatenate([q.u, q.u]), branch=self.branch))
+            self.merged_at = q
+            return True
+        if cp.special is not None:
+            self.pending.append(op)  # delivered with the next regular point
+            return False
+        self.previous = D
+        stop_now = False
+        for o in self.pending + [op]:
+            stop_now = deliver(o) or stop_now
+        self.pending = []
+        return stop_now

@@ -26,6 +26,7 @@ test: $(STAMP)
 bench: $(STAMP)
 	$(PY) benchmarks/bench_dynamics.py
 	$(PY) benchmarks/bench_sweep.py
+	$(PY) benchmarks/bench_continuation.py
 
 paper-numbers: $(STAMP)
 	$(PY) benchmarks/paper_numbers.py $(OUTD)
@@ -43,6 +44,9 @@ clean:
 # runs/paper-fast/.
 # ---------------------------------------------------------------------------------------------
 FIGS := fig2 fig3a fig3b fig4 fig5a fig5b fig6 fig7a fig7b fig7c fig8a fig8b fig8c
+# Frequency-response figures also get their continuation: every periodic response, stable and
+# unstable, with its bifurcations, drawn over the brute-force points (runs/paper/<fig>-continuation.png).
+CONTS := fig3a fig4 fig5a fig6 fig7a fig8a
 CFG  := configs/paper
 ifdef FAST
 OUTD := runs/paper-fast
@@ -60,9 +64,13 @@ RUN := $(CLI)
 # and the figure shows them with the reason; keep it instead of failing the target.
 KEEP_PARTIAL = || test $$? -eq 3
 
-.PHONY: figures $(FIGS)
-figures: $(FIGS)
+.PHONY: figures $(FIGS) $(CONTS:%=%-continuation)
+figures: $(FIGS) $(CONTS:%=%-continuation)
 $(FIGS): %: $(OUTD)/%.png
+$(CONTS:%=%-continuation): %-continuation: $(OUTD)/%-continuation.h5
+
+$(OUTD)/%-continuation.h5: $(CFG)/%.yaml $(OUTD)/%.h5 | $(STAMP)
+	$(RUN) continue $< -o $@ --overlay $(OUTD)/$*.h5
 
 $(OUTD)/%.png: $(OUTD)/%.h5
 	$(RUN) plot $< -o $@

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
+from .analyses.continuation import ContinuationResult, run_continuation
 from .analyses.dynamic import run_free_vibration, run_history
 from .analyses.static import StaticResult, run_static
 from .analyses.sweep import SweepResult, run_sweep
@@ -23,10 +24,13 @@ from .case import Case, case_from_dict
 from .case import load_case as _read_case_file
 from .dynamics.integrators import Integrator
 from .dynamics.result import HistoryResult
+from .io.continuation import write_continuation
 from .io.hdf5 import write_history, write_static
 from .io.sweeps import write_sweep
 from .io.journal import SweepFile, fingerprint
+from .orbits import OrbitPoint
 from .plots.cable import plot_cable
+from .plots.continuation import plot_continuation
 from .plots.history import plot_history
 from .plots.sweep import plot_sweep
 
@@ -193,3 +197,46 @@ def sweep(
     res = run_sweep(case, case.text, analysis, integrator, n_jobs=jobs, backend=backend, scheduler=scheduler,
                     progress=progress, recorder=recorder)
     return SweepRun(case, res)
+
+
+@dataclass(frozen=True)
+class ContinuationRun:
+    """Periodic responses by continuation: ``result``
+    (:class:`~cablesim.analyses.continuation.ContinuationResult`: branches with their Floquet
+    multipliers and stability, and the bifurcations)."""
+
+    case: Case
+    result: ContinuationResult
+
+    def to_hdf5(self, path: str | Path) -> Path:
+        """Write the file ``cablesim continue`` writes."""
+        return write_continuation(path, self.result)
+
+    def plot(self, path: str | Path, h5_path: str | Path, overlay: str | Path | None = None) -> Path:
+        """Draw the response diagram of the stored file ``h5_path`` as the PNG ``path``
+        (``overlay``: a sweep file whose points are drawn on top)."""
+        return plot_continuation(h5_path, path, overlay=overlay)
+
+
+def continuation(
+    case: Case,
+    analysis: str | None = None,
+    progress: Callable[[OrbitPoint], None] | None = None,
+) -> ContinuationRun:
+    """Every periodic response over the case's ``continuation:`` range, stable and unstable.
+
+    Periodic orbits are found by shooting on ``(z, y')`` (Newton with the monodromy matrix of
+    the variational equations) and followed by pseudo-arclength continuation in the forcing
+    frequency (or the load factor ``gamma``); folds, period doublings and Neimark-Sacker points
+    are located, and every period doubling is followed onto its period-2p branch.
+
+    Parameters
+    ----------
+    case : Case
+        With a ``continuation:`` section.
+    analysis : str, optional
+        Overrides the case's analysis.
+    progress : callable, optional
+        Receives each converged orbit (``branch``, ``parameter``, ``period``, ``stable``, ...).
+    """
+    return ContinuationRun(case, run_continuation(case, analysis, progress))

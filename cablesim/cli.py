@@ -323,14 +323,21 @@ def continue_(
     if overlay is not None and not overlay.is_file():
         raise CablesimError(f"--overlay {overlay}: no such sweep file; give the output of cablesim sweep.")
 
+    shown = {"t": 0.0}
+
     def update(point):
-        sys.stderr.write(f"\rbranch {point.branch} (period {point.period}): {point.parameter:.5g}, "
-                         f"point {point.index}, {'stable' if point.stable else 'unstable'}   ")
-        sys.stderr.flush()
+        # One status line on a terminal, refreshed at most ten times a second.
+        now = time.monotonic()
+        if sys.stderr.isatty() and now - shown["t"] > 0.1:
+            shown["t"] = now
+            sys.stderr.write(f"\rcontinuing: branch {point.branch} (period {point.period}), "
+                             f"{point.parameter:.5g}, orbit {point.index}   ")
+            sys.stderr.flush()
 
     t0 = time.perf_counter()
     run = api.continuation(case, analysis.value if analysis else None, progress=update)
-    sys.stderr.write("\n")
+    if shown["t"]:
+        sys.stderr.write("\n")
     run.to_hdf5(out)
     typer.echo(continuation_summary(case, run.result, time.perf_counter() - t0))
     msg = f"\nWrote {out}"

@@ -86,7 +86,7 @@ def put(group: h5py.Group, name: str, data, units: str, description: str = "", a
         If ``data`` holds NaN or infinity and ``allow_nan`` is False.
     """
     arr = np.asarray(data)
-    if arr.dtype.kind == "f" and not allow_nan and not np.all(np.isfinite(arr)):
+    if arr.dtype.kind in "fc" and not allow_nan and not np.all(np.isfinite(arr)):
         raise ValueError(f"refusing to write non-finite values to {group.name}/{name}")
     ds = group.create_dataset(name, data=arr)
     ds.attrs["units"] = units

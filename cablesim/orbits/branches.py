@@ -334,21 +334,27 @@ def trace_branches(
 
 
 def cable_scales(eom, parameter: str, start: float, stop: float, gamma: float = 1.0):
-    """State and parameter scales of the cable problem.
+    """State and parameter scales of the cable problem, properties of the case (not of the range
+    asked for, so that a branch is traced alike whatever part of it is requested).
 
-    Displacements: the largest linear-response amplitude over the parameter range (a grid of
-    64 values), floored at 1e-6 of the chord; velocities: that times the fundamental frequency.
+    Displacements: the largest linear-response amplitude at the largest load factor, over the
+    range (a grid of 64 values) and at every linear resonance (the modal frequencies), floored at
+    1e-6 of the chord: a nonlinear branch born far from resonance (a period doubling near
+    ``2 w1``) grows to amplitudes of the primary resonance, which a range-local scale would not
+    see. Velocities: that times the fundamental frequency. Parameter: its largest magnitude.
     """
     w1 = float(eom.frequencies[0])
     if parameter == "omega":
-        grid = np.linspace(min(start, stop), max(start, stop), 64)
-        amp = max(float(np.abs(linear_response(eom, w, gamma)).max()) for w in grid)
+        g = gamma
+        freqs = np.concatenate([np.linspace(min(start, stop), max(start, stop), 64), eom.frequencies])
     else:
-        amp = float(np.abs(linear_response(eom, eom.omega, max(abs(start), abs(stop)))).max())
+        g = max(abs(start), abs(stop))
+        freqs = np.concatenate([[eom.omega], eom.frequencies])
+    amp = max(float(np.abs(linear_response(eom, w, g)).max()) for w in freqs if w > 0)
     amp = max(amp, 1e-6 * eom.cable.chord_length)
     nd = eom.n_dof
     scale = np.concatenate([np.full(nd, amp), np.full(nd, amp * w1)])
-    lam_scale = abs(stop - start) if stop != start else 1.0
+    lam_scale = max(abs(start), abs(stop))
     return scale, lam_scale
 
 

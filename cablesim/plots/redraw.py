@@ -17,6 +17,7 @@ from ..errors import CablesimError
 from ..io.hdf5 import FAMILY_TEXT, ResultInfo, inspect_result, read_history, read_static_drawing
 from .cable import plot_cable
 from .composite import draw_figure
+from .continuation import plot_continuation
 from .history import plot_history
 from .sweep import plot_sweep
 
@@ -68,7 +69,7 @@ def redraw(paths, output=None, figure=None) -> list[Path]:
         spec = figure if hasattr(figure, "kind") else read_figure(figure)
         png = output if output is not None else paths[0].with_suffix(".png")
         return [draw_figure(spec, infos, png, case.name)]
-    if case.figure is not None and family != "static":
+    if case.figure is not None and family in ("history", "sweep"):
         png = output if output is not None else paths[0].with_suffix(".png")
         return [draw_figure(case.figure, infos, png, case.name)]
 
@@ -90,6 +91,8 @@ def _standard(info: ResultInfo, output: Path | None) -> list[Path]:
         result = read_static_drawing(info.path, case)
         png = output if output is not None else info.path.with_suffix(".png")
         return [plot_cable(result, png, case.name)]
+    if info.family == "continuation":
+        return [plot_continuation(info.path, output if output is not None else info.path.with_suffix(".png"))]
     if info.family == "sweep":
         return [plot_sweep(info.path, output if output is not None else info.path.with_suffix(".png"))]
     hist = read_history(info.path)

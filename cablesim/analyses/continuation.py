@@ -1,0 +1,224 @@
+"""Every periodic response of a case over a frequency (or load-factor) range: case in, result out.
+
+Builds the equations of motion, starts the first branch from the linear response (or from a
+response integrated from rest), and lets :func:`cablesim.orbits.continue_branches` follow it and
+every period-doubled branch, with Floquet stability and located bifurcations. The result is
+plain arrays per branch, in the case's channels, ready to be written and drawn.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from ..case import Case
+from ..channels import channel_index
+from ..errors import CablesimError
+from ..dynamics.steady import SteadyCriterion, steady_response
+from ..orbits import OrbitPoint, Settings, continue_branches
+from .setup import build_equations, frequency_of_interest, make_integrator
+from .static import run_static
+
+
+@dataclass(frozen=True)
+class BranchResult:
+    """One branch of periodic responses.
+
+    Attributes
+    ----------
+    name : str
+        ``"b<k>-p<period>"``.
+    period : int
+        Response period in forcing periods.
+    parameter : ndarray (points,)
+        Value of the continuation parameter (omega in rad/s, or gamma).
+    omega : ndarray (points,)
+        Forcing frequency, rad/s.
+    gamma : ndarray (points,)
+        Scale of FL.
+    amplitude, halfrange : ndarray (points, channels)
+        Largest ``|z|`` over the orbit and half its peak-to-peak range, m.
+    stable, trusted : ndarray of bool (points,)
+        All Floquet multipliers inside the unit circle; multipliers that passed the accuracy
+        checks (Newton residual and Liouville's formula).
+    multipliers : ndarray complex (points, 2 n_dof)
+        Floquet multipliers, by decreasing modulus.
+    state : ndarray (points, 2 n_dof)
+        ``(z, y')`` at forcing phase 0, m and m/s.
+    parent : int or None
+        Branch it was switched from (period doubling).
+    end : str
+        Why the branch ended.
+    """
+
+    name: str
+    period: int
+    parameter: np.ndarray
+    omega: np.ndarray
+    gamma: np.ndarray
+    amplitude: np.ndarray
+    halfrange: np.ndarray
+    stable: np.ndarray
+    trusted: np.ndarray
+    multipliers: np.ndarray
+    state: np.ndarray
+    parent: int | None
+    end: str
+
+
+@dataclass(frozen=True)
+class BifurcationResult:
+    """A located bifurcation: ``kind`` (``fold``, ``period-doubling``, ``neimark-sacker``,
+    ``branch-point``), where (``parameter``, ``omega``), on which ``branch`` (index), the orbit's
+    ``period`` and ``amplitude`` per channel (m), the critical ``multiplier``, and whether the
+    location converged (``located``) and its multipliers passed the accuracy checks (``trusted``)."""
+
+    kind: str
+    parameter: float
+    omega: float
+    branch: int
+    period: int
+    amplitude: np.ndarray
+    multiplier: complex
+    located: bool
+    trusted: bool
+
+
+@dataclass
+class ContinuationResult:
+    """Every branch and bifurcation found, with what is needed to store and draw them."""
+
+    parameter: str
+    start: float
+    stop: float
+    fixed: float
+    channels: list[str]
+    branches: list[BranchResult]
+    bifurcations: list[BifurcationResult]
+    analysis: str
+    modal_omega: np.ndarray
+    case_name: str
+    case_text: str
+    stats: dict = field(default_factory=dict)
+
+    @property
+    def n_points(self) -> int:
+        """Points over all branches."""
+        return int(sum(b.parameter.size for b in self.branches))
+
+
+def _channels(case: Case) -> tuple[list[str], np.ndarray]:
+    n_dof = 2 * case.cable.n_nodes
+    names = case.continuation.channels or case.history.channels or [f"z{i + 1}" for i in range(n_dof)]
+    idx = np.array([channel_index(c, n_dof) for c in names], dtype=int)
+    return [f"z{i + 1}" for i in idx], idx
+
+
+def _branch(k: int, br, parameter: str, fixed: float, idx: np.ndarray) -> BranchResult:
+    pts = br.points
+    values = np.array([p.parameter for p in pts], dtype=float)
+    omega = np.array([p.omega for p in pts], dtype=float)
+    gamma = values.copy() if parameter == "gamma" else np.full(values.size, fixed)
+    return BranchResult(
+        name=f"b{k}-p{br.period}",
+        period=int(br.period),
+        parameter=values,
+        omega=omega,
+        gamma=gamma,
+        amplitude=np.array([p.amplitude[idx] for p in pts]).reshape(len(pts), idx.size),
+        halfrange=np.array([p.halfrange[idx] for p in pts]).reshape(len(pts), idx.size),
+        stable=np.array([p.stable for p in pts], dtype=bool),
+        trusted=np.array([p.trusted for p in pts], dtype=bool),
+        multipliers=np.array([p.multipliers for p in pts]),
+        state=np.array([p.state for p in pts]),
+        parent=br.parent,
+        end=br.end.name.lower().replace("_", " "),
+    )
+
+
+def _integrated_start(case: Case, static, omega: float, gamma: float, names, idx) -> np.ndarray:
+    """``(z, y')`` at forcing phase 0 of the response integrated from rest until steady."""
+    eom = build_equations(case, static, omega=omega, load_scale=gamma)
+    integ = make_integrator(case.integrator, eom, frequency_of_interest(eom, omega))
+    sw = case.sweep
+    crit = SteadyCriterion() if sw is None else SteadyCriterion(cap=sw.duration, window=sw.window, tol=sw.tol,
+                                                                  max_period=sw.max_period)
+    point = steady_response(eom, integ, idx, crit)
+    if point.failed:
+        raise CablesimError(
+            f"continuation.start_from is history, but the response at the start ({omega:g} rad/s, gamma "
+            f"{gamma:g}) could not be integrated: {point.message}. Start from the linear response instead "
+            "(start_from: linear).", field="continuation.start_from")
+    return point.final_state[: 2 * eom.n_dof]
+
+
+def run_continuation(
+    case: Case,
+    analysis: str | None = None,
+    progress: Callable[[OrbitPoint], None] | None = None,
+) -> ContinuationResult:
+    """Continue the periodic responses of a case over its ``continuation:`` range.
+
+    Parameters
+    ----------
+    case : Case
+        Must have a ``continuation:`` section.
+    analysis : str, optional
+        Overrides the case's analysis.
+    progress : callable, optional
+        Receives every converged orbit (branch, parameter, period, stability).
+
+    Returns
+    -------
+    ContinuationResult
+    """
+    spec = case.continuation
+    if spec is None:
+        raise CablesimError(
+            "This case has no `continuation:` section. Add one, for example "
+            "`continuation: {omega: {start: 0.5, stop: 6.0}, channels: [z2, z4]}`.",
+            field="continuation",
+        )
+    if not np.any(case.FL):
+        raise CablesimError("loads.FL is zero, so there is no forced response to continue.", field="loads.FL")
+    static = run_static(case, analysis, all_models=False)
+    rng, fixed = spec.range, spec.fixed
+    omega0 = rng.start if spec.parameter == "omega" else fixed
+    gamma0 = rng.start if spec.parameter == "gamma" else fixed
+    eom = build_equations(case, static, omega=omega0, load_scale=1.0)
+    names, idx = _channels(case)
+    initial = None
+    if spec.start_from == "history":
+        initial = _integrated_start(case, static, omega0, gamma0, names, idx)
+    t0 = time.perf_counter()
+
+    def callback(point):
+        if progress is not None:
+            progress(point)
+        return None
+
+    diagram = continue_branches(
+        eom, spec.parameter, rng.start, rng.stop, period=spec.period, switch_branches=spec.switch_branches,
+        callback=callback, gamma=fixed if spec.parameter == "omega" else 1.0, initial_state=initial,
+        segments=spec.segments, max_period=spec.max_period, settings=Settings(max_points=spec.max_points),
+    )
+    branches = [_branch(k, br, spec.parameter, fixed, idx) for k, br in enumerate(diagram.branches) if br.points]
+    bifs = [
+        BifurcationResult(
+            kind=b.kind, parameter=float(b.parameter),
+            omega=float(b.parameter) if spec.parameter == "omega" else fixed,
+            branch=int(b.branch), period=int(b.period), amplitude=np.asarray(b.amplitude)[idx],
+            multiplier=complex(b.multiplier), located=bool(b.located), trusted=bool(b.trusted),
+        )
+        for b in diagram.bifurcations
+    ]
+    stats = dict(diagram.stats)
+    stats["wall"] = time.perf_counter() - t0
+    return ContinuationResult(
+        parameter=spec.parameter, start=rng.start, stop=rng.stop, fixed=fixed, channels=names, branches=branches,
+        bifurcations=bifs, analysis=static.analysis, modal_omega=static.modes.omega.copy(), case_name=case.name,
+        case_text=case.text, stats=stats,
+    )

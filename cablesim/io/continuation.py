@@ -1,0 +1,109 @@
+"""Continuation files (``cablesim continue``): writer and reader.
+
+Layout (with the root attributes of every cablesim file, see :mod:`cablesim.io.hdf5`):
+
+- ``/continuation`` attributes ``parameter`` (``omega`` or ``gamma``), ``start``, ``stop``,
+  ``fixed`` (the other parameter's value), ``channels``, ``case_name`` and the cost counters;
+- ``/continuation/branches/<name>/{parameter, omega, gamma, amplitude (points x channels, max |z|
+  over the orbit), halfrange, stable, trusted, multipliers (complex), state}`` with attributes
+  ``period``, ``channels``, ``parent`` (-1: none) and ``end``;
+- ``/continuation/bifurcations/{kind, parameter, omega, branch, period, amplitude (x channels),
+  multiplier (complex), located, trusted}``;
+- ``/modal/omega``: the linear modal frequencies, rad/s.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from ..errors import CablesimError
+from .hdf5 import atomic_h5, attr_text, put, stamp
+
+#: Bifurcation kinds, in the order the files store their names.
+KINDS = ("fold", "period-doubling", "neimark-sacker", "branch-point")
+
+
+def write_continuation(path: str | Path, res) -> Path:
+    """Write a :class:`~cablesim.analyses.continuation.ContinuationResult` atomically."""
+    unit = "rad/s" if res.parameter == "omega" else "1"
+    with atomic_h5(path) as f:
+        stamp(f, res.case_text, "continue", analysis=res.analysis)
+        g = f.create_group("continuation")
+        for k, v in dict(parameter=res.parameter, start=res.start, stop=res.stop, fixed=res.fixed,
+                         case_name=res.case_name).items():
+            g.attrs[k] = v
+        g.attrs["channels"] = np.array(res.channels, dtype="S")
+        for k, v in res.stats.items():
+            g.attrs[f"cost_{k}"] = v
+        bg = g.create_group("branches")
+        for k, b in enumerate(res.branches):
+            h = bg.create_group(b.name)
+            h.attrs.update(period=b.period, parent=-1 if b.parent is None else b.parent, end=b.end, index=k)
+            h.attrs["channels"] = np.array(res.channels, dtype="S")
+            put(h, "parameter", b.parameter, unit, f"continuation parameter ({res.parameter})")
+            put(h, "omega", b.omega, "rad/s", "forcing frequency")
+            put(h, "gamma", b.gamma, "1", "scale of the harmonic loads FL")
+            put(h, "amplitude", b.amplitude, "m", "largest |z| over the orbit, per channel")
+            put(h, "halfrange", b.halfrange, "m", "half the peak-to-peak range over the orbit, per channel")
+            put(h, "stable", b.stable, "1", "all Floquet multipliers inside the unit circle")
+            put(h, "trusted", b.trusted, "1", "multipliers passed the residual and Liouville checks")
+            put(h, "multipliers", b.multipliers, "1", "Floquet multipliers, by decreasing modulus")
+            put(h, "state", b.state, "m, m/s", "(z, y') at forcing phase 0")
+        fg = g.create_group("bifurcations")
+        bifs = res.bifurcations
+        put(fg, "kind", np.array([b.kind for b in bifs], dtype="S"), "1", "fold, period-doubling, neimark-sacker")
+        put(fg, "parameter", np.array([b.parameter for b in bifs], dtype=float), unit, "where")
+        put(fg, "omega", np.array([b.omega for b in bifs], dtype=float), "rad/s", "forcing frequency")
+        put(fg, "branch", np.array([b.branch for b in bifs], dtype=int), "1", "index of the branch")
+        put(fg, "period", np.array([b.period for b in bifs], dtype=int), "forcing periods", "of the orbit")
+        put(fg, "amplitude", np.array([b.amplitude for b in bifs], dtype=float).reshape(len(bifs), len(res.channels)),
+            "m", "largest |z| over the orbit, per channel")
+        put(fg, "multiplier", np.array([b.multiplier for b in bifs], dtype=complex), "1", "critical multiplier")
+        put(fg, "located", np.array([b.located for b in bifs], dtype=bool), "1", "location converged")
+        put(fg, "trusted", np.array([b.trusted for b in bifs], dtype=bool), "1", "multipliers trusted")
+        m = f.create_group("modal")
+        put(m, "omega", res.modal_omega, "rad/s", "linear modal frequencies about the equilibrium")
+    return Path(path)
+
+
+def read_continuation(path: str | Path) -> dict:
+    """Read a continuation file into plain arrays.
+
+    Returns
+    -------
+    dict
+        ``parameter``, ``start``, ``stop``, ``fixed``, ``channels``, ``case_name``, ``analysis``,
+        ``modal`` (rad/s), ``branches`` (list of dicts with the datasets and ``name``, ``period``,
+        ``parent``, ``end``, in file order) and ``bifurcations`` (dict of arrays).
+    """
+    path = Path(path)
+    try:
+        f = h5py.File(path, "r")
+    except OSError:
+        raise CablesimError(f"{path} is not an HDF5 file (or cannot be read).") from None
+    with f:
+        if "continuation" not in f:
+            raise CablesimError(f"{path} is not a continuation file (no /continuation group); give the "
+                                "output of cablesim continue.")
+        g = f["continuation"]
+        out = {k: g.attrs[k] for k in ("start", "stop", "fixed")}
+        out["parameter"] = attr_text(g.attrs["parameter"])
+        out["case_name"] = attr_text(g.attrs.get("case_name", path.stem))
+        out["channels"] = [attr_text(c) for c in np.asarray(g.attrs["channels"]).ravel()]
+        out["analysis"] = attr_text(f.attrs.get("analysis", "exact"))
+        out["modal"] = np.asarray(f["modal/omega"][()], dtype=float) if "modal/omega" in f else np.empty(0)
+        branches = []
+        for name, h in g["branches"].items():
+            b = {k: np.asarray(h[k][()]) for k in h}
+            b.update(name=name, period=int(h.attrs["period"]), parent=int(h.attrs["parent"]),
+                     end=attr_text(h.attrs["end"]), index=int(h.attrs.get("index", len(branches))))
+            branches.append(b)
+        out["branches"] = sorted(branches, key=lambda b: b["index"])
+        fg = g["bifurcations"]
+        bif = {k: np.asarray(fg[k][()]) for k in fg}
+        bif["kind"] = [attr_text(k) for k in bif.get("kind", [])]
+        out["bifurcations"] = bif
+    return out

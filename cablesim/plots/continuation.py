@@ -1,0 +1,153 @@
+"""The response diagram of ``cablesim continue``: every periodic response, stable and unstable.
+
+One panel per channel: amplitude (largest ``|z|`` over the orbit) against the continuation
+parameter; stable orbits solid, unstable dashed, one colour per response period; points whose
+multipliers failed the accuracy checks crossed in grey; bifurcations marked and named; linear
+modal frequencies dotted; optionally a brute-force sweep's points on top.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..io.continuation import read_continuation
+from ..io.sweeps import read_sweep
+from .base import figure_grid, save_atomic
+from .sweep import channel_label
+
+#: Colour of each response period (period 1 first).
+PERIOD_COLOURS = ("C0", "C1", "C2", "C4", "C5", "C6", "C8", "C9")
+#: Marker and short label of each bifurcation kind.
+BIFURCATION_STYLE = {
+    "fold": ("^", "F", "fold (multiplier +1)"),
+    "period-doubling": ("s", "PD", "period doubling (multiplier -1)"),
+    "neimark-sacker": ("D", "NS", "Neimark-Sacker (complex pair)"),
+    "branch-point": ("o", "BP", "branch point"),
+}
+
+
+def _runs(mask: np.ndarray):
+    """(start, stop) index pairs of the runs where ``mask`` holds, each extended by one point so
+    that consecutive runs of opposite stability join."""
+    runs, k, n = [], 0, mask.size
+    while k < n:
+        if mask[k]:
+            j = k
+            while j + 1 < n and mask[j + 1]:
+                j += 1
+            runs.append((max(k - 1, 0) if k else 0, min(j + 2, n)))
+            k = j + 1
+        else:
+            k += 1
+    return runs
+
+
+def _draw_branch(ax, b: dict, c: int, colour) -> None:
+    x, y = b["parameter"], b["amplitude"][:, c]
+    stable = b["stable"].astype(bool)
+    for lo, hi in _runs(stable):
+        ax.plot(x[lo:hi], y[lo:hi], "-", color=colour, lw=1.6, zorder=3)
+    for lo, hi in _runs(~stable):
+        ax.plot(x[lo:hi], y[lo:hi], "--", color=colour, lw=1.1, zorder=2)
+    bad = ~b["trusted"].astype(bool)
+    if bad.any():
+        ax.plot(x[bad], y[bad], "x", color="0.45", ms=4, zorder=4)
+
+
+def _draw_overlay(ax, sweep, c_name: str) -> set:
+    """A sweep's points of one channel; which kinds (``steady``, ``not steady``) were drawn."""
+    drawn = set()
+    if c_name not in sweep.channels:
+        return drawn
+    c = sweep.channels.index(c_name)
+    for curve in sweep.curves:
+        ok = curve.valid
+        y = curve.data["amplitude"][:, c]
+        for kind, mask, colour in (("steady", ok & curve.data["steady"], "k"),
+                                   ("not steady", ok & ~curve.data["steady"], "red")):
+            if mask.any():
+                drawn.add(kind)
+                ax.plot(sweep.omega[mask], y[mask], "o", ms=3.2, mfc="none", mec=colour, mew=0.7, zorder=5)
+    return drawn
+
+
+def plot_continuation(h5_path, png_path=None, overlay=None, title: str | None = None) -> Path:
+    """Draw a continuation file as a PNG.
+
+    Parameters
+    ----------
+    h5_path : str or Path
+        The HDF5 file written by ``cablesim continue``.
+    png_path : str or Path, optional
+        Default: ``h5_path`` with the suffix ``.png``.
+    overlay : str or Path, optional
+        A sweep file whose points are drawn on top (open circles: steady; red: not steady).
+    title : str, optional
+        First title line.
+
+    Returns
+    -------
+    Path
+    """
+    from matplotlib.lines import Line2D  # matplotlib loads only when drawing
+
+    d = read_continuation(h5_path)
+    png_path = Path(h5_path).with_suffix(".png") if png_path is None else Path(png_path)
+    sweep = read_sweep(overlay) if overlay is not None else None
+    chans = d["channels"][:8]
+    periods = sorted({b["period"] for b in d["branches"]})
+    colour = {p: PERIOD_COLOURS[i % len(PERIOD_COLOURS)] for i, p in enumerate(periods)}
+    lo, hi = sorted((float(d["start"]), float(d["stop"])))
+    pad = 0.02 * (hi - lo)
+    is_omega = d["parameter"] == "omega"
+    modal = [(k + 1, w) for k, w in enumerate(d["modal"]) if is_omega and lo - pad <= w <= hi + pad]
+    fig, axes = figure_grid(len(chans), 1, 8.6, 2.8, sharex=True, top=0.8, hspace=0.3, left=1.4)
+    bif = d["bifurcations"]
+    overlaid = set()
+    for c, (ax, name) in enumerate(zip(axes[:, 0], chans)):
+        for b in d["branches"]:
+            _draw_branch(ax, b, c, colour[b["period"]])
+        for k, kind in enumerate(bif["kind"]):
+            marker, short, _ = BIFURCATION_STYLE.get(kind, ("o", kind, kind))
+            x, y = float(bif["parameter"][k]), float(bif["amplitude"][k, c])
+            ax.plot(x, y, marker, color="k", mfc="white", ms=6, zorder=6)
+            ax.annotate(short, (x, y), textcoords="offset points", xytext=(5, 6 if k % 2 == 0 else -12), fontsize=7,
+                        zorder=7)
+        if sweep is not None and is_omega:
+            overlaid |= _draw_overlay(ax, sweep, name)
+        for _, w in modal:
+            ax.axvline(w, color="0.5", ls=":", lw=1.0, alpha=0.7, zorder=1)
+        ax.set_ylim(bottom=0.0)
+        ax.set_ylabel(channel_label(name), fontsize=9)
+        ax.grid(True, alpha=0.3)
+    axes[-1, 0].set_xlim(lo - pad, hi + pad)
+    axes[-1, 0].set_xlabel("forcing frequency \u03c9 (rad/s)" if is_omega else "load factor \u03b3 (multiplies FL)")
+    handles = [Line2D([], [], color=colour[p], lw=2.0, label=f"period {p} (response 1/{p})" if p > 1 else "period 1")
+               for p in periods]
+    handles += [Line2D([], [], color="0.3", lw=1.6, label="stable"), Line2D([], [], color="0.3", ls="--", lw=1.1,
+                                                                             label="unstable")]
+    for kind in dict.fromkeys(bif["kind"]):
+        marker, short, text = BIFURCATION_STYLE.get(kind, ("o", kind, kind))
+        handles.append(Line2D([], [], ls="none", marker=marker, color="k", mfc="white", label=f"{short}: {text}"))
+    if any((~b["trusted"].astype(bool)).any() for b in d["branches"]):
+        handles.append(Line2D([], [], ls="none", marker="x", color="0.45", label="multipliers not trusted"))
+    if "steady" in overlaid:
+        handles.append(Line2D([], [], ls="none", marker="o", mfc="none", mec="k", label="sweep: steady point"))
+    if "not steady" in overlaid:
+        handles.append(Line2D([], [], ls="none", marker="o", mfc="none", mec="red", label="sweep: not steady (cap)"))
+    if modal:
+        handles.append(Line2D([], [], ls=":", color="0.5", label="linear modal frequencies"))
+    axes[0, 0].legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, framealpha=0.9)
+    counts = {}
+    for kind in bif["kind"]:
+        counts[kind] = counts.get(kind, 0) + 1
+    found = ", ".join(f"{n} {BIFURCATION_STYLE.get(k, ('', k, ''))[1]}" for k, n in counts.items()) or "none"
+    fixed = f"\u03b3 = {float(d['fixed']):g}" if is_omega else f"\u03c9 = {float(d['fixed']):g} rad/s"
+    first = title or f"{d['case_name']}: periodic responses ({d['analysis']} analysis)"
+    symbol = "\u03c9" if is_omega else "\u03b3"
+    sub = (f"continuation in {symbol}, {fixed}; {len(d['branches'])} branches, "
+           f"{sum(b['parameter'].size for b in d['branches'])} orbits; bifurcations: {found}")
+    fig.suptitle(f"{first}\n{sub}", fontsize=10, y=1 - 0.08 / fig.get_figheight(), va="top")
+    return save_atomic(fig, png_path)

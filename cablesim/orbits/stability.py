@@ -70,20 +70,32 @@ def critical_multiplier(kind: str, mu: np.ndarray) -> complex:
     return mu[k]
 
 
-def step_ratio(mu_a: np.ndarray, mu_b: np.ndarray, floor: float = 0.005) -> float:
-    """How far the multiplier moduli moved between two points, relative to how close the first
-    point is to the unit circle: ``max |d|mu|| / max(crit / 2, floor)``, moduli sorted, ``crit``
-    the smallest ``||mu| - 1||``.
+def step_ratio(mu_a: np.ndarray, mu_b: np.ndarray, floor: float = 0.005, near: float = 0.3) -> float:
+    """How far the multipliers moved between two points, relative to how close the first point
+    is to a bifurcation; a step with a ratio above 1 is rejected.
 
-    Moduli, not multipliers: near a bifurcation only the distance to the unit circle matters
-    (lightly damped multipliers spin fast around the origin as the frequency changes, without
-    approaching it). A narrow period-doubling pair, where a complex pair near -1 splits into two
-    real multipliers for a short parameter interval, shows up as a jump of the sorted moduli.
+    Two measures, the larger counts:
+
+    - the sorted moduli: ``max |d|mu|| / max(crit / 2, floor)``, ``crit`` the smallest
+      ``||mu| - 1||``. Moduli, not multipliers: lightly damped multipliers spin fast around the
+      origin as the frequency changes without approaching the unit circle;
+    - the multipliers themselves near ``+1`` or ``-1``: a multiplier within ``near`` of either
+      point may move at most half its distance to it. A narrow period-doubling pair, where a
+      complex pair close to -1 meets on the real axis, splits, and one multiplier passes -1 and
+      back within a short parameter interval, would otherwise fit between two points whose
+      moduli barely differ.
     """
-    ma = np.sort(np.abs(np.asarray(mu_a)))
-    mb = np.sort(np.abs(np.asarray(mu_b)))
+    mu_a = np.asarray(mu_a, dtype=complex)
+    mu_b = np.asarray(mu_b, dtype=complex)
+    ma = np.sort(np.abs(mu_a))
+    mb = np.sort(np.abs(mu_b))
     crit = float(np.abs(ma - 1.0).min())
-    return float(np.abs(mb - ma).max()) / max(0.5 * crit, floor)
+    ratio = float(np.abs(mb - ma).max()) / max(0.5 * crit, floor)
+    dist = np.minimum(np.abs(mu_a + 1.0), np.abs(mu_a - 1.0))
+    for k in np.flatnonzero(dist < near):
+        moved = float(np.abs(mu_b - mu_a[k]).min())  # to its nearest partner at b
+        ratio = max(ratio, moved / max(0.5 * float(dist[k]), floor))
+    return ratio
 
 
 def is_stable(mu: np.ndarray) -> bool:

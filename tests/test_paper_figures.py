@@ -1,7 +1,7 @@
 """The paper-figure make targets, end to end, in their FAST form.
 
-Runs ``make fig3a fig3b FAST=1`` (a frequency-response figure and a waveform figure) into a
-temporary folder and checks the HDF5 results and the PNGs; then that make does not rerun a
+Runs ``make fig3a fig3a-continuation fig3b FAST=1`` (a frequency-response figure, its
+continuation over the brute-force points, and a waveform figure) into a temporary folder and checks the HDF5 results and the PNGs; then that make does not rerun a
 scene whose case file has not changed.
 """
 
@@ -33,7 +33,7 @@ def make(out: Path, *targets: str) -> subprocess.CompletedProcess:
 @pytest.fixture(scope="module")
 def built(tmp_path_factory):
     out = tmp_path_factory.mktemp("paper-fast")
-    r = make(out, "fig3a", "fig3b")
+    r = make(out, "fig3a", "fig3a-continuation", "fig3b")
     assert r.returncode == 0, r.stdout + r.stderr
     return out, r
 
@@ -51,6 +51,18 @@ def test_fdr_figure(built):
         # The fundamental resonance of the paper example (2.52 rad/s, softening) dominates z2.
         assert abs(w[np.argmax(amp[:, 0])] - 2.5) < 0.3
         assert "history" not in f  # an FDR scene stores amplitudes, not time histories
+
+
+def test_continuation_figure(built):
+    out, _ = built
+    png = out / "fig3a-continuation.png"
+    assert png.read_bytes()[:8] == PNG_MAGIC and png.stat().st_size > 20_000
+    with h5py.File(out / "fig3a-continuation.h5") as f:
+        assert f.attrs["command"] == "continue"
+        kinds = sorted(k.decode() for k in f["continuation/bifurcations/kind"][()])
+        assert kinds.count("period-doubling") == 2  # the subharmonic band near 2 w1
+        periods = sorted(int(b.attrs["period"]) for b in f["continuation/branches"].values())
+        assert periods == [1, 2]
 
 
 def test_waveform_figure(built):

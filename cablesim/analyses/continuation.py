@@ -117,6 +117,20 @@ def _channels(case: Case) -> tuple[list[str], np.ndarray]:
     return [f"z{i + 1}" for i in idx], idx
 
 
+#: Why a flow integration failed, in words (the orbits' FlowStatus names).
+_FAILURE_TEXT = {"SLACK": "a segment went slack", "NONFINITE": "the state became non-finite",
+                 "INNER_SOLVE": "the inner equilibrium solve failed"}
+
+
+def _end_text(br) -> str:
+    """Why a branch ended, with the cause of a failed flow when there is one."""
+    text = br.end.name.lower().replace("_", " ")
+    failure = getattr(br, "failure", None)
+    if failure is not None and failure.name in _FAILURE_TEXT:
+        text += f" ({_FAILURE_TEXT[failure.name]})"
+    return text
+
+
 def _branch(k: int, br, parameter: str, fixed: float, idx: np.ndarray) -> BranchResult:
     pts = br.points
     values = np.array([p.parameter for p in pts], dtype=float)
@@ -135,7 +149,7 @@ def _branch(k: int, br, parameter: str, fixed: float, idx: np.ndarray) -> Branch
         multipliers=np.array([p.multipliers for p in pts]),
         state=np.array([p.state for p in pts]),
         parent=br.parent,
-        end=br.end.name.lower().replace("_", " "),
+        end=_end_text(br),
     )
 
 

@@ -26,6 +26,7 @@ from ..case import Case, parse_case
 from ..channels import channel_index
 from ..dynamics.status import Status
 from ..dynamics.steady import SteadyCriterion, steady_response
+from ..orbits.accelerate import accelerated_steady_response
 from ..errors import CablesimError
 from .setup import build_equations, make_integrator
 from .static import run_static
@@ -134,7 +135,8 @@ def solve_point(job: PointJob) -> dict:
     )
     s0 = None if job.start is None else np.array(job.start)
     t0 = time.perf_counter()
-    r = steady_response(eom, integ, np.array(job.channels), crit, s0=s0)
+    decide = accelerated_steady_response if sw.accelerate else steady_response
+    r = decide(eom, integ, np.array(job.channels), crit, s0=s0)
     return {
         "curve": job.curve,
         "index": job.index,
@@ -146,6 +148,8 @@ def solve_point(job: PointJob) -> dict:
         "steady": bool(r.steady),
         "t_end": float(r.t_end),
         "floquet": None if not np.isfinite(r.floquet) else float(r.floquet),
+        "decided": r.decided,
+        "multipliers": None if r.multipliers is None else [[float(m.real), float(m.imag)] for m in r.multipliers],
         "status": r.message,
         "code": int(r.status),
         "final_state": r.final_state.tolist(),
@@ -160,6 +164,7 @@ def solve_point(job: PointJob) -> dict:
 def _empty_result(omega, gamma, direction, channels, curves, **meta) -> SweepResult:
     res = SweepResult(omega=omega, gamma=gamma, direction=direction, channels=channels, curves=curves, **meta)
     P, C = omega.size, len(channels)
+    n_dof = res.modal_omega.size  # one modal frequency per degree of freedom
     for c in range(len(curves)):
         res.data[c] = {
             "amplitude": np.full((P, C), np.nan),
@@ -171,6 +176,8 @@ def _empty_result(omega, gamma, direction, channels, curves, **meta) -> SweepRes
             "t_end": np.full(P, np.nan),
             "floquet": np.full(P, np.nan),
             "wall": np.full(P, np.nan),
+            "decided": np.full(P, "", dtype=object),
+            "multipliers": np.full((P, 2 * n_dof), np.nan + 0j),
             "done": np.zeros(P, dtype=bool),
         }
     return res
@@ -188,6 +195,10 @@ def record_point(res: SweepResult, rec: dict) -> None:
     d["t_end"][i] = rec["t_end"]
     d["floquet"][i] = np.nan if rec["floquet"] is None else rec["floquet"]
     d["wall"][i] = rec.get("wall", np.nan)
+    d["decided"][i] = rec.get("decided", "")
+    if rec.get("multipliers"):
+        mu = np.array([complex(a, b) for a, b in rec["multipliers"]])
+        d["multipliers"][i, : mu.size] = mu
     d["done"][i] = True
     # Only a point that ran to its end (at forcing phase 0) can start the next one of a chain.
     res.states[(rec["curve"], i)] = None if d["failed"][i] else rec["final_state"]
@@ -269,7 +280,8 @@ def new_sweep_result(case: Case, case_text: str, analysis: str | None = None) ->
     omega, gamma, curves = plan(case)
     names, _ = channel_indices(case, case.sweep.channels)
     sw = case.sweep
-    settings = dict(cap=sw.duration, window=sw.window, tol=sw.tol, max_period=sw.max_period, floquet_check=sw.floquet)
+    settings = dict(cap=sw.duration, window=sw.window, tol=sw.tol, max_period=sw.max_period, floquet_check=sw.floquet,
+                    accelerate=sw.accelerate)
     return _empty_result(omega, gamma, sw.direction, names, curves, analysis=static.analysis,
                          modal_omega=static.modes.omega.copy(), case_name=case.name, case_text=case_text,
                          settings=settings)

@@ -196,6 +196,7 @@ class SweepSpec(StrictModel):
     tol: float = Field(default=1e-5, gt=0, lt=0.1, description="relative periodicity tolerance")
     max_period: int = Field(default=6, ge=1, le=50, description="largest response period sought")
     floquet: bool = Field(default=True, description="check the stability of periodic responses")
+    accelerate: bool = Field(default=True, description="decide steady points by shooting from the transient")
 
     @field_validator("omega", mode="before")
     @classmethod

@@ -24,6 +24,7 @@ the same quantities come from the last ``window`` seconds and the point is flagg
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -32,6 +33,8 @@ from .equations import EquationsOfMotion
 from .integrators import DOPRI5, Integrator
 from .status import Status
 
+#: Most forcing periods between two calls of a ``decide`` hook of :func:`steady_response`.
+DECIDE_EVERY = 10
 #: Floquet multipliers above this modulus mark an unstable periodic orbit.
 UNSTABLE_MULTIPLIER = 1.0 + 1e-3
 
@@ -95,6 +98,12 @@ class PointResult:
         else why it stopped.
     message : str
         ``"steady"``, ``"cap reached"`` or when and why the run stopped.
+    decided : str
+        How the point was decided: ``"integrated"`` (periodicity of the integrated response),
+        ``"shooting"`` (the periodic orbit the response approaches, found by shooting), ``"cap"``
+        (no steady state before the cap) or ``"failed"``.
+    multipliers : ndarray (complex) or None
+        Floquet multipliers of the orbit, by decreasing modulus, where computed.
     """
 
     omega: float
@@ -108,6 +117,8 @@ class PointResult:
     final_state: np.ndarray
     status: Status
     message: str
+    decided: str = "integrated"
+    multipliers: np.ndarray | None = None
 
     @property
     def failed(self) -> bool:
@@ -206,6 +217,7 @@ def steady_response(
     channels: np.ndarray,
     criterion: SteadyCriterion,
     s0: np.ndarray | None = None,
+    decide: Callable[[int, np.ndarray, np.ndarray], PointResult | None] | None = None,
 ) -> PointResult:
     """Integrate from ``s0`` until the response is steady (see module docstring) or the cap.
 
@@ -219,6 +231,12 @@ def steady_response(
     criterion : SteadyCriterion
     s0 : ndarray, optional
         Initial ``(z, y', y'')`` at forcing phase 0 (default: the equilibrium at rest).
+    decide : callable, optional
+        Called as ``decide(k, s, strobes)`` after every chunk of at most :data:`DECIDE_EVERY`
+        forcing periods (``k`` periods done, ``s`` the state at forcing phase 0, ``strobes`` the
+        ``k + 1`` stroboscopic samples ``(z, y'/w)`` so far); a
+        :class:`PointResult` it returns ends the point (how
+        :mod:`cablesim.orbits.accelerate` decides by shooting).
 
     Returns
     -------
@@ -245,10 +263,7 @@ def steady_response(
     hold = max(crit.hold, 3)
     ftol = crit.tol
     f_integ = _floquet_integrator(integrator) if crit.floquet else None
-    # Differences below what the integrator resolves are noise: for a tiny response the
-    # periodicity test is relative to the integrator's absolute tolerance, not to zero.
-    # (``floor`` bounds the scale from below, so the absolute threshold is at least tol * floor.)
-    floor = max(1e-9 * eom.cable.chord_length, 3.0 * getattr(integrator, "atol", 0.0) / ftol)
+    floor = _noise_floor(eom, integrator, ftol)
 
     while k < n_cap:
         kk = min(k + chunk, n_cap)
@@ -274,7 +289,11 @@ def steady_response(
         strobes[k + 1 : kk + 1, :nd] = sel[:, :nd]
         strobes[k + 1 : kk + 1, nd:] = sel[:, nd : 2 * nd] / w
         k = kk
-        chunk = min(chunk * 2, 200)
+        chunk = min(chunk * 2, 200 if decide is None else DECIDE_EVERY)
+        if decide is not None and k < n_cap:
+            decided = decide(k, out[-1].copy(), strobes[: k + 1])  # out[-1]: at phase 0
+            if decided is not None:
+                return decided
 
         p = _periodic(strobes[: k + 1], hold, crit.max_period, ftol, floor)
         if p == 0 or k < recheck_after:
@@ -310,7 +329,15 @@ def _cap_reached(eom, channels, state, fine, spp, floquet) -> PointResult:
         final_state=state.s.copy(),
         status=Status.COMPLETED,
         message="cap reached",
+        decided="cap",
     )
+
+
+def _noise_floor(eom, integrator, tol: float) -> float:
+    """Differences below what the integrator resolves are noise: for a tiny response the
+    periodicity test is relative to the integrator's absolute tolerance, not to zero (the floor
+    bounds the scale from below, so the absolute threshold is at least ``tol * floor``)."""
+    return max(1e-9 * eom.cable.chord_length, 3.0 * getattr(integrator, "atol", 0.0) / tol)
 
 
 def _largest_multiplier(eom, integrator, s_star, p) -> float:
@@ -361,6 +388,36 @@ def _persists(strobes: np.ndarray, k: int, h: int, q: int, tol_abs: float) -> bo
     return now > 10.0 * tol_abs and now >= 0.9 * before
 
 
+def periodic_response(
+    eom: EquationsOfMotion,
+    integrator: Integrator,
+    s0: np.ndarray,
+    t0: float,
+    channels: np.ndarray,
+    period: int,
+    criterion: SteadyCriterion,
+    floquet: float = np.nan,
+    decided: str = "integrated",
+    multipliers: np.ndarray | None = None,
+) -> PointResult:
+    """The response over one orbit from a state on a periodic orbit, measured as a steady sweep
+    point is: ``period`` forcing periods sampled ``criterion.samples_per_period`` times each.
+
+    Parameters
+    ----------
+    s0 : ndarray
+        ``(z, y', y'')`` at ``t0``, a whole number of forcing periods (forcing phase 0).
+    """
+    T = 2.0 * np.pi / eom.omega
+    k = int(round(t0 / T))
+    state = integrator.start(eom, np.asarray(s0, dtype=float), t0)
+    r = _finish_steady(eom, integrator, eom.params(), state, channels, period, k, T, criterion.samples_per_period,
+                       floquet)
+    r.decided = decided if not r.failed else "failed"
+    r.multipliers = multipliers
+    return r
+
+
 def _finish_steady(eom, integrator, prm, state, channels, p, k, T, spp, floquet) -> PointResult:
     nd = eom.n_dof
     t_out = T * (k + np.arange(1, p * spp + 1) / spp)
@@ -403,4 +460,5 @@ def _failed(eom, channels, w, out, t_out, state, code, fine, spp, T) -> PointRes
         final_state=state.s.copy(),
         status=Status(code),
         message=f"stopped at t = {state.t:.6g} s: {Status(code).text}",
+        decided="failed",
     )

@@ -36,6 +36,7 @@ def write_sweep(path: str | Path, res) -> Path:
         "floquet": ("1", "largest Floquet multiplier modulus of the last periodic orbit checked"),
         "done": ("1", "whether the point has been computed"),
         "wall": ("s", "wall-clock time of the point"),
+        "multipliers": ("1", "Floquet multipliers of the orbit where computed by shooting (NaN elsewhere)"),
     }
     with atomic_h5(path) as f:
         stamp(f, res.case_text, "sweep", analysis=res.analysis)
@@ -46,8 +47,9 @@ def write_sweep(path: str | Path, res) -> Path:
         g.attrs["direction"] = res.direction
         g.attrs["channels"] = np.array(res.channels, dtype="S")
         g.attrs["case_name"] = res.case_name
-        for k in ("cap", "window", "tol", "max_period", "floquet_check"):
-            g.attrs[k] = res.settings[k]
+        for k in ("cap", "window", "tol", "max_period", "floquet_check", "accelerate"):
+            if k in res.settings:
+                g.attrs[k] = res.settings[k]
         g.attrs["complete"] = res.complete
         g.attrs["points_done"] = res.n_done
         g.attrs["points_total"] = res.n_total
@@ -56,9 +58,13 @@ def write_sweep(path: str | Path, res) -> Path:
             target = g if d == "independent" else g.create_group(d)
             cs = [k for k, c in enumerate(res.curves) if c.direction == d]
             for name, (u, desc) in units.items():
-                arrs = [res.data[k][name] for k in cs]
-                arr = np.stack(arrs) if res.gamma is not None else arrs[0]
-                put(target, name, arr, u, desc, allow_nan=True)
+                arrs = [res.data[k][name] for k in cs if name in res.data[k]]
+                if arrs:
+                    arr = np.stack(arrs) if res.gamma is not None else arrs[0]
+                    put(target, name, arr, u, desc, allow_nan=True)
+            decided = [np.array([str(x) for x in res.data[k].get("decided", [])], dtype="S") for k in cs]
+            put(target, "decided", np.stack(decided) if res.gamma is not None else decided[0], "1",
+                "how each point was decided: integrated, shooting, cap, failed (empty: not computed)")
         m = f.create_group("modal")
         put(m, "omega", res.modal_omega, "rad/s", "linear modal frequencies about the equilibrium")
     return Path(path)

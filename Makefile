@@ -27,6 +27,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_dynamics.py
 	$(PY) benchmarks/bench_sweep.py
 	$(PY) benchmarks/bench_continuation.py
+	$(PY) benchmarks/bench_accelerate.py
 
 paper-numbers: $(STAMP)
 	$(PY) benchmarks/paper_numbers.py $(OUTD)

@@ -30,7 +30,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..dynamics.equations import EquationsOfMotion
-from ..dynamics.integrators import Integrator
+from ..dynamics.integrators import DOPRI5, Integrator
 from ..dynamics.steady import DECIDE_EVERY, PointResult, SteadyCriterion, periodic_response, steady_response
 from .shooting import Shooting, solve_orbit
 from .systems import cable_system
@@ -41,6 +41,11 @@ NEAR = 0.2
 REPEATS = 0.5
 #: Newton iterations per shooting attempt (an orbit within reach converges in a few).
 MAX_NEWTON = 8
+#: Relative tolerance of an adaptive integrator while the transient is integrated.
+TRANSIENT_RTOL = 1e-6
+#: Newton's tolerance (relative to the orbit's extent): the orbit only seeds the measurement,
+#: which integrates it with the sweep's own integrator.
+NEWTON_TOL = 1e-7
 #: Forcing periods over which the contraction towards a proposed orbit is checked.
 CONTRACTION_PERIODS = 5
 #: Scaled distances below this are at the integration's accuracy: the trajectory is on the orbit.
@@ -110,7 +115,7 @@ class _Shooter:
         Newton reaches from ``x``, remembered for later attempts; None if there is none."""
         if p in self.orbits:
             return self.orbits[p]
-        sol = solve_orbit(Shooting(self.system, p, 1, "omega"), x, self.eom.omega, max_iter=MAX_NEWTON)
+        sol = solve_orbit(Shooting(self.system, p, 1, "omega"), x, self.eom.omega, tol=NEWTON_TOL, max_iter=MAX_NEWTON)
         if not sol.converged or sol.evaluation is None:
             return None
         ev = sol.evaluation
@@ -120,7 +125,8 @@ class _Shooter:
             return None
         q = self.minimal_period(sol.u, p, scale)
         if q != p:  # the same orbit, its multipliers over its own period
-            sol = solve_orbit(Shooting(self.system, q, 1, "omega"), sol.u, self.eom.omega, max_iter=MAX_NEWTON)
+            sol = solve_orbit(Shooting(self.system, q, 1, "omega"), sol.u, self.eom.omega, tol=NEWTON_TOL,
+                              max_iter=MAX_NEWTON)
             if not sol.converged or sol.evaluation is None:
                 return None
         self.orbits[p] = (q, sol, scale)
@@ -188,5 +194,10 @@ def accelerated_steady_response(
     """
     if not eom.exact or eom.n_dof > 40:
         return steady_response(eom, integrator, channels, criterion, s0=s0)
-    return steady_response(eom, integrator, channels, criterion, s0=s0,
+    transient = integrator
+    if isinstance(integrator, DOPRI5) and integrator.rtol < TRANSIENT_RTOL:
+        # the transient only has to bring the response near its orbit; the orbit, once accepted,
+        # is measured with the sweep's own integrator
+        transient = DOPRI5(rtol=TRANSIENT_RTOL, atol=integrator.atol, dt_max=integrator.dt_max)
+    return steady_response(eom, transient, channels, criterion, s0=s0,
                            decide=_Shooter(eom, integrator, channels, criterion))

@@ -15,7 +15,8 @@ believed.
 Bifurcations (fold, period doubling, Neimark-Sacker, branch point) are located on the branch
 (:mod:`cablesim.orbits.continuation`). At every located period doubling of a period-``p``
 branch (``2p <= max_period``) the period-``2p`` branch is started from the critical
-eigenvector and continued away from the parent; a ``2p`` branch that rejoins a period-``p``
+eigenvector (a perturbation of scaled size ``switch_size``, smaller where that guess is out of
+reach of Newton's method) and continued away from the parent; a ``2p`` branch that rejoins a period-``p``
 orbit at the other period doubling of a pair ends there (:attr:`BranchEnd.MERGED`, the parent's
 period doubling as its last point) and that period doubling is not switched at again
 (:mod:`cablesim.orbits.switching`).
@@ -35,8 +36,12 @@ from .continuation import Settings, continuation
 from .diagram import Bifurcation, BranchEnd, OrbitBranch, OrbitPoint, ResponseDiagram
 from .shooting import Evaluation, FlowStatus, Shooting, solve_orbit
 from .starting import integrate_to_steady, linear_response, linear_response_state
-from .switching import MergeWatch, doubled_point, doubling_direction, lap_separation
+from .switching import MergeWatch, doubled_point, doubling_direction, lap_separation, start_factor
 from .systems import OdeSystem, cable_system
+
+
+#: Perturbation sizes tried at a period doubling before giving up (each a quarter of the last).
+SWITCH_ATTEMPTS = 3
 
 
 class OrbitProblem:
@@ -115,6 +120,8 @@ class _Tracer:
         self.switch_size = switch_size
         self.diagram = ResponseDiagram(parameter=parameter)
         self.shootings: dict = {}
+        #: Scaled size of the perturbation that started each period-doubled branch, by index.
+        self.sizes: dict = {}
 
     def shooting(self, period: int, segments: int) -> Shooting:
         """The shooting of period-``period`` orbits on ``segments`` segments."""
@@ -141,12 +148,14 @@ class _Tracer:
             self.run_branch(sh, sol.u, start, None, None, None, [])
 
     def run_branch(self, sh: Shooting, u_start: np.ndarray, lam_start: float, tangent: np.ndarray | None,
-                   parent: int | None, origin: Bifurcation | None, prefix: list) -> OrbitBranch:
+                   parent: int | None, origin: Bifurcation | None, prefix: list,
+                   size: float | None = None) -> OrbitBranch:
         """Continue one branch from ``(u_start, lam_start)`` and append it to the diagram.
 
-        ``tangent``, ``parent`` and ``origin`` are given for a period-doubled branch (its start
-        direction, the parent branch and the period doubling); ``prefix`` are points recorded
-        before the continuation's first (the parent's period doubling)."""
+        ``tangent``, ``parent``, ``origin`` and ``size`` are given for a period-doubled branch
+        (its start direction, the parent branch, the period doubling and the scaled size of the
+        perturbation it started from); ``prefix`` are points recorded before the continuation's
+        first (the parent's period doubling)."""
         idx = len(self.diagram.branches)
         br = OrbitBranch(index=idx, period=sh.period, parameter=self.parameter, parent=parent, origin=origin)
         br.segments = sh.segments
@@ -154,9 +163,10 @@ class _Tracer:
         problem = OrbitProblem(sh, self.state_scale, self.lam_scale)
         watch = None
         if parent is not None:
+            size = self.switch_size if size is None else size
+            self.sizes[idx] = size
             partners = [q for q in self.diagram.branches[parent].points if q.special == "period-doubling"]
-            watch = MergeWatch(partners, idx, sh.period, self.n, sh.segments // 2, self.state_scale,
-                               self.switch_size)
+            watch = MergeWatch(partners, idx, sh.period, self.n, sh.segments // 2, self.state_scale, size)
         for p in prefix:
             p.branch, p.index = idx, len(br.points)
             br.points.append(p)
@@ -181,8 +191,12 @@ class _Tracer:
 
     def switch(self, br: OrbitBranch, p: OrbitPoint, bif: Bifurcation) -> OrbitBranch | None:
         """Start the period-doubled branch at period doubling ``p`` of branch ``br``
-        (:mod:`cablesim.orbits.switching`); None if neither sign of the perturbation leads
-        away from the parent."""
+        (:mod:`cablesim.orbits.switching`); None if no perturbation leads away from the parent.
+
+        The perturbation has the scaled size ``switch_size``, or less where the guess is not
+        within reach of Newton's method (:func:`~cablesim.orbits.switching.start_factor`); when
+        both signs fail, it is tried again at a quarter of the size, at most
+        ``SWITCH_ATTEMPTS`` times."""
         m1 = br.segments
         ev = self.shooting(br.period, m1).evaluate(p.u, p.parameter)
         if ev.status != ok.OK:
@@ -190,14 +204,27 @@ class _Tracer:
         dirn, eps = doubling_direction(ev, m1, self.state_scale, self.switch_size)
         sh2 = self.shooting(2 * br.period, 2 * m1)
         base = np.concatenate([p.u, p.u])
+        factor = start_factor(sh2, base, dirn, eps, p.parameter, np.tile(self.state_scale, 2 * m1))
+        for _ in range(SWITCH_ATTEMPTS if factor is not None else 0):
+            child = self.start_doubled(br, p, bif, sh2, base, dirn, factor * eps, factor * self.switch_size)
+            if child is not None:
+                return child
+            factor *= 0.25
+        return None
+
+    def start_doubled(self, br: OrbitBranch, p: OrbitPoint, bif: Bifurcation, sh2: Shooting, base: np.ndarray,
+                      direction: np.ndarray, eps: float, size: float) -> OrbitBranch | None:
+        """The period-doubled branch started from ``base + eps direction`` or
+        ``base - eps direction`` (``size`` its scaled size), if one leads away from the parent."""
         for sign in (1.0, -1.0):
             doubled = doubled_point(p, 2 * br.period, base.copy())
-            child = self.run_branch(sh2, base + sign * eps * dirn, p.parameter, np.concatenate([sign * dirn, [0.0]]),
-                                    br.index, bif, [doubled])
+            child = self.run_branch(sh2, base + sign * eps * direction, p.parameter,
+                                    np.concatenate([sign * direction, [0.0]]), br.index, bif, [doubled], size)
             if child.end != BranchEnd.START_FAILED and len(child.points) > 1 \
-                    and lap_separation(child.points[1].u, self.n, m1, self.state_scale) > 0.1 * self.switch_size:
+                    and lap_separation(child.points[1].u, self.n, br.segments, self.state_scale) > 0.1 * size:
                 return child
             self.diagram.branches.pop()  # a failed attempt leaves no branch behind
+            self.sizes.pop(child.index, None)
         return None
 
     def is_own_bifurcation(self, br: OrbitBranch, p: OrbitPoint) -> bool:
@@ -209,7 +236,8 @@ class _Tracer:
             return False  # the branch's own origin
         if br.end == BranchEnd.MERGED and (p is br.points[-1] or (
                 p.index >= len(br.points) - 4
-                and lap_separation(p.u, self.n, br.segments // 2, self.state_scale) < 2.0 * self.switch_size)):
+                and lap_separation(p.u, self.n, br.segments // 2, self.state_scale)
+                < 2.0 * self.sizes.get(br.index, self.switch_size))):
             # where a doubled branch rejoins its parent; the pitchfork there may also have
             # tripped the fold test just before
             return False
@@ -306,7 +334,8 @@ def trace_branches(
     liouville_tol : float
         Largest ``|log det - int tr J|`` of a trusted point.
     switch_size : float
-        Scaled size of the perturbation that starts a period-doubled branch.
+        Scaled size of the perturbation that starts a period-doubled branch (reduced where the
+        guess would be out of reach of Newton's method, :mod:`cablesim.orbits.switching`).
 
     Returns
     -------

@@ -7,6 +7,17 @@ states perturbed by ``+eps w_k`` on the first lap and ``-eps w_k`` on the second
 direction, and continued away from the parent; if that start fails, ``-eps`` is tried (the two
 signs give the same orbit shifted by ``p`` forcing periods, so one of them suffices).
 
+The perturbation has the scaled size ``switch_size`` unless the guess is out of reach of
+Newton's method there (:func:`start_factor`): the state scale is a property of the case (for a
+cable, the linear response at its primary resonance), and an orbit born far from that resonance
+can be much smaller than it. On a stiff cable (EA = 1e12 N, near ``2 w1``) ``switch_size``
+times the scale is larger than the orbit itself and stretches the nearly inextensible segments
+by more than their static stretch: the perturbed guess goes slack and the flow cannot even be
+evaluated. The size is halved until both signs' guesses can be integrated and their residual
+(the flow's nonlinear remainder along the critical direction) is a small fraction of the
+perturbation; the thresholds that judge the new branch (its separation from the parent, the
+merge) scale with the size used.
+
 A ``2p`` branch whose two laps come back together (or whose lap difference reverses between two
 points: the step went through the branch point onto the mirror image) has rejoined a
 period-``p`` orbit at the other period doubling of a pair (:class:`MergeWatch`): it ends there,
@@ -25,7 +36,7 @@ from typing import Callable
 import numpy as np
 
 from . import stability
-from .shooting import Evaluation
+from .shooting import Evaluation, FlowStatus
 
 
 def lap_difference(u: np.ndarray, n: int, m_parent: int, scale: np.ndarray) -> np.ndarray:
@@ -87,6 +98,48 @@ def doubling_direction(ev: Evaluation, segments: int, state_scale: np.ndarray,
     direction = np.concatenate([W.ravel(), -W.ravel()])
     eps = switch_size / np.linalg.norm(direction / np.tile(state_scale, 2 * segments))
     return direction, eps
+
+
+def start_factor(shooting, base: np.ndarray, direction: np.ndarray, eps: float, lam: float,
+                 scale: np.ndarray, linear_tol: float = 0.1, max_halvings: int = 12) -> float | None:
+    """The largest ``2^-k`` (``k <= max_halvings``) for which the perturbed guesses
+    ``base +- 2^-k eps direction`` of the period-doubled orbit are within reach of Newton's
+    method, or None if none is.
+
+    Within reach: the flow over both laps can be integrated from either guess (a cable may go
+    slack when a displacement perturbation stretches its segments) and the guess's residual
+    is at most ``linear_tol`` times the perturbation (scaled max norms). At the period doubling
+    ``direction`` is a null vector of the Jacobian (:func:`doubling_direction`), so the residual
+    is the nonlinear remainder of the flow along it, of second order in the perturbation: the
+    test sizes the perturbation by how fast the branch bends away from its tangent. Evaluations
+    without variational equations.
+
+    Parameters
+    ----------
+    shooting : Shooting
+        Of the period-doubled orbit.
+    base : ndarray
+        The parent orbit's unknowns repeated over both laps.
+    direction, eps : ndarray, float
+        From :func:`doubling_direction`.
+    lam : float
+        Parameter value at the period doubling.
+    scale : ndarray
+        Scale of every unknown (``state_scale`` tiled over the segments).
+    """
+    for k in range(max_halvings + 1):
+        factor = 0.5**k
+        step = factor * eps * direction
+        size = float(np.abs(step / scale).max())
+        ok = True
+        for sign in (1.0, -1.0):
+            ev = shooting.evaluate(base + sign * step, lam, jac=False)
+            if ev.status != FlowStatus.OK or not float(np.abs(ev.r / scale).max()) <= linear_tol * size:
+                ok = False
+                break
+        if ok:
+            return factor
+    return None
 
 
 def doubled_point(p, period: int, u: np.ndarray, **changes):

@@ -80,8 +80,15 @@ class StoredCurve:
 
     @property
     def valid(self) -> np.ndarray:
-        """Points that were computed (done, with a finite amplitude)."""
-        return self.data["done"] & np.all(np.isfinite(self.data["amplitude"]), axis=1)
+        """Points computed to their end (done, not stopped early, with a finite amplitude): the
+        ones a response curve or a peak may be drawn from."""
+        return self.data["done"] & ~self.data["failed"] & np.all(np.isfinite(self.data["amplitude"]), axis=1)
+
+    @property
+    def failed(self) -> np.ndarray:
+        """Points that stopped early (a segment went slack, the state blew up): their values are
+        partial and never part of a curve."""
+        return self.data["done"] & self.data["failed"]
 
     @property
     def label(self) -> str:
@@ -119,7 +126,7 @@ def _read_group(where, name: str, P: int, G: int | None, order, bad):
         raise bad(f"{name}/amplitude is missing")
     raw = {}
     C = None
-    for key in ("amplitude", "halfrange", "response_frequency", "period", "steady", "done"):
+    for key in ("amplitude", "halfrange", "response_frequency", "period", "steady", "done", "failed"):
         if key not in where:
             continue
         arr = np.asarray(where[key][()])
@@ -145,6 +152,7 @@ def _curve_data(data: dict, P: int) -> dict:
         data[key] = data[key].astype(float) if key in data else np.full_like(amp, np.nan)
     data["period"] = data["period"].astype(int) if "period" in data else np.ones(P, dtype=int)
     data["steady"] = data["steady"].astype(bool) if "steady" in data else np.ones(P, dtype=bool)
+    data["failed"] = data["failed"].astype(bool) if "failed" in data else np.zeros(P, dtype=bool)
     finite = np.all(np.isfinite(amp), axis=1)
     data["done"] = (data["done"].astype(bool) & finite) if "done" in data else finite
     return data

@@ -458,7 +458,7 @@ def _draw_fdr(fig_spec, infos, png: Path, title: str) -> Path:
     n = len(chans)
     fig = plt.figure(figsize=(10.5, 1.3 + 2.8 * n), layout="constrained")
     axes = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
-    any_unsteady = any_sub = False
+    markers = np.zeros(3, dtype=bool)  # not steady, subharmonic, stopped early
     for ax, name in zip(axes, chans):
         for k, sw in enumerate(sweeps):
             if name not in sw.channels:
@@ -466,8 +466,7 @@ def _draw_fdr(fig_spec, infos, png: Path, title: str) -> Path:
             c = sw.channels.index(name)
             markevery = max(1, sw.omega.size // 80)
             for curve in sw.curves:
-                unsteady, sub = draw_curve(ax, sw.omega, curve, c, "amplitude", colors[(k, curve.gamma)], markevery, 1.3)
-                any_unsteady, any_sub = any_unsteady or unsteady, any_sub or sub
+                markers |= draw_curve(ax, sw.omega, curve, c, "amplitude", colors[(k, curve.gamma)], markevery, 1.3)
         for w in modal:
             ax.axvline(w, color="0.5", ls=":", lw=1.0, alpha=0.7, zorder=1)
         ax.set_ylim(bottom=0.0)
@@ -480,14 +479,14 @@ def _draw_fdr(fig_spec, infos, png: Path, title: str) -> Path:
         st = DIRECTION_STYLE[d]
         handles.append(Line2D([], [], ls=st["ls"], marker=st["marker"], ms=st["ms"] + 1, color="0.3", lw=1.2,
                               label=st["label"]))
-    handles += marker_handles(any_unsteady, any_sub)
+    handles += marker_handles(*markers)
     if modal:
         handles.append(Line2D([], [], ls=":", color="0.5", lw=1.0,
                               label="linear modal frequencies\n(" + ", ".join(f"{w:.4g}" for w in modal) + " rad/s)"))
     axes[0].legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, framealpha=0.9)
-    incomplete = [f"{nm}: {sum(int(cv.valid.sum()) for cv in sw.curves)} of {sw.omega.size * len(sw.curves)} points"
+    incomplete = [f"{nm}: {sum(int(cv.data['done'].sum()) for cv in sw.curves)} of {sw.omega.size * len(sw.curves)} points"
                   for sw, nm in zip(sweeps, names)
-                  if sum(int(cv.valid.sum()) for cv in sw.curves) < sw.omega.size * len(sw.curves)]
+                  if sum(int(cv.data["done"].sum()) for cv in sw.curves) < sw.omega.size * len(sw.curves)]
     if incomplete:
         notes.insert(0, "incomplete sweep(s): " + "; ".join(incomplete))
     if notes:

@@ -71,26 +71,37 @@ def _subtitle(sweep: StoredSweep, shown: list[str]) -> str:
 
 
 def draw_curve(ax, omega, curve, c: int, quantity: str, color, markevery: int, lw: float = 1.2):
-    """One sweep curve of channel ``c``: its line, non-steady points ringed in red, subharmonic
-    points as black diamonds labelled ``1/p``; whether each kind of marker was drawn."""
+    """One sweep curve of channel ``c``: a line through its steady points only, broken where the
+    response period changes; points that reached the cap without a steady state as red open
+    circles and points that stopped early (a segment went slack) as grey crosses at their
+    partial values, neither joined into the line; subharmonic points as black diamonds labelled
+    ``1/p``. Returns which markers were drawn: ``(not steady, subharmonic, stopped early)``."""
     valid = curve.valid
-    y = np.where(valid, curve.data[quantity][:, c], np.nan)
-    st = DIRECTION_STYLE[curve.direction]
-    ax.plot(omega, y, ls=st["ls"], marker=st["marker"], ms=st["ms"], color=color, lw=lw,
-            markevery=markevery, zorder=2)
-    unsteady = valid & ~curve.data["steady"] & np.isfinite(y)
-    if unsteady.any():
-        ax.plot(omega[unsteady], y[unsteady], ls="none", marker="o", ms=8, mfc="none",
-                mec="red", mew=1.2, zorder=4)
+    steady = valid & curve.data["steady"]
     period = curve.data["period"]
-    sub = valid & (period >= 2) & np.isfinite(y)
+    values = curve.data[quantity][:, c]
+    y = np.where(steady, values, np.nan)
+    # break the line between responses of different period (different branches)
+    jumps = np.flatnonzero(steady[:-1] & steady[1:] & (period[:-1] != period[1:]))
+    x_line, y_line = np.insert(omega, jumps + 1, np.nan), np.insert(y, jumps + 1, np.nan)
+    st = DIRECTION_STYLE[curve.direction]
+    ax.plot(x_line, y_line, ls=st["ls"], marker=st["marker"], ms=st["ms"], color=color, lw=lw,
+            markevery=markevery, zorder=2)
+    unsteady = valid & ~curve.data["steady"] & np.isfinite(values)
+    if unsteady.any():
+        ax.plot(omega[unsteady], values[unsteady], ls="none", marker="o", ms=8, mfc="none",
+                mec="red", mew=1.2, zorder=4)
+    failed = curve.failed & np.isfinite(values)
+    if failed.any():
+        ax.plot(omega[failed], values[failed], ls="none", marker="x", ms=6, color="0.4", mew=1.2, zorder=4)
+    sub = steady & (period >= 2) & np.isfinite(y)
     if sub.any():
         ax.plot(omega[sub], y[sub], ls="none", marker="D", ms=3.5, color="k", zorder=5)
         for k in period_runs(sub, period):
             ax.annotate(f"1/{period[k]}", (omega[k], y[k]), textcoords="offset points",
                         xytext=(0, 7), ha="center", va="bottom", fontsize=7, color="0.15", zorder=6,
                         bbox=dict(boxstyle="round,pad=0.1", fc="white", ec="none", alpha=0.7))
-    return bool(unsteady.any()), bool(sub.any())
+    return bool(unsteady.any()), bool(sub.any()), bool(failed.any())
 
 
 def channel_label(name: str, quantity: str = "amplitude") -> str:
@@ -100,18 +111,17 @@ def channel_label(name: str, quantity: str = "amplitude") -> str:
 
 
 def _draw_channel(ax, sweep: StoredSweep, c: int, quantity: str, color_of, markevery: int):
-    """Every curve of channel ``c``; whether non-steady and subharmonic points were drawn."""
-    any_unsteady = any_sub = False
+    """Every curve of channel ``c``; which markers were drawn (see :func:`draw_curve`)."""
+    drawn = np.zeros(3, dtype=bool)
     for curve in sweep.curves:
-        unsteady, sub = draw_curve(ax, sweep.omega, curve, c, quantity, color_of(curve), markevery)
-        any_unsteady, any_sub = any_unsteady or unsteady, any_sub or sub
+        drawn |= draw_curve(ax, sweep.omega, curve, c, quantity, color_of(curve), markevery)
     ax.set_ylim(bottom=0.0)
     ax.set_ylabel(channel_label(sweep.channels[c], quantity), fontsize=9)
     ax.grid(True, alpha=0.3)
-    return any_unsteady, any_sub
+    return tuple(bool(x) for x in drawn)
 
 
-def _legend(sweep: StoredSweep, gammas, colors, any_unsteady, any_sub, modal_k) -> list:
+def _legend(sweep: StoredSweep, gammas, colors, markers, modal_k) -> list:
     """Proxy artists: colours = gamma values, line styles = directions, markers."""
     from matplotlib.lines import Line2D
 
@@ -127,7 +137,7 @@ def _legend(sweep: StoredSweep, gammas, colors, any_unsteady, any_sub, modal_k) 
         st = DIRECTION_STYLE[d]
         handles.append(Line2D([], [], ls=st["ls"], marker=st["marker"], ms=st["ms"] + 1, color=style_color,
                               lw=1.2, label=st["label"]))
-    handles += marker_handles(any_unsteady, any_sub)
+    handles += marker_handles(*markers)
     if modal_k:
         handles.append(Line2D([], [], ls=":", color="0.5", lw=1.0, label="linear modal frequencies"))
     return handles
@@ -202,10 +212,9 @@ def plot_sweep(h5_path, png_path=None, channels=None, quantity: str = "amplitude
 
     n = len(chans)
     fig, axes = figure_grid(n, 1, 8.6, 2.6, sharex=True, top=0.8 if modal_k else 0.65, hspace=0.3, left=1.4)
-    any_unsteady = any_sub = False
+    markers = np.zeros(3, dtype=bool)  # not steady, subharmonic, stopped early
     for ax, c in zip(axes[:, 0], chans):
-        unsteady, sub = _draw_channel(ax, sweep, c, quantity, color_of, markevery)
-        any_unsteady, any_sub = any_unsteady or unsteady, any_sub or sub
+        markers |= _draw_channel(ax, sweep, c, quantity, color_of, markevery)
         for _, w in modal_k:
             ax.axvline(w, color="0.5", ls=":", lw=1.0, alpha=0.7, zorder=1)
     top_ax = axes[0, 0]
@@ -218,16 +227,16 @@ def plot_sweep(h5_path, png_path=None, channels=None, quantity: str = "amplitude
     axes[-1, 0].set_xlim(x_lo, x_hi)
     axes[-1, 0].set_xlabel("forcing frequency omega (rad/s)")
 
-    top_ax.legend(handles=_legend(sweep, gammas, colors, any_unsteady, any_sub, modal_k), loc="upper left",
+    top_ax.legend(handles=_legend(sweep, gammas, colors, markers, modal_k), loc="upper left",
                   bbox_to_anchor=(1.01, 1.0), fontsize=8, framealpha=0.9)
 
     # Incomplete sweep.
     total = P * len(sweep.curves)
-    done = sum(int(cv.valid.sum()) for cv in sweep.curves)
+    done = sum(int(cv.data["done"].sum()) for cv in sweep.curves)
     warn = done < total
     if warn:
         text = f"incomplete sweep: {done} of {total} points"
-        short = [f"{cv.label}: {int(cv.valid.sum())} of {P}" for cv in sweep.curves if cv.valid.sum() < P]
+        short = [f"{cv.label}: {int(cv.data['done'].sum())} of {P}" for cv in sweep.curves if cv.data['done'].sum() < P]
         if len(sweep.curves) > 1:
             more = f"; and {len(short) - 4} more curves" if len(short) > 4 else ""
             text += " (" + "; ".join(short[:4]) + more + ")"
@@ -249,7 +258,7 @@ def plot_sweep(h5_path, png_path=None, channels=None, quantity: str = "amplitude
     return save_atomic(fig, png_path)
 
 
-def marker_handles(any_unsteady: bool, any_sub: bool) -> list:
+def marker_handles(any_unsteady: bool, any_sub: bool, any_failed: bool = False) -> list:
     """Legend entries for the point markers of a frequency-response plot (those present)."""
     from matplotlib.lines import Line2D
 
@@ -260,4 +269,7 @@ def marker_handles(any_unsteady: bool, any_sub: bool) -> list:
     if any_sub:
         handles.append(Line2D([], [], ls="none", marker="D", ms=3.5, color="k",
                               label="subharmonic response (period p >= 2),\nlabelled 1/p"))
+    if any_failed:
+        handles.append(Line2D([], [], ls="none", marker="x", ms=6, color="0.4", mew=1.2,
+                              label="stopped early (a segment went slack):\npartial value, not a peak"))
     return handles

@@ -40,6 +40,12 @@ def _say_error(message: str) -> None:
     sys.stderr.write(textwrap.fill("error: " + message, width=width) + "\n")
 
 
+def _say_warnings(warnings) -> None:
+    """Plausibility warnings: one paragraph each on standard error; they never stop a run."""
+    for w in warnings or ():
+        sys.stderr.write(textwrap.fill("warning: " + w, width=100) + "\n")
+
+
 def user_errors(func):
     """Turn CablesimError into a one-paragraph message and exit status 2."""
 
@@ -101,6 +107,7 @@ def static(
 
     case = api.load_case(case_file, overrides)
     run = api.static(case, analysis.value if analysis else None)
+    _say_warnings(run.result.warnings)
     typer.echo(static_summary(case, run.result))
     out = _output(case, output, "static")
     run.to_hdf5(out)
@@ -191,11 +198,21 @@ def history(
 
     from . import api
 
+    from .case.numbers import DURATION, OMEGA, OUTPUT_STEP, check_flag
+
+    check_flag(OMEGA, omega, "--omega", "history.omega")
+    check_flag(DURATION, duration, "--duration", "history.duration")
+    check_flag(OUTPUT_STEP, output_step, "--output-step", "history.output_step")
     case = api.load_case(case_file, overrides)
     dur = duration if duration is not None else case.history.duration
-    if dur <= 0:
-        raise CablesimError("--duration must be a positive number of seconds.", field="history.duration")
     w = omega if omega is not None else case.history.omega
+    if w is None:
+        raise CablesimError(
+            "No forcing frequency: give --omega W (rad/s), or history.omega in the case file (a "
+            "`history:` section with `omega: 2.4`, say). `cablesim static` prints the cable's natural "
+            "frequencies to choose from.",
+            field="history.omega",
+        )
     out = output if output is not None else Path("runs") / case.name / f"history-w{w:g}.h5"
     bar, update = _progress(dur)
     t0 = time.perf_counter()
@@ -226,12 +243,15 @@ def free_vibration(
 
     from . import api
 
+    from .case.numbers import DAMPING_RATIO, DURATION, MODE, OUTPUT_STEP, PEAK_VELOCITY, check_flag
+
+    check_flag(MODE, mode, "--mode", "free_vibration.mode")
+    check_flag(PEAK_VELOCITY, peak_velocity, "--peak-velocity", "free_vibration.peak_velocity")
+    check_flag(DAMPING_RATIO, damping_ratio, "--damping-ratio", "free_vibration.damping_ratio")
+    check_flag(DURATION, duration, "--duration", "free_vibration.duration")
+    check_flag(OUTPUT_STEP, output_step, "--output-step", "free_vibration.output_step")
     case = api.load_case(case_file, overrides)
-    if damping_ratio is not None and not 0 <= damping_ratio < 1:
-        raise CablesimError("--damping-ratio must be in [0, 1).", field="free_vibration.damping_ratio")
     dur = duration if duration is not None else case.free_vibration.duration
-    if dur <= 0:
-        raise CablesimError("--duration must be a positive number of seconds.", field="free_vibration.duration")
     k = mode if mode is not None else case.free_vibration.mode
     stem = f"free-vibration-mode{k}" if k is not None else "free-vibration"
     out = output if output is not None else Path("runs") / case.name / f"{stem}.h5"
@@ -270,9 +290,14 @@ def sweep(
     from .io.report import sweep_summary
     from .plots.sweep import plot_sweep
 
-    case = api.load_case(case_file, overrides)
     if jobs == 0 or jobs < -1:
         raise CablesimError("--jobs must be a positive number of processes, or -1 for all cores.")
+    if scheduler is not None and backend != Backend.dask:
+        raise CablesimError(
+            f"--scheduler {scheduler} is used only with --backend dask (the default backend, loky, runs "
+            "the points on this machine): add --backend dask, or drop --scheduler."
+        )
+    case = api.load_case(case_file, overrides)
     out = output if output is not None else Path("runs") / case.name / "sweep.h5"
     bar = _LazyBar(1, "sweeping", show_pos=True, show_eta=True)
 

@@ -94,7 +94,14 @@ def run_free_vibration(
     if mode is not None:
         if not 1 <= mode <= n_dof:
             raise CablesimError(f"--mode must be between 1 and {n_dof}; got {mode}.", field="free_vibration.mode")
-        if peak_velocity is None or peak_velocity <= 0:
+        if peak_velocity is None:
+            raise CablesimError(
+                f"Mode {mode} gives the shape of the initial velocities but not their size: give "
+                "--peak-velocity V too (the largest initial velocity, m/s), or free_vibration.peak_velocity "
+                "in the case file.",
+                field="free_vibration.peak_velocity",
+            )
+        if not peak_velocity > 0:
             raise CablesimError("--peak-velocity must be a positive speed in m/s.", field="free_vibration.peak_velocity")
         v0 = mode_velocity(static, mode, peak_velocity)
         z0 = None

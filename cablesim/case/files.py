@@ -6,6 +6,7 @@ import re
 import stat
 from importlib import resources
 from pathlib import Path
+from typing import Optional
 
 import yaml
 from pydantic import BaseModel, ConfigDict, ValidationError
@@ -13,6 +14,7 @@ from pydantic import BaseModel, ConfigDict, ValidationError
 from ..errors import CablesimError
 from . import strict_yaml
 from .model import Case
+from .numbers import DURATION, check_flag
 from .sections import HINTS, FigureSpec
 
 EXAMPLE_RESOURCE = "paper-example.yaml"
@@ -100,6 +102,38 @@ def apply_overrides(data: dict, overrides, source: str) -> dict:
         except (yaml.YAMLError, strict_yaml.StrictYamlError, RecursionError):
             raise CablesimError(f"--set {key}: the value {value!r} is not valid YAML.") from None
     return data
+
+
+def sweep_flag_overrides(omega: Optional[str], duration: Optional[float], channels: Optional[str]) -> list[str]:
+    """``--omega``, ``--duration`` and ``--channels`` of ``sweep`` as ``--set`` overrides (so that
+    they are recorded with the case and checked like it)."""
+    sets = []
+    if omega is not None:
+        parts = omega.split(":") if ":" in omega else None
+        try:
+            if parts is not None:
+                if len(parts) != 3:
+                    raise ValueError
+                start, stop, num = float(parts[0]), float(parts[1]), int(parts[2])
+                sets.append(f"sweep.omega={{start: {start!r}, stop: {stop!r}, num: {num}}}")
+            else:
+                values = [float(x) for x in omega.split(",") if x.strip()]
+                if not values:
+                    raise ValueError
+                sets.append(f"sweep.omega=[{', '.join(repr(x) for x in values)}]")
+        except ValueError:
+            raise CablesimError(
+                f"--omega {omega!r}: give the frequencies in rad/s as a list W1,W2,... or a grid START:STOP:NUM "
+                "(e.g. 0.5:6:56).", field="sweep.omega") from None
+    if duration is not None:
+        check_flag(DURATION, duration, "--duration", "sweep.duration")
+        sets.append(f"sweep.duration={duration!r}")
+    if channels is not None:
+        names = [c.strip() for c in channels.split(",") if c.strip()]
+        if not names:
+            raise CablesimError("--channels is empty; give DOF names such as z2,z4.", field="sweep.channels")
+        sets.append(f"sweep.channels=[{', '.join(names)}]")
+    return sets
 
 
 def parse_case(text: str, source: str = "<case>", default_name: str = "case", overrides=None) -> Case:

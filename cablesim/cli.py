@@ -16,6 +16,7 @@ import functools
 import shlex
 import sys
 import textwrap
+import warnings
 from enum import Enum
 from pathlib import Path
 from typing import Optional
@@ -79,7 +80,10 @@ def user_errors(func):
 
         interrupts.install()
         try:
-            return func(*args, **kwargs)
+            with warnings.catch_warnings():
+                # cablesim checks its numbers itself; numpy's notes on NaN would only precede the message
+                warnings.simplefilter("ignore", RuntimeWarning)
+                return func(*args, **kwargs)
         except CablesimError as exc:
             _say_error(str(exc))
             raise typer.Exit(2)

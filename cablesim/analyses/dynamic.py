@@ -8,6 +8,7 @@ from typing import Callable
 import numpy as np
 
 from ..case import Case
+from ..dynamics import kernels as kn
 from ..dynamics.equations import EquationsOfMotion
 from ..dynamics.integrators import Integrator
 from ..dynamics.result import HistoryResult
@@ -157,10 +158,27 @@ def plan_free_vibration(
         w_int = float(static.modes.omega[-1]) if n_dof <= 4 else float(static.modes.omega[min(3, n_dof - 1)])
     s0 = eom.initial_state(z0=z0, v0=v0)
     check_initial_state(s0, "free_vibration.z0 and v0" if mode is None else "free_vibration.peak_velocity")
+    if z0 is not None:
+        _check_taut_start(static, z0)
     step = output_interval(output_step or fv.output_step, w_int, duration)
     integ = make_integrator(case.integrator, eom, w_int, integrator)
     split = case.outputs.split if split is None else split
     return HistoryPlan("free-vibration", static, eom, integ, w_int, duration, step, s0, split)
+
+
+def _check_taut_start(static: StaticResult, z0: np.ndarray) -> None:
+    """Refuse an initial displacement that leaves a segment slack (the model needs tension)."""
+    cable = static.cable
+    T = np.empty(cable.n_segments)
+    kn.exact_tensions(static.y0 + z0, cable.S, cable.EA, cable.L, cable.H, T)
+    k = int(np.argmin(T))
+    if not T[k] > 0:
+        raise CablesimError(
+            f"free_vibration.z0 leaves segment {k + 1} slack at t = 0 (its tension would be {T[k]:.4g} N, "
+            f"against {static.T0[k]:.4g} N at equilibrium), and this model needs every segment taut. Give a "
+            "smaller initial displacement z0 (m, from the equilibrium).",
+            field="free_vibration.z0",
+        )
 
 
 def _mode_start(static: StaticResult, mode: int, peak_velocity: float | None, n_dof: int):

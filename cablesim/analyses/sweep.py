@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import multiprocessing
 import os
 import threading
 import time
@@ -154,8 +155,12 @@ def end_with_parent(parent: int, interval: float = 0.5) -> None:
     with nobody to report to. A daemon thread watches the parent process id; the compiled time
     loop returns to Python many times a second, so the thread gets its turn.
     """
-    if _WATCHDOG or parent <= 0 or os.getpid() == parent or os.getppid() != parent:
-        return  # in the driver itself, or already watching, or not a child of it (a Dask worker)
+    if _WATCHDOG or parent <= 0 or os.getpid() == parent:
+        return  # already watching, or in the driver itself (one job: no workers)
+    if not multiprocessing.current_process().name.startswith("LokyProcess"):
+        return  # not a local worker of this sweep (a Dask worker belongs to its cluster)
+    if os.getppid() != parent:
+        os._exit(1)  # the driver died while this worker was starting
     _WATCHDOG.append(parent)
 
     def watch():

@@ -109,7 +109,8 @@ def _root(
     verbose: bool = typer.Option(False, "--verbose", "-v", help="Also print the effective options and the cost estimate."),
 ):
     if quiet and verbose:
-        raise click.UsageError("--quiet and --verbose exclude each other; give one.")
+        _say_error("--quiet and --verbose exclude each other; give one of them.")
+        raise typer.Exit(2)
     _OUT.update(quiet=quiet, verbose=verbose)
 
 
@@ -137,9 +138,9 @@ def _effective(ctx: click.Context, **values) -> None:
     _note("effective options: " + ", ".join(f"{k} = {plain(v)}" for k, v in values.items()), verbose_only=True)
 
 
-def _compile_notice() -> None:
+def _compile_notice(cache: Path | None = None) -> None:
     """One line when the compiled kernels are not yet in numba's cache (the first run)."""
-    cache = Path(__file__).resolve().parent / "dynamics" / "__pycache__"
+    cache = cache if cache is not None else Path(__file__).resolve().parent / "dynamics" / "__pycache__"
     if not list(cache.glob("equations.rate-*.nbi")):
         _note("compiling the numerical kernels on first use (about a minute; cached for later runs) ...")
 

@@ -15,20 +15,20 @@ from __future__ import annotations
 import functools
 import shlex
 import sys
-import textwrap
 import warnings
 from enum import Enum
 from pathlib import Path
 from typing import Optional
 
-import click
 import typer
 
 from .errors import CablesimError
+from .io.terminal import CommandGroup, LazyBar, say_error, say_warnings
 from .names import ANALYSES, INTEGRATORS
 from .version import __version__
 
 app = typer.Typer(
+    cls=CommandGroup,
     add_completion=False,
     no_args_is_help=True,
     rich_markup_mode=None,  # help texts are plain: "[default: ...]" must not be read as markup
@@ -44,18 +44,6 @@ IntegratorName = Enum("IntegratorName", {a.replace("-", "_"): a for a in INTEGRA
 
 #: --quiet / --verbose of this invocation.
 _OUT = {"quiet": False, "verbose": False}
-
-
-def _say_error(message: str, command: str | None = None) -> None:
-    sys.stderr.write(textwrap.fill("error: " + message, width=100) + "\n")
-    if command:  # a command to copy: whole, on one line of its own
-        sys.stderr.write(command + "\n")
-
-
-def _say_warnings(warnings) -> None:
-    """Plausibility warnings: one paragraph each on standard error; they never stop a run."""
-    for w in warnings or ():
-        sys.stderr.write(textwrap.fill("warning: " + w, width=100) + "\n")
 
 
 def _note(message: str, verbose_only: bool = False) -> None:
@@ -85,10 +73,10 @@ def user_errors(func):
                 warnings.simplefilter("ignore", RuntimeWarning)
                 return func(*args, **kwargs)
         except CablesimError as exc:
-            _say_error(str(exc))
+            say_error(str(exc))
             raise typer.Exit(2)
         except KeyboardInterrupt:
-            _say_error(f"interrupted ({interrupts.signal_name()}); files already completed were kept.")
+            say_error(f"interrupted ({interrupts.signal_name()}); files already completed were kept.")
             raise typer.Exit(interrupts.exit_status())
         finally:
             interrupts.restore()
@@ -109,7 +97,7 @@ def _root(
     verbose: bool = typer.Option(False, "--verbose", "-v", help="Also print the effective options and the cost estimate."),
 ):
     if quiet and verbose:
-        _say_error("--quiet and --verbose exclude each other; give one of them.")
+        say_error("--quiet and --verbose exclude each other; give one of them.")
         raise typer.Exit(2)
     _OUT.update(quiet=quiet, verbose=verbose)
 
@@ -117,7 +105,7 @@ def _root(
 # ----------------------------------------------------------------------------------------------
 # The command line as run, for provenance and for the --resume hint
 # ----------------------------------------------------------------------------------------------
-def _begin(ctx: click.Context, **effective) -> str:
+def _begin(ctx, **effective) -> str:
     """Record this invocation for the result files; print the options with --verbose."""
     from .io.provenance import command_words, plain, set_invocation
 
@@ -129,7 +117,7 @@ def _begin(ctx: click.Context, **effective) -> str:
     return line
 
 
-def _effective(ctx: click.Context, **values) -> None:
+def _effective(ctx, **values) -> None:
     """Add effective values (the output chosen, the frequency used) to the recorded options."""
     from .io.provenance import invocation, plain, set_invocation
 
@@ -155,8 +143,17 @@ ANALYSIS_OPT = typer.Option(None, "--analysis", help="Override the case file's a
                             "the case file, else exact).")
 INTEGRATOR_OPT = typer.Option(None, "--integrator", help="Time-integration scheme (default: integrator.name in "
                               "the case file, else dopri5, or generalized-alpha for a stiff cable).")
-FORCE_OPT = typer.Option(False, "--force", help="Run even when the cost estimate is above the limits (1e9 time "
-                         "steps or 4 GB of memory).")
+FORCE_OPT = typer.Option(False, "--force", help="Run even when the cost estimate is above the limits (1e8 time "
+                         "steps, a sweep 1e9, or 4 GB of memory).")
+
+
+def _check_jobs(jobs: int) -> None:
+    import os
+
+    most = max(64, 4 * (os.cpu_count() or 1))
+    if jobs == 0 or jobs < -1 or jobs > most:
+        raise CablesimError(f"--jobs must be a number of processes from 1 to {most} (four per core), or -1 for "
+                            f"all cores; got {jobs}.")
 
 
 def _check_outputs(out: Path, case_file, companions=()) -> Path:
@@ -184,7 +181,6 @@ def _simulate(planned, duration: float):
     """Integrate a planned history with a progress bar; ``(run, wall seconds)``."""
     import time
 
-    from .io.progress import LazyBar
 
     bar = LazyBar(1000, "simulating", quiet=_OUT["quiet"], show_eta=True)
     t0 = time.perf_counter()
@@ -223,7 +219,7 @@ def _finish_history(run, out: Path, plot: bool, channels, wall: float):
     _echo(f"\nWrote {target}" + (" and " + ", ".join(str(p) for p in pngs) if pngs else ""))
     if not hist.completed:
         kept = f" The complete result {out} was kept; this run's results are in {target}." if target != out else ""
-        _say_error(f"the run did not complete: {hist.message}. Results up to that instant were written.{kept}")
+        say_error(f"the run did not complete: {hist.message}. Results up to that instant were written.{kept}")
         if hist.status is Status.INTERRUPTED:
             raise typer.Exit(interrupts.exit_status())
         raise typer.Exit(3)
@@ -255,7 +251,7 @@ def check(
 
     case = api.load_case(case_file, overrides)
     run = api.static(case, analysis.value if analysis else None)
-    _say_warnings(run.result.warnings)
+    say_warnings(run.result.warnings)
     where = case_file or "the embedded paper example"
     typer.echo(f"# {where} is valid. The case as it runs (defaults filled in"
                + (", --set applied" if overrides else "") + "):")
@@ -283,10 +279,10 @@ def static(
     _begin(ctx)
     case = api.load_case(case_file, overrides)
     out = output if output is not None else Path("runs") / case.name / "static.h5"
-    _check_outputs(out, case_file, [out.with_suffix(".png")] if plot else [])
+    _check_outputs(out, case_file, (lambda o: [o.with_suffix(".png")]) if plot else [])
     _effective(ctx, output=out)
     run = api.static(case, analysis.value if analysis else None)
-    _say_warnings(run.result.warnings)
+    say_warnings(run.result.warnings)
     _echo(static_summary(case, run.result))
     run.to_hdf5(out)
     msg = f"\nWrote {out}"
@@ -332,10 +328,10 @@ def history(
         )
     out = output if output is not None else Path("runs") / case.name / f"history-w{w:g}-d{dur:g}.h5"
     chans = parse_channels(channels, case.history.channels, 2 * case.cable.n_nodes)
-    _check_outputs(out, case_file, _history_pngs(out) if plot else [])
+    _check_outputs(out, case_file, _history_pngs if plot else [])
     planned = api.plan_history_run(case, omega, dur, output_step, analysis.value if analysis else None,
                                    integrator.value if integrator else None)
-    _say_warnings(planned.plan.static.warnings)
+    say_warnings(planned.plan.static.warnings)
     _guard(planned.cost(), force, "Shorten --duration, raise --output-step or integrator.dt", out)
     _effective(ctx, output=out, omega=w, duration=dur, output_step=planned.plan.output_step,
                integrator={"name": planned.plan.integrator.name, **planned.plan.integrator.settings()})
@@ -381,10 +377,10 @@ def free_vibration(
     stem = "free-vibration" + (f"-mode{k}" if k is not None else "") + (f"-v{v:g}" if v is not None and k else "")
     out = output if output is not None else Path("runs") / case.name / f"{stem}.h5"
     chans = parse_channels(channels, fv.channels, 2 * case.cable.n_nodes)
-    _check_outputs(out, case_file, _history_pngs(out) if plot else [])
+    _check_outputs(out, case_file, _history_pngs if plot else [])
     planned = api.plan_free_vibration_run(case, mode, peak_velocity, damping_ratio, dur, output_step,
                                           analysis.value if analysis else None, integrator.value if integrator else None)
-    _say_warnings(planned.plan.static.warnings)
+    say_warnings(planned.plan.static.warnings)
     _guard(planned.cost(), force, "Shorten --duration, raise --output-step or integrator.dt", out)
     _effective(ctx, output=out, mode=k, peak_velocity=v, duration=dur, output_step=planned.plan.output_step,
                integrator={"name": planned.plan.integrator.name, **planned.plan.integrator.settings()})
@@ -424,8 +420,7 @@ def sweep(
     from .io.journal import fingerprint, nothing_to_resume
 
     _begin(ctx)
-    if jobs == 0 or jobs < -1:
-        raise CablesimError("--jobs must be a positive number of processes, or -1 for all cores.")
+    _check_jobs(jobs)
     if scheduler is not None and backend != Backend.dask:
         raise CablesimError(
             f"--scheduler {scheduler} is used only with --backend dask (the default backend, loky, runs "
@@ -433,7 +428,8 @@ def sweep(
         )
     case = api.load_case(case_file, [*(overrides or ()), *sweep_flag_overrides(omega, duration, channels)])
     out = output if output is not None else Path("runs") / case.name / "sweep.h5"
-    _check_outputs(out, case_file, [out.with_suffix(".png")] if plot else [])
+    _check_outputs(out, case_file, lambda o: [o.with_name(o.name + ".journal"), o.with_name(o.name + ".lock"),
+                                              *([o.with_suffix(".png")] if plot else [])])
     an, integ = (analysis.value if analysis else None), (integrator.value if integrator else None)
     if resume and nothing_to_resume(out, fingerprint(case.text, an, integ)):
         _echo(f"Nothing to do: {out} already holds this sweep, complete.")
@@ -451,7 +447,6 @@ def _run_sweep(ctx, case, out: Path, jobs, resume, analysis, integrator, backend
     from . import api
     from .dynamics import interrupts
     from .io.journal import snapshot_path
-    from .io.progress import LazyBar
     from .io.provenance import command_words
     from .io.report import sweep_summary
     from .plots.sweep import plot_sweep
@@ -466,18 +461,18 @@ def _run_sweep(ctx, case, out: Path, jobs, resume, analysis, integrator, backend
     except KeyboardInterrupt:
         again = shlex.join(command_words(ctx, drop=("resume", "output")) + ["--output", str(out), "--resume"])
         kept = f" (the complete result {out} is untouched)" if snapshot != out else ""
-        _say_error(f"interrupted ({interrupts.signal_name()}); every completed point is kept in {snapshot}{kept} "
+        say_error(f"interrupted ({interrupts.signal_name()}); every completed point is kept in {snapshot}{kept} "
                    f"and the journal {out.name}.journal. Finish the sweep with:", command=again)
         raise typer.Exit(interrupts.exit_status())
     res = run.result
-    _say_warnings(res.warnings)
+    say_warnings(res.warnings)
     _echo(sweep_summary(case, res, time.perf_counter() - t0))
     msg = f"\nWrote {out}"
     if plot:
         msg += f" and {plot_sweep(out)}"
     _echo(msg)
     if res.n_failed:
-        _say_error(f"{res.n_failed} of {res.n_total} sweep points stopped early; their values are partial and "
+        say_error(f"{res.n_failed} of {res.n_total} sweep points stopped early; their values are partial and "
                    "left out of the peaks (the summary above and /sweep/status name each with its cause). "
                    + res.failures()[0])
         raise typer.Exit(3)
@@ -561,8 +556,7 @@ def stress(
     from .io.paths import check_output
     from .stress import FAILED, build_cases, format_summary, format_table, run_stress, write_report
 
-    if jobs == 0 or jobs < -1:
-        raise CablesimError("--jobs must be a positive number of processes, or -1 for all cores.")
+    _check_jobs(jobs)
     check_output(md, flag="--md", suffixes=(".md",))
     check_output(png, flag="--png", suffixes=(".png",))
     total = len(build_cases(reduced))
@@ -583,7 +577,7 @@ def stress(
     _echo(f"\nWrote {md_path} and {png_path}")
     failed = sum(r["outcome"] == FAILED for r in rows)
     if failed:
-        _say_error(f"{failed} stress run(s) FAILED (listed above and in {md_path}); each is a bug to fix.")
+        say_error(f"{failed} stress run(s) FAILED (listed above and in {md_path}); each is a bug to fix.")
         raise typer.Exit(1)
 
 

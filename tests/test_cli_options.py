@@ -27,7 +27,7 @@ FLAGS = {
     "mode-0": (FV + ["--mode", "0", "--peak-velocity", "1"], ["--mode must be"]),
     "scheduler-without-dask": (["sweep", "--scheduler", "tcp://localhost:8786", "--no-plot"],
                                ["--scheduler", "only with --backend dask"]),
-    "jobs-0": (["sweep", "--jobs", "0", "--no-plot"], ["--jobs must be a positive"]),
+    "jobs-0": (["sweep", "--jobs", "0", "--no-plot"], ["--jobs must be a number of processes from 1 to"]),
 }
 
 
@@ -56,3 +56,39 @@ def test_dt_in_the_file_conflicts_with_dopri5(invoke_cli, write_case, tmp_path):
     case = write_case(EXAMPLE + "integrator:\n  name: rk4\n  dt: 0.01\n")
     res = invoke_cli("history", case, "--omega", "2.4", "--duration", "5", "--integrator", "dopri5", "--no-plot")
     assert_refused(res, tmp_path, "--integrator dopri5 conflicts", "integrator.dt", keep=(case,))
+
+
+USAGE = {
+    "not-a-number": (["history", "--omega", "abc"], ["Invalid value for '--omega'", "cablesim history --help"]),
+    "unknown-option": (["history", "--bogus"], ["No such option: --bogus", "cablesim history --help"]),
+    "unknown-command": (["frobnicate"], ["No such command 'frobnicate'", "cablesim --help"]),
+    "unknown-choice": (["static", "--analysis", "foo"], ["'foo' is not one of 'exact', 'approximate'"]),
+    "extra-argument": (["example", "x"], ["unexpected extra argument"]),
+    "missing-value": (["history", "--omega"], ["--omega"]),
+    "jobs-too-many": (["sweep", "--jobs", "100000", "--no-plot"], ["--jobs must be a number of processes from 1 to"]),
+}
+
+
+@pytest.mark.parametrize("name", USAGE)
+def test_usage_errors_are_one_paragraph_with_exit_2(name, invoke_cli, tmp_path):
+    args, needles = USAGE[name]
+    assert_refused(invoke_cli(*args), tmp_path, *needles)
+
+
+def test_cablesim_alone_prints_the_help(invoke_cli):
+    res = invoke_cli()
+    assert res.returncode == 0 and "Commands:" in res.stdout and "check" in res.stdout
+
+
+def test_a_closed_output_pipe_is_no_traceback(tmp_path):
+    import subprocess
+    import sys
+
+    cmd = f"{sys.executable} -m cablesim.cli example | head -c 10"
+    res = subprocess.run(cmd, shell=True, cwd=tmp_path, capture_output=True, text=True, timeout=60)
+    assert res.stdout == "# cablesim" and "Traceback" not in res.stderr and "Error" not in res.stderr
+
+
+def test_a_displacement_beyond_the_cable_is_refused(invoke_cli, tmp_path):
+    res = invoke_cli("free-vibration", "--set", "free_vibration.z0=[1.0e5, 0.0, 0.0, 0.0]", "--no-plot")
+    assert_refused(res, tmp_path, "free_vibration.z0 moves a node by more than the cable's whole length (340 m)")

@@ -142,3 +142,25 @@ def test_a_stale_lock_is_taken_over(invoke_cli, write_case, tmp_path):
     res = invoke_cli("sweep", case, "-o", "out.h5", "--no-plot", "--jobs", "1")
     assert res.returncode == 0, res.stderr
     assert not (tmp_path / "out.h5.lock").exists()
+
+
+def test_a_root_folder_as_the_output_is_refused(invoke_cli, case, tmp_path):
+    assert_refused(invoke_cli("static", case, "-o", "/"), tmp_path, "-o /: names a folder", keep=(case,))
+
+
+@pytest.mark.parametrize("blocker", ["s.png", "s.h5.journal", "s.h5.lock"])
+def test_a_folder_where_a_companion_file_goes_is_refused(blocker, invoke_cli, write_case, tmp_path):
+    case = write_case(EXAMPLE.replace("num: 56}", "num: 2}"))
+    (tmp_path / blocker).mkdir()
+    assert_refused(invoke_cli("sweep", case, "-o", "s.h5"), tmp_path, f"the file {blocker} written beside it is a "
+                   "folder", keep=(case,))
+
+
+def test_a_malformed_history_file_is_refused_by_plot(invoke_cli, case, tmp_path):
+    ok = invoke_cli("history", case, "--omega", "2.4", "--duration", "5", "--no-plot", "-o", "h.h5")
+    assert ok.returncode == 0, ok.stderr
+    with h5py.File(tmp_path / "h.h5", "a") as f:
+        del f["history/t"]
+        f["history/t"] = [1.0, 2.0]
+    assert_refused(invoke_cli("plot", "h.h5", "-o", "h.png"), tmp_path, "is malformed", "do not match",
+                   keep=(case, tmp_path / "h.h5"))

@@ -79,6 +79,10 @@ class Case(StrictModel):
             v = getattr(fv, key)
             if v is not None and len(v) != 2 * n:
                 raise ValueError(f"free_vibration.{key} has {len(v)} values; it needs 2n = {2 * n}")
+        length = sum(self.cable.S)
+        if fv.z0 is not None and max(abs(x) for x in fv.z0) > length:
+            raise ValueError(f"free_vibration.z0 moves a node by more than the cable's whole length ({length:g} m); "
+                             "give displacements from the equilibrium smaller than that, in m")
         if fv.mode is not None and fv.mode > 2 * n:
             raise ValueError(f"free_vibration.mode must be between 1 and 2n = {2 * n}")
         for section in ("history", "free_vibration", "sweep", "outputs"):

@@ -194,6 +194,8 @@ def simulate(
     _observe_all(prm, t, S, np.array(eom.F1, dtype=float), zc, ze, T, residual, slack, approximate_workspace(eom.cable.n_nodes), split)
     # Nothing non-finite leaves silently: cut the record at the first bad instant.
     bad = ~(np.isfinite(S).all(axis=1) & np.isfinite(T).all(axis=1) & np.isfinite(residual))
+    if split and not (np.isfinite(zc[0]).all() and np.isfinite(ze[0]).all()):
+        split = False  # no inextensible split even at the start (a displaced start far from it): none
     if split:
         bad |= ~(np.isfinite(zc).all(axis=1) & np.isfinite(ze).all(axis=1))
     if bad.any():

@@ -360,12 +360,17 @@ def read_history(path):
                 f"The history file {path} is malformed: /history/{{{', '.join(missing)}}} missing. "
                 "Rerun the history."
             )
-        data = {k: np.asarray(g[k][()]) for k in need}
-        zc = np.asarray(g["zc"][()]) if "zc" in g else None
-        ze = np.asarray(g["ze"][()]) if "ze" in g else None
-        dof = tuple(int(d) for d in np.asarray(g["dof"][()]).ravel()) if "dof" in g else None
-        attrs = {k: _plain(v) for k, v in g.attrs.items()}
-        modal = np.asarray(f["modal/omega"][()], dtype=float) if "modal/omega" in f else np.empty(0)
+        try:
+            data = {k: np.asarray(g[k][()], dtype=float) for k in need}
+            zc = np.asarray(g["zc"][()], dtype=float) if "zc" in g else None
+            ze = np.asarray(g["ze"][()], dtype=float) if "ze" in g else None
+            dof = tuple(int(d) for d in np.asarray(g["dof"][()]).ravel()) if "dof" in g else None
+            attrs = {k: _plain(v) for k, v in g.attrs.items()}
+            modal = np.asarray(f["modal/omega"][()], dtype=float) if "modal/omega" in f else np.empty(0)
+        except (TypeError, ValueError, KeyError, AttributeError):
+            raise CablesimError(f"The history file {path} is malformed: a dataset under /history is not an "
+                                "array of numbers. Rerun the history.") from None
+    _check_history_shapes(path, data, zc, ze)
     if dof is not None and dof == tuple(range(1, data["y0"].size + 1)):
         dof = None  # every DOF, in order
     omega = attrs.pop("omega", None)
@@ -388,6 +393,21 @@ def read_history(path):
         y0=data["y0"], T0=data["T0"], omega=omega, analysis=analysis, integrator=integrator,
         status=status, message=message, t_stop=t_stop, modal_omega=modal, settings=attrs, dof=dof,
     )
+
+
+def _check_history_shapes(path, data: dict, zc, ze) -> None:
+    """Refuse a history file whose arrays do not fit together (time along the first axis)."""
+    m = data["t"].shape[0] if data["t"].ndim == 1 else -1
+    want = {"z": 2, "v": 2, "T": 2, "residual": 1}
+    bad = [k for k, nd in want.items() if data[k].ndim != nd or data[k].shape[0] != m]
+    bad += [k for k, a in (("zc", zc), ("ze", ze)) if a is not None and a.shape != data["z"].shape]
+    if m < 1 or data["z"].shape != data["v"].shape:
+        bad.append("t")
+    if bad:
+        raise CablesimError(
+            f"The history file {path} is malformed: /history/{{{', '.join(sorted(set(bad)))}}} do not match "
+            "the saved instants /history/t. Rerun the history."
+        )
 
 
 def read_static_drawing(path: Path, case):

@@ -17,11 +17,13 @@ None of this imports h5py: the command line checks its outputs before loading an
 from __future__ import annotations
 
 import errno
+import functools
 import json
 import os
 import shutil
 import socket
 import stat
+import tempfile
 import time
 from pathlib import Path
 
@@ -31,8 +33,11 @@ from ..errors import CablesimError
 HDF5_SUFFIXES = (".h5", ".hdf5")
 
 
-def _fail(flag: str, path: Path, why: str, fix: str) -> CablesimError:
-    return CablesimError(f"{flag} {path}: {why}. {fix}", field="output")
+def _fail(flag: str, path: Path, why: str, fix: str, owner: Path | None = None) -> CablesimError:
+    if owner is None:
+        return CablesimError(f"{flag} {path}: {why}. {fix}", field="output")
+    return CablesimError(f"{flag} {owner}: the file {path} written beside it {why}. Move {path} away, or give "
+                         f"another {flag}.", field="output")
 
 
 def _existing_ancestor(folder: Path) -> Path:
@@ -51,35 +56,45 @@ def _same_file(a: Path, b: Path) -> bool:
         return False
 
 
-def _check_target(path: Path, flag: str, inputs) -> None:
+def _check_target(path: Path, flag: str, inputs, owner: Path | None = None) -> None:
     """One file to be written: not a folder, device or input; its folder writable."""
+    fail = functools.partial(_fail, owner=owner)
     if os.path.lexists(path):
         try:
             st = os.stat(path)
         except OSError as exc:
-            raise _fail(flag, path, f"cannot be examined ({exc.strerror})", "Give another file name.") from None
+            raise fail(flag, path, f"cannot be examined ({exc.strerror})", "Give another file name.") from None
         if stat.S_ISDIR(st.st_mode):
-            raise _fail(flag, path, "is a folder", f"Give a file name, for example {path / ('result' + path.suffix)}.")
+            raise fail(flag, path, "is a folder", f"Give a file name, for example {path / ('result' + path.suffix)}.")
         if not stat.S_ISREG(st.st_mode):
-            raise _fail(flag, path, "is a device or special file, not a regular file, and would be replaced",
+            raise fail(flag, path, "is a device or special file, not a regular file, and would be replaced",
                         "Give the name of an ordinary file.")
         for inp in inputs:
             if inp is not None and _same_file(path, Path(inp)):
-                raise _fail(flag, path, f"is this run's input {inp}, which writing the results would destroy",
+                raise fail(flag, path, f"is this run's input {inp}, which writing the results would destroy",
                             "Give another output name.")
     folder = path.parent
     base = _existing_ancestor(folder)
     if not base.is_dir():
-        raise _fail(flag, path, f"{base} is a file, so no folder can be made inside it",
+        raise fail(flag, path, f"{base} is a file, so no folder can be made inside it",
                     "Give an output path in a folder.")
     try:
         readonly = bool(os.statvfs(base).f_flag & os.ST_RDONLY)
     except OSError:
         readonly = False
-    if readonly or not os.access(base, os.W_OK | os.X_OK):
-        raise _fail(flag, path, f"the folder {base} cannot be written"
+    if readonly or not os.access(base, os.W_OK | os.X_OK) or not _probe(base):
+        raise fail(flag, path, f"the folder {base} cannot be written"
                     + (" (a read-only file system)" if readonly else " (no permission)"),
-                    "Give -o in a folder you can write to.")
+                    f"Give {flag} in a folder you can write to.")
+
+
+def _probe(folder: Path) -> bool:
+    """Whether a file can really be created in ``folder`` (permissions can say yes and be wrong)."""
+    try:
+        with tempfile.NamedTemporaryFile(dir=folder, prefix=".cablesim-probe-"):
+            return True
+    except OSError:
+        return False
 
 
 def check_output(path, *, inputs=(), flag: str = "-o", suffixes=HDF5_SUFFIXES, companions=(),
@@ -96,7 +111,7 @@ def check_output(path, *, inputs=(), flag: str = "-o", suffixes=HDF5_SUFFIXES, c
         How messages name the option (``"-o"``, ``"--md"``).
     suffixes : tuple of str
         Allowed suffixes (lower case).
-    companions : iterable of paths
+    companions : iterable of paths, or a function of ``path`` giving them
         Other files the run writes beside it (PNGs), checked the same way.
     need_bytes : float
         Estimated size of what is written; refused if the disk has less room.
@@ -112,13 +127,17 @@ def check_output(path, *, inputs=(), flag: str = "-o", suffixes=HDF5_SUFFIXES, c
     """
     path = Path(path)
     inputs = [Path(i) for i in inputs if i is not None]
+    if not path.name or path.name in (".", ".."):
+        raise _fail(flag, path, "names a folder, not a file", f"Give a file name, for example {flag} result{suffixes[0]}.")
     if path.suffix.lower() not in suffixes:
         what = "an HDF5 result" if suffixes == HDF5_SUFFIXES else f"a {suffixes[0]} file"
         extra = " (the plots are written beside it as PNG files)" if suffixes == HDF5_SUFFIXES else ""
         raise _fail(flag, path, f"this option names {what}{extra}, so its name must end in "
                     f"{' or '.join(suffixes)}", f"Give, for example, {flag} {path.with_suffix(suffixes[0])}.")
+    if callable(companions):
+        companions = companions(path)
     for p in (path, *map(Path, companions)):
-        _check_target(p, flag, inputs)
+        _check_target(p, flag, inputs, owner=None if p == path else path)
         remove_stale_parts(p)
     check_room(path, need_bytes, flag)
     return path

@@ -20,13 +20,17 @@ The package, from the bottom layer up (a module imports only from layers below i
 - ``cable``, ``closure``, ``statics``, ``modal`` -- the model: geometry, the closure problem on
   the complementary energy, the three static equilibria, modes and Rayleigh damping;
 - ``dynamics/`` -- compiled kernels, the equations of motion (``equations``), the integrators
-  (``integrators/``), time histories (``simulate``), steady states (``steady``), spectra, run
-  status (``status``); it never sees a case file;
+  (``integrators/``), time histories (``simulate``, in chunks bounded in steps), steady states
+  (``steady``), spectra, run status (``status``), Ctrl-C and SIGTERM (``interrupts``); it never
+  sees a case file;
 - ``orbits/`` -- periodic orbits by shooting, Floquet multipliers, continuation, bifurcations;
-- ``case`` -- YAML case files validated into a frozen :class:`~cablesim.case.Case`;
+- ``case`` -- YAML case files (strict YAML: ``strict_yaml``; numbers in stated ranges:
+  ``numbers``) validated into a frozen :class:`~cablesim.case.Case`;
 - ``analyses/`` -- case in, result out: ``setup`` (equations, integrator and step rules, once),
-  ``static``, ``dynamic``, ``sweep``, ``continuation``; no drawing, no files;
-- ``io/`` -- HDF5 writers and readers (``hdf5``, the only h5py), sweep journal, text summaries;
+  ``static``, ``dynamic``, ``sweep``, ``continuation``, ``cost`` (estimates before a run); no
+  drawing, no files;
+- ``io/`` -- HDF5 writers and readers (``hdf5``, the only h5py), sweep journal, text summaries,
+  output paths checked and locked (``paths``), the record of each run (``provenance``), progress;
 - ``plots/`` -- every PNG (the only matplotlib);
 - ``stress/`` -- numerical stability across parameter ranges (``cablesim stress``);
 - ``api`` and ``cli`` -- the Python API and the ``cablesim`` command.

@@ -17,17 +17,20 @@ from pathlib import Path
 from typing import Callable
 
 from .analyses.continuation import ContinuationResult, run_continuation
-from .analyses.dynamic import run_free_vibration, run_history
+from .analyses.cost import Cost
+from .analyses.dynamic import HistoryPlan, plan_free_vibration, plan_history
 from .analyses.static import StaticResult, run_static
-from .analyses.sweep import SweepResult, run_sweep
+from .analyses.sweep import SweepResult, estimate_sweep, run_sweep
 from .case import Case, case_from_dict
 from .case import load_case as _read_case_file
 from .dynamics.integrators import Integrator
 from .dynamics.result import HistoryResult
+from .errors import CablesimError
 from .io.continuation import write_continuation
 from .io.hdf5 import write_history, write_static
-from .io.sweeps import write_sweep
 from .io.journal import SweepFile, fingerprint
+from .io.provenance import invocation
+from .io.sweeps import write_sweep
 from .orbits import OrbitPoint
 from .plots.cable import plot_cable
 from .plots.continuation import plot_continuation
@@ -109,6 +112,25 @@ class SweepRun:
         return plot_sweep(h5_path, path)
 
 
+@dataclass(frozen=True)
+class Planned:
+    """A time history checked and set up but not yet integrated: ``cost()`` says what it will
+    take (:class:`~cablesim.analyses.cost.Cost`), ``run()`` integrates it."""
+
+    case: Case
+    command: str
+    plan: HistoryPlan
+
+    def cost(self) -> Cost:
+        """Steps, saved instants, memory and disk of the run."""
+        return self.plan.cost()
+
+    def run(self, progress: Callable[[float], None] | None = None) -> HistoryRun:
+        """Integrate (``progress`` is called with the simulated time reached, s)."""
+        st, hist, integ = self.plan.run(progress)
+        return HistoryRun(self.case, self.command, st, hist, integ)
+
+
 def static(case: Case, analysis: str | None = None) -> StaticRun:
     """Static equilibrium under F0 (inextensible, approximate, exact), modes and damping.
 
@@ -140,8 +162,14 @@ def history(
     progress : callable, optional
         Called with the simulated time reached, s.
     """
-    st, hist, integ = run_history(case, omega, duration, output_step, analysis, integrator, progress=progress)
-    return HistoryRun(case, "history", st, hist, integ)
+    return plan_history_run(case, omega, duration, output_step, analysis, integrator).run(progress)
+
+
+def plan_history_run(case: Case, omega: float | None = None, duration: float | None = None,
+                     output_step: float | None = None, analysis: str | None = None,
+                     integrator: str | None = None) -> Planned:
+    """:func:`history` checked and set up, not integrated (see :class:`Planned`)."""
+    return Planned(case, "history", plan_history(case, omega, duration, output_step, analysis, integrator))
 
 
 def free_vibration(
@@ -157,10 +185,22 @@ def free_vibration(
 ) -> HistoryRun:
     """Damped free vibration started with velocities along linear mode ``mode`` (largest
     component ``peak_velocity``, m/s); defaults from the case's ``free_vibration:`` section."""
-    st, hist, integ = run_free_vibration(
-        case, mode, peak_velocity, damping_ratio, duration, output_step, analysis, integrator, progress=progress
-    )
-    return HistoryRun(case, "free-vibration", st, hist, integ)
+    return plan_free_vibration_run(case, mode, peak_velocity, damping_ratio, duration, output_step, analysis,
+                                   integrator).run(progress)
+
+
+def plan_free_vibration_run(case: Case, mode: int | None = None, peak_velocity: float | None = None,
+                            damping_ratio: float | None = None, duration: float | None = None,
+                            output_step: float | None = None, analysis: str | None = None,
+                            integrator: str | None = None) -> Planned:
+    """:func:`free_vibration` checked and set up, not integrated (see :class:`Planned`)."""
+    plan = plan_free_vibration(case, mode, peak_velocity, damping_ratio, duration, output_step, analysis, integrator)
+    return Planned(case, "free-vibration", plan)
+
+
+def sweep_cost(case: Case, analysis: str | None = None, integrator: str | None = None) -> Cost:
+    """Upper bound of what :func:`sweep` will take (every point to the cap), nothing integrated."""
+    return estimate_sweep(case, analysis, integrator)
 
 
 def sweep(
@@ -193,7 +233,8 @@ def sweep(
     """
     recorder = None
     if output is not None:
-        recorder = SweepFile(Path(output), fingerprint(case.text, analysis, integrator), resume=resume)
+        recorder = SweepFile(Path(output), fingerprint(case.text, analysis, integrator), resume=resume,
+                             command=invocation()["command_line"])
     res = run_sweep(case, case.text, analysis, integrator, n_jobs=jobs, backend=backend, scheduler=scheduler,
                     progress=progress, recorder=recorder)
     return SweepRun(case, res)
@@ -240,3 +281,22 @@ def continuation(
         Receives each converged orbit (``branch``, ``parameter``, ``period``, ``stable``, ...).
     """
     return ContinuationRun(case, run_continuation(case, analysis, progress))
+def estimates(case: Case, analysis: str | None = None, integrator: str | None = None) -> dict[str, str]:
+    """What each command would take on this case, in words (``cablesim check``): the cost of
+    ``history``, ``free-vibration`` and ``sweep`` with the case's settings, or why the command
+    needs more (``"needs --omega ..."``) or refuses the case."""
+    out = {"static": f"statics and modes of {case.cable.n_nodes} nodes (a fraction of a second)"}
+    tries = {
+        "history": lambda: plan_history_run(case, analysis=analysis, integrator=integrator).cost(),
+        "free-vibration": lambda: plan_free_vibration_run(case, analysis=analysis, integrator=integrator).cost(),
+        "sweep": lambda: sweep_cost(case, analysis, integrator),
+    }
+    for command, make in tries.items():
+        try:
+            cost = make()
+        except CablesimError as exc:
+            out[command] = f"cannot run with the case's settings alone: {exc}"
+            continue
+        why = cost.impossible() or cost.excess()
+        out[command] = cost.text().split(": ", 1)[1] + (f"; needs --force: {why}" if why else "")
+    return out

@@ -181,3 +181,22 @@ def column_name(result, col: int) -> str:
 def column_description(result, col: int) -> str:
     """What a stored column is, e.g. ``"node 2, vertical (down +)"``."""
     return channel_description(result.dof_numbers[col] - 1)
+
+
+def parse_channels(spec: str | None, fallback, n_dof: int, flag: str = "--channels") -> list[str] | None:
+    """The channels of a ``z2,z4`` option (or ``fallback``), each checked against ``n_dof``.
+
+    Raises
+    ------
+    CablesimError
+        For an empty list or a channel the cable does not have.
+    """
+    names = [c.strip() for c in spec.split(",") if c.strip()] if spec else (list(fallback) if fallback else None)
+    if spec is not None and not names:
+        raise CablesimError(f"{flag} is empty; give DOF names such as z2,z4.", field="channels")
+    for name in names or ():
+        try:
+            channel_index(name, n_dof)
+        except CablesimError as exc:
+            raise CablesimError(f"{flag}: {exc}", field="channels") from None
+    return names

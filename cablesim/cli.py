@@ -1,7 +1,10 @@
 """The ``cablesim`` command line: a thin layer over :mod:`cablesim.api`, the writers and plots.
 
 Every problem a user can fix is reported as one paragraph on standard error with exit status
-2 and no traceback; Ctrl-C exits with status 130 and keeps whatever was already written.
+2, no traceback and no file written; every output is checked before anything is computed.
+Ctrl-C exits with status 130 and SIGTERM with 143, both keeping whatever was computed (an
+incomplete result never replaces a complete one: it is written beside it). A run that stopped
+early (a slack segment; a sweep with failed points) exits with status 3.
 
 Each command imports its machinery when it runs (numba, scipy, h5py, matplotlib are heavy), so
 that ``cablesim --help`` starts at once.
@@ -10,8 +13,9 @@ that ``cablesim --help`` starts at once.
 from __future__ import annotations
 
 import functools
+import shlex
 import sys
-import textwrap
+import warnings
 from enum import Enum
 from pathlib import Path
 from typing import Optional
@@ -19,40 +23,63 @@ from typing import Optional
 import typer
 
 from .errors import CablesimError
+from .io.terminal import CommandGroup, LazyBar, StatusLine, say_error, say_warnings
 from .names import ANALYSES, INTEGRATORS
 from .version import __version__
 
 app = typer.Typer(
+    cls=CommandGroup,
     add_completion=False,
     no_args_is_help=True,
+    rich_markup_mode=None,  # help texts are plain: "[default: ...]" must not be read as markup
     help="Nonlinear statics and dynamics of weightless sagging elasto-flexible cables. "
     "Each command reads a YAML case file (or, given none, the paper's example: see "
-    "`cablesim example`) and writes HDF5 results and PNG plots under runs/<case name>/.",
+    "`cablesim example`) and writes HDF5 results and PNG plots under runs/<case name>/. "
+    "SI units throughout (m, N, kg, s, rad/s). Exit status: 0 done, 2 refused input (nothing "
+    "written), 3 stopped early or a sweep point failed, 130 Ctrl-C, 143 SIGTERM.",
 )
-
 
 Analysis = Enum("Analysis", {a.replace("-", "_"): a for a in ANALYSES}, type=str)
 IntegratorName = Enum("IntegratorName", {a.replace("-", "_"): a for a in INTEGRATORS}, type=str)
 
+#: --quiet / --verbose of this invocation.
+_OUT = {"quiet": False, "verbose": False}
 
-def _say_error(message: str) -> None:
-    width = 100
-    sys.stderr.write(textwrap.fill("error: " + message, width=width) + "\n")
+
+def _note(message: str, verbose_only: bool = False) -> None:
+    """A line on standard error, unless --quiet (or, for details, unless --verbose)."""
+    if not _OUT["quiet"] and (_OUT["verbose"] or not verbose_only):
+        sys.stderr.write(message + "\n")
+
+
+def _echo(text: str) -> None:
+    """Standard output (summaries), unless --quiet."""
+    if not _OUT["quiet"]:
+        typer.echo(text)
 
 
 def user_errors(func):
-    """Turn CablesimError into a one-paragraph message and exit status 2."""
+    """Turn CablesimError into a one-paragraph message and exit status 2; an interruption
+    (Ctrl-C, SIGTERM) into a message and exit status 130 or 143."""
 
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
+        from .dynamics import interrupts
+
+        interrupts.install()
         try:
-            return func(*args, **kwargs)
+            with warnings.catch_warnings():
+                # cablesim checks its numbers itself; numpy's notes on NaN would only precede the message
+                warnings.simplefilter("ignore", RuntimeWarning)
+                return func(*args, **kwargs)
         except CablesimError as exc:
-            _say_error(str(exc))
+            say_error(str(exc))
             raise typer.Exit(2)
         except KeyboardInterrupt:
-            _say_error("interrupted; files already completed were kept.")
-            raise typer.Exit(130)
+            say_error(f"interrupted ({interrupts.signal_name()}); files already completed were kept.")
+            raise typer.Exit(interrupts.exit_status())
+        finally:
+            interrupts.restore()
 
     return wrapper
 
@@ -66,17 +93,141 @@ def _version(value: bool):
 @app.callback()
 def _root(
     version: bool = typer.Option(False, "--version", callback=_version, is_eager=True, help="Print the version."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Print only errors and warnings (no summary, no progress)."),
+    verbose: bool = typer.Option(False, "--verbose", "-v", help="Also print the effective options and the cost estimate."),
 ):
-    pass
+    if quiet and verbose:
+        say_error("--quiet and --verbose exclude each other; give one of them.")
+        raise typer.Exit(2)
+    _OUT.update(quiet=quiet, verbose=verbose)
 
 
+# ----------------------------------------------------------------------------------------------
+# The command line as run, for provenance and for the --resume hint
+# ----------------------------------------------------------------------------------------------
+def _begin(ctx, **effective) -> str:
+    """Record this invocation for the result files; print the options with --verbose."""
+    from .io.provenance import command_words, plain, set_invocation
+
+    line = shlex.join(command_words(ctx))
+    options = {k: plain(v) for k, v in ctx.params.items()}
+    options.update({k: plain(v) for k, v in effective.items()})
+    set_invocation(line, options)
+    _note(f"command: {line}", verbose_only=True)
+    return line
+
+
+def _effective(ctx, **values) -> None:
+    """Add effective values (the output chosen, the frequency used) to the recorded options."""
+    from .io.provenance import invocation, plain, set_invocation
+
+    inv = invocation()
+    set_invocation(inv["command_line"], {**inv["options"], **{k: plain(v) for k, v in values.items()}})
+    _note("effective options: " + ", ".join(f"{k} = {plain(v)}" for k, v in values.items()), verbose_only=True)
+
+
+def _compile_notice(cache: Path | None = None) -> None:
+    """One line when the compiled kernels are not yet in numba's cache (the first run)."""
+    cache = cache if cache is not None else Path(__file__).resolve().parent / "dynamics" / "__pycache__"
+    if not list(cache.glob("equations.rate-*.nbi")):
+        _note("compiling the numerical kernels on first use (about a minute; cached for later runs) ...")
+
+
+# ----------------------------------------------------------------------------------------------
+# Shared options and steps
+# ----------------------------------------------------------------------------------------------
 CASE_ARG = typer.Argument(None, help="YAML case file; omit it to run the paper's example.", show_default=False)
+SET_OPT = typer.Option(None, "--set", metavar="KEY=VALUE", help="Override a case-file value, with a dotted key "
+                       "(e.g. sweep.duration=1000); repeatable. Values are read as YAML.")
+ANALYSIS_OPT = typer.Option(None, "--analysis", help="Override the case file's analysis (default: analysis: in "
+                            "the case file, else exact).")
+INTEGRATOR_OPT = typer.Option(None, "--integrator", help="Time-integration scheme (default: integrator.name in "
+                              "the case file, else dopri5, or generalized-alpha for a stiff cable).")
+FORCE_OPT = typer.Option(False, "--force", help="Run even when the cost estimate is above the limits (1e8 time "
+                         "steps, a sweep 1e9, or 4 GB of memory).")
 
 
-def _output(case, out: Optional[Path], stem: str) -> Path:
-    return out if out is not None else Path("runs") / case.name / f"{stem}.h5"
+def _check_jobs(jobs: int) -> None:
+    import os
+
+    most = max(64, 4 * (os.cpu_count() or 1))
+    if jobs == 0 or jobs < -1 or jobs > most:
+        raise CablesimError(f"--jobs must be a number of processes from 1 to {most} (four per core), or -1 for "
+                            f"all cores; got {jobs}.")
 
 
+def _check_outputs(out: Path, case_file, companions=()) -> Path:
+    """Refuse, before anything runs, an output that cannot or must not be written."""
+    from .io.paths import check_output
+
+    return check_output(out, inputs=[case_file] if case_file else [], companions=companions)
+
+
+def _guard(cost, force: bool, fix: str, out: Path | None = None) -> None:
+    """Refuse a run above the cost limits (unless --force) or beyond this machine; say a long
+    run's estimate before it starts; refuse a disk without room for the results."""
+    from .io.paths import check_room
+
+    err = cost.refusal(force, fix)
+    if err is not None:
+        raise err
+    if out is not None:
+        check_room(out, cost.disk)
+    long = cost.steps > 1e7 or cost.memory > 1e8
+    _note(f"estimate: {cost.text()}", verbose_only=not long)
+
+
+def _simulate(planned, duration: float):
+    """Integrate a planned history with a progress bar; ``(run, wall seconds)``."""
+    import time
+
+
+    bar = LazyBar(1000, "simulating", quiet=_OUT["quiet"], show_eta=True)
+    t0 = time.perf_counter()
+    with bar:
+        run = planned.run(progress=lambda t: bar.set(int(1000 * t / duration)))
+    return run, time.perf_counter() - t0
+
+
+def _history_pngs(out: Path) -> list[Path]:
+    prefix = str(out.with_suffix(""))
+    return [Path(f"{prefix}-{kind}.png") for kind in ("waveforms", "phase", "lissajous", "tensions", "fft")]
+
+
+def _finish_history(run, out: Path, plot: bool, channels, wall: float):
+    """Write the history (beside a complete result if this run is not complete), plot, report."""
+    from dataclasses import replace
+
+    from .channels import channel_index
+    from .dynamics import interrupts
+    from .dynamics.status import Status
+    from .io.hdf5 import is_complete_result
+    from .io.paths import beside
+    from .io.report import history_summary
+
+    case, hist = run.case, run.history
+    if case.outputs.channels:  # a scene keeps only the channels it draws
+        keep = [channel_index(c, hist.n_dof) + 1 for c in case.outputs.channels]
+        run = replace(run, history=hist.keep(keep))
+        hist = run.history
+    target = out
+    if not hist.completed and is_complete_result(out):
+        target = beside(out)  # never replace a complete result with an incomplete one
+    run.to_hdf5(target)
+    pngs = run.plot(target.with_suffix(""), channels=channels) if plot and hist.t.size > 1 else []
+    _echo(history_summary(case, hist, run.integrator, wall))
+    _echo(f"\nWrote {target}" + (" and " + ", ".join(str(p) for p in pngs) if pngs else ""))
+    if not hist.completed:
+        kept = f" The complete result {out} was kept; this run's results are in {target}." if target != out else ""
+        say_error(f"the run did not complete: {hist.message}. Results up to that instant were written.{kept}")
+        if hist.status is Status.INTERRUPTED:
+            raise typer.Exit(interrupts.exit_status())
+        raise typer.Exit(3)
+
+
+# ----------------------------------------------------------------------------------------------
+# Commands
+# ----------------------------------------------------------------------------------------------
 @app.command()
 @user_errors
 def example():
@@ -88,160 +239,154 @@ def example():
 
 @app.command()
 @user_errors
-def static(
+def check(
     case_file: Optional[Path] = CASE_ARG,
-    overrides: Optional[list[str]] = typer.Option(None, "--set", help="Override a case-file value, KEY=VALUE with a dotted key (e.g. sweep.duration=1000); repeatable."),
-    output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file [default: runs/<name>/static.h5]"),
-    analysis: Optional[Analysis] = typer.Option(None, "--analysis", help="Override the case file's analysis."),
+    overrides: Optional[list[str]] = SET_OPT,
+    analysis: Optional[Analysis] = ANALYSIS_OPT,
+    integrator: Optional[IntegratorName] = INTEGRATOR_OPT,
+):
+    """Check a case file without running anything: solve its statics, print the case as it will
+    run (every default filled in, --set applied) and the cost estimate of each command."""
+    from . import api
+
+    case = api.load_case(case_file, overrides)
+    run = api.static(case, analysis.value if analysis else None)
+    say_warnings(run.result.warnings)
+    where = case_file or "the embedded paper example"
+    typer.echo(f"# {where} is valid. The case as it runs (defaults filled in"
+               + (", --set applied" if overrides else "") + "):")
+    typer.echo(case.effective_yaml().rstrip("\n"))
+    typer.echo("# What each command would take (estimates; a sweep: every point to its cap):")
+    for command, text in api.estimates(case, analysis.value if analysis else None,
+                                       integrator.value if integrator else None).items():
+        typer.echo(f"#   {command}: {text}")
+
+
+@app.command()
+@user_errors
+def static(
+    ctx: typer.Context,
+    case_file: Optional[Path] = CASE_ARG,
+    overrides: Optional[list[str]] = SET_OPT,
+    output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file (default: runs/<name>/static.h5); the plot goes beside it as .png."),
+    analysis: Optional[Analysis] = ANALYSIS_OPT,
     plot: bool = typer.Option(True, "--plot/--no-plot", help="Also draw the cable as a PNG beside the HDF5 file."),
 ):
     """Static equilibrium under F0 (inextensible, approximate and exact), modes and damping."""
     from . import api
     from .io.report import static_summary
 
+    _begin(ctx)
     case = api.load_case(case_file, overrides)
+    out = output if output is not None else Path("runs") / case.name / "static.h5"
+    _check_outputs(out, case_file, (lambda o: [o.with_suffix(".png")]) if plot else [])
+    _effective(ctx, output=out)
     run = api.static(case, analysis.value if analysis else None)
-    typer.echo(static_summary(case, run.result))
-    out = _output(case, output, "static")
+    say_warnings(run.result.warnings)
+    _echo(static_summary(case, run.result))
     run.to_hdf5(out)
     msg = f"\nWrote {out}"
     if plot:
         msg += f" and {run.plot(out.with_suffix('.png'))}"
-    typer.echo(msg)
-
-
-class _LazyBar:
-    """A progress bar on standard error that appears only once there is progress to show
-    (so that an input error is never preceded by a bar's label)."""
-
-    def __init__(self, length: int, label: str, **kw):
-        self._args = dict(length=length, label=label, file=sys.stderr, **kw)
-        self._bar = None
-        self.done = 0
-
-    def __enter__(self):
-        return self
-
-    def set(self, done: int, length: int | None = None):
-        if self._bar is None:
-            if length is not None:
-                self._args["length"] = length
-            self._bar = typer.progressbar(**self._args).__enter__()
-        if length is not None:
-            self._bar.length = length
-        if done > self.done:
-            self._bar.update(done - self.done)
-            self.done = done
-
-    def __exit__(self, *exc):
-        if self._bar is not None:
-            self._bar.__exit__(*exc)
-        return False
-
-
-def _progress(duration: float):
-    """A progress bar for a run of ``duration`` simulated seconds, and its update function."""
-    bar = _LazyBar(1000, "simulating", show_eta=True)
-    return bar, lambda t: bar.set(int(1000 * t / duration))
-
-
-def _channels(spec: Optional[str], fallback) -> Optional[list[str]]:
-    if spec:
-        return [c.strip() for c in spec.split(",") if c.strip()]
-    return list(fallback) if fallback else None
-
-
-def _finish_history(run, out: Path, plot: bool, channels, wall: float):
-    from dataclasses import replace
-
-    from .channels import channel_index
-    from .dynamics.status import Status
-    from .io.report import history_summary
-
-    case, hist = run.case, run.history
-    if case.outputs.channels:  # a scene keeps only the channels it draws
-        keep = [channel_index(c, hist.n_dof) + 1 for c in case.outputs.channels]
-        run = replace(run, history=hist.keep(keep))
-        hist = run.history
-    run.to_hdf5(out)
-    pngs = run.plot(out.with_suffix(""), channels=channels) if plot and hist.t.size > 1 else []
-    typer.echo(history_summary(case, hist, run.integrator, wall))
-    typer.echo(f"\nWrote {out}" + (" and " + ", ".join(str(p) for p in pngs) if pngs else ""))
-    if not hist.completed:
-        _say_error(f"the run did not complete: {hist.message}. Results up to that instant were written.")
-        raise typer.Exit(130 if hist.status is Status.INTERRUPTED else 3)
+    _echo(msg)
 
 
 @app.command()
 @user_errors
 def history(
+    ctx: typer.Context,
     case_file: Optional[Path] = CASE_ARG,
-    overrides: Optional[list[str]] = typer.Option(None, "--set", help="Override a case-file value, KEY=VALUE with a dotted key (e.g. sweep.duration=1000); repeatable."),
-    omega: Optional[float] = typer.Option(None, "--omega", help="Forcing frequency w, rad/s [default: history.omega]."),
-    duration: Optional[float] = typer.Option(None, "--duration", help="Simulated time, s [default: history.duration]."),
-    output_step: Optional[float] = typer.Option(None, "--output-step", help="Interval between saved instants, s."),
-    analysis: Optional[Analysis] = typer.Option(None, "--analysis", help="Override the case file's analysis."),
-    integrator: Optional[IntegratorName] = typer.Option(None, "--integrator", help="Time-integration scheme."),
-    channels: Optional[str] = typer.Option(None, "--channels", help="DOF to plot, e.g. z2,z4."),
-    output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file [default: runs/<name>/history-w<omega>.h5]"),
+    overrides: Optional[list[str]] = SET_OPT,
+    omega: Optional[float] = typer.Option(None, "--omega", help="Forcing frequency w, rad/s, 1e-4 to 1e4 (default: history.omega in the case file)."),
+    duration: Optional[float] = typer.Option(None, "--duration", help="Simulated time, s (default: history.duration, else 600)."),
+    output_step: Optional[float] = typer.Option(None, "--output-step", help="Interval between saved instants, s (default: history.output_step, else 40 per period of w)."),
+    analysis: Optional[Analysis] = ANALYSIS_OPT,
+    integrator: Optional[IntegratorName] = INTEGRATOR_OPT,
+    channels: Optional[str] = typer.Option(None, "--channels", help="DOF to plot, e.g. z2,z4 (default: history.channels, else all)."),
+    output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file (default: runs/<name>/history-w<omega>.h5); the plots go beside it."),
     plot: bool = typer.Option(True, "--plot/--no-plot", help="Draw waveforms, phase, Lissajous, tension and FFT plots."),
+    force: bool = FORCE_OPT,
 ):
     """Forced response F(t) = F0 + FL sin(w t) at one frequency, from the equilibrium at rest."""
-    import time
-
     from . import api
+    from .case.numbers import DURATION, OMEGA, OUTPUT_STEP, check_flag
+    from .channels import parse_channels
 
+    _begin(ctx)
+    check_flag(OMEGA, omega, "--omega", "history.omega")
+    check_flag(DURATION, duration, "--duration", "history.duration")
+    check_flag(OUTPUT_STEP, output_step, "--output-step", "history.output_step")
     case = api.load_case(case_file, overrides)
     dur = duration if duration is not None else case.history.duration
-    if dur <= 0:
-        raise CablesimError("--duration must be a positive number of seconds.", field="history.duration")
     w = omega if omega is not None else case.history.omega
-    out = output if output is not None else Path("runs") / case.name / f"history-w{w:g}.h5"
-    bar, update = _progress(dur)
-    t0 = time.perf_counter()
-    with bar:
-        run = api.history(case, omega, dur, output_step, analysis.value if analysis else None,
-                          integrator.value if integrator else None, progress=update)
-    _finish_history(run, out, plot, _channels(channels, case.history.channels), time.perf_counter() - t0)
+    if w is None:
+        raise CablesimError(
+            "No forcing frequency: give --omega W (rad/s), or history.omega in the case file (a "
+            "`history:` section with `omega: 2.4`, say). `cablesim static` prints the cable's natural "
+            "frequencies to choose from.",
+            field="history.omega",
+        )
+    out = output if output is not None else Path("runs") / case.name / f"history-w{w:g}-d{dur:g}.h5"
+    chans = parse_channels(channels, case.history.channels, 2 * case.cable.n_nodes)
+    _check_outputs(out, case_file, _history_pngs if plot else [])
+    planned = api.plan_history_run(case, omega, dur, output_step, analysis.value if analysis else None,
+                                   integrator.value if integrator else None)
+    say_warnings(planned.plan.static.warnings)
+    _guard(planned.cost(), force, "Shorten --duration, raise --output-step or integrator.dt", out)
+    _effective(ctx, output=out, omega=w, duration=dur, output_step=planned.plan.output_step,
+               integrator={"name": planned.plan.integrator.name, **planned.plan.integrator.settings()})
+    _compile_notice()
+    run, wall = _simulate(planned, dur)
+    _finish_history(run, out, plot, chans, wall)
 
 
 @app.command("free-vibration")
 @user_errors
 def free_vibration(
+    ctx: typer.Context,
     case_file: Optional[Path] = CASE_ARG,
-    overrides: Optional[list[str]] = typer.Option(None, "--set", help="Override a case-file value, KEY=VALUE with a dotted key (e.g. sweep.duration=1000); repeatable."),
-    mode: Optional[int] = typer.Option(None, "--mode", help="Linear mode K giving the initial velocities."),
-    peak_velocity: Optional[float] = typer.Option(None, "--peak-velocity", help="Largest initial velocity V, m/s."),
-    damping_ratio: Optional[float] = typer.Option(None, "--damping-ratio", help="Override damping.ratio (same two modes)."),
-    duration: Optional[float] = typer.Option(None, "--duration", help="Simulated time, s [default: free_vibration.duration]."),
-    output_step: Optional[float] = typer.Option(None, "--output-step", help="Interval between saved instants, s."),
-    analysis: Optional[Analysis] = typer.Option(None, "--analysis", help="Override the case file's analysis."),
-    integrator: Optional[IntegratorName] = typer.Option(None, "--integrator", help="Time-integration scheme."),
-    channels: Optional[str] = typer.Option(None, "--channels", help="DOF to plot, e.g. z2,z4."),
-    output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file [default: runs/<name>/free-vibration-mode<K>.h5]"),
+    overrides: Optional[list[str]] = SET_OPT,
+    mode: Optional[int] = typer.Option(None, "--mode", help="Linear mode K giving the initial velocities, 1 to 2n (default: free_vibration.mode)."),
+    peak_velocity: Optional[float] = typer.Option(None, "--peak-velocity", help="Largest initial velocity V, m/s (default: free_vibration.peak_velocity)."),
+    damping_ratio: Optional[float] = typer.Option(None, "--damping-ratio", help="Override damping.ratio, 0 to below 1 (same two modes; default: free_vibration.damping_ratio, else damping:)."),
+    duration: Optional[float] = typer.Option(None, "--duration", help="Simulated time, s (default: free_vibration.duration, else 20)."),
+    output_step: Optional[float] = typer.Option(None, "--output-step", help="Interval between saved instants, s (default: free_vibration.output_step, else 40 per period)."),
+    analysis: Optional[Analysis] = ANALYSIS_OPT,
+    integrator: Optional[IntegratorName] = INTEGRATOR_OPT,
+    channels: Optional[str] = typer.Option(None, "--channels", help="DOF to plot, e.g. z2,z4 (default: free_vibration.channels, else all)."),
+    output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file (default: runs/<name>/free-vibration-mode<K>-v<V>.h5); the plots go beside it."),
     plot: bool = typer.Option(True, "--plot/--no-plot", help="Draw waveforms, phase, Lissajous, tension and FFT plots."),
+    force: bool = FORCE_OPT,
 ):
     """Damped free vibration about the equilibrium, started with velocities along a linear mode."""
-    import time
-
     from . import api
+    from .case.numbers import DAMPING_RATIO, DURATION, MODE, OUTPUT_STEP, PEAK_VELOCITY, check_flag
+    from .channels import parse_channels
 
+    _begin(ctx)
+    check_flag(MODE, mode, "--mode", "free_vibration.mode")
+    check_flag(PEAK_VELOCITY, peak_velocity, "--peak-velocity", "free_vibration.peak_velocity")
+    check_flag(DAMPING_RATIO, damping_ratio, "--damping-ratio", "free_vibration.damping_ratio")
+    check_flag(DURATION, duration, "--duration", "free_vibration.duration")
+    check_flag(OUTPUT_STEP, output_step, "--output-step", "free_vibration.output_step")
     case = api.load_case(case_file, overrides)
-    if damping_ratio is not None and not 0 <= damping_ratio < 1:
-        raise CablesimError("--damping-ratio must be in [0, 1).", field="free_vibration.damping_ratio")
-    dur = duration if duration is not None else case.free_vibration.duration
-    if dur <= 0:
-        raise CablesimError("--duration must be a positive number of seconds.", field="free_vibration.duration")
-    k = mode if mode is not None else case.free_vibration.mode
-    stem = f"free-vibration-mode{k}" if k is not None else "free-vibration"
+    fv = case.free_vibration
+    dur = duration if duration is not None else fv.duration
+    k = mode if mode is not None else fv.mode
+    v = peak_velocity if peak_velocity is not None else fv.peak_velocity
+    stem = "free-vibration" + (f"-mode{k}" if k is not None else "") + (f"-v{v:g}" if v is not None and k else "")
     out = output if output is not None else Path("runs") / case.name / f"{stem}.h5"
-    bar, update = _progress(dur)
-    t0 = time.perf_counter()
-    with bar:
-        run = api.free_vibration(case, mode, peak_velocity, damping_ratio, dur, output_step,
-                                 analysis.value if analysis else None, integrator.value if integrator else None,
-                                 progress=update)
-    _finish_history(run, out, plot, _channels(channels, case.free_vibration.channels), time.perf_counter() - t0)
+    chans = parse_channels(channels, fv.channels, 2 * case.cable.n_nodes)
+    _check_outputs(out, case_file, _history_pngs if plot else [])
+    planned = api.plan_free_vibration_run(case, mode, peak_velocity, damping_ratio, dur, output_step,
+                                          analysis.value if analysis else None, integrator.value if integrator else None)
+    say_warnings(planned.plan.static.warnings)
+    _guard(planned.cost(), force, "Shorten --duration, raise --output-step or integrator.dt", out)
+    _effective(ctx, output=out, mode=k, peak_velocity=v, duration=dur, output_step=planned.plan.output_step,
+               integrator={"name": planned.plan.integrator.name, **planned.plan.integrator.settings()})
+    _compile_notice()
+    run, wall = _simulate(planned, dur)
+    _finish_history(run, out, plot, chans, wall)
 
 
 class Backend(str, Enum):
@@ -252,60 +397,95 @@ class Backend(str, Enum):
 @app.command()
 @user_errors
 def sweep(
+    ctx: typer.Context,
     case_file: Optional[Path] = CASE_ARG,
-    overrides: Optional[list[str]] = typer.Option(None, "--set", help="Override a case-file value, KEY=VALUE with a dotted key (e.g. sweep.duration=1000); repeatable."),
+    overrides: Optional[list[str]] = SET_OPT,
+    omega: Optional[str] = typer.Option(None, "--omega", metavar="W1,W2,...|START:STOP:NUM", help="Forcing frequencies, rad/s: a list, or a grid of NUM points (default: sweep.omega in the case file)."),
+    duration: Optional[float] = typer.Option(None, "--duration", help="Cap on simulated seconds per point, s (default: sweep.duration, else 3000)."),
+    channels: Optional[str] = typer.Option(None, "--channels", help="DOF recorded and plotted, e.g. z2,z4 (default: sweep.channels, else all)."),
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel worker processes (-1: all cores)."),
-    resume: bool = typer.Option(False, "--resume", help="Finish an interrupted sweep (same case, same -o)."),
-    output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file [default: runs/<name>/sweep.h5]"),
-    analysis: Optional[Analysis] = typer.Option(None, "--analysis", help="Override the case file's analysis."),
-    integrator: Optional[IntegratorName] = typer.Option(None, "--integrator", help="Time-integration scheme."),
+    resume: bool = typer.Option(False, "--resume", help="Finish an interrupted sweep (same command, same -o)."),
+    output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file (default: runs/<name>/sweep.h5); the plot goes beside it."),
+    analysis: Optional[Analysis] = ANALYSIS_OPT,
+    integrator: Optional[IntegratorName] = INTEGRATOR_OPT,
     backend: Backend = typer.Option(Backend.loky, "--backend", help="Run points locally (loky) or on a Dask cluster."),
-    scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Dask scheduler address, with --backend dask."),
+    scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Dask scheduler address, with --backend dask (e.g. tcp://host:8786)."),
     plot: bool = typer.Option(True, "--plot/--no-plot", help="Draw the frequency-response plot."),
+    force: bool = FORCE_OPT,
 ):
-    """Frequency-domain response: steady amplitude of each channel against forcing frequency."""
+    """Frequency-domain response: steady amplitude of each channel against forcing frequency.
+    Exit status 3 if any point stopped early (the summary names which and why)."""
+    from . import api
+    from .case.files import sweep_flag_overrides
+    from .io.journal import fingerprint, nothing_to_resume
+
+    _begin(ctx)
+    _check_jobs(jobs)
+    if scheduler is not None and backend != Backend.dask:
+        raise CablesimError(
+            f"--scheduler {scheduler} is used only with --backend dask (the default backend, loky, runs "
+            "the points on this machine): add --backend dask, or drop --scheduler."
+        )
+    case = api.load_case(case_file, [*(overrides or ()), *sweep_flag_overrides(omega, duration, channels)])
+    out = output if output is not None else Path("runs") / case.name / "sweep.h5"
+    _check_outputs(out, case_file, lambda o: [o.with_name(o.name + ".journal"), o.with_name(o.name + ".lock"),
+                                              *([o.with_suffix(".png")] if plot else [])])
+    an, integ = (analysis.value if analysis else None), (integrator.value if integrator else None)
+    if resume and nothing_to_resume(out, fingerprint(case.text, an, integ)):
+        _echo(f"Nothing to do: {out} already holds this sweep, complete.")
+        return
+    _guard(api.sweep_cost(case, an, integ), force, "Use fewer points (sweep.omega), a shorter sweep.duration "
+           "or a larger integrator.dt", out)
+    _effective(ctx, output=out)
+    _compile_notice()
+    _run_sweep(ctx, case, out, jobs, resume, an, integ, None if backend == Backend.loky else "dask", scheduler, plot)
+
+
+def _run_sweep(ctx, case, out: Path, jobs, resume, analysis, integrator, backend, scheduler, plot: bool):
     import time
 
     from . import api
+    from .dynamics import interrupts
+    from .io.journal import snapshot_path
+    from .io.provenance import command_words
     from .io.report import sweep_summary
     from .plots.sweep import plot_sweep
 
-    case = api.load_case(case_file, overrides)
-    if jobs == 0 or jobs < -1:
-        raise CablesimError("--jobs must be a positive number of processes, or -1 for all cores.")
-    out = output if output is not None else Path("runs") / case.name / "sweep.h5"
-    bar = _LazyBar(1, "sweeping", show_pos=True, show_eta=True)
-
-    def update(done: int, total: int):
-        bar.set(done, total)
-
+    bar = LazyBar(1, "sweeping", quiet=_OUT["quiet"], show_pos=True, show_eta=True)
+    snapshot = out if resume else snapshot_path(out)
     t0 = time.perf_counter()
     try:
         with bar:
-            run = api.sweep(case, jobs, analysis.value if analysis else None, integrator.value if integrator else None,
-                            output=out, resume=resume, backend=None if backend == Backend.loky else "dask",
-                            scheduler=scheduler, progress=update)
+            run = api.sweep(case, jobs, analysis, integrator, output=out, resume=resume, backend=backend,
+                            scheduler=scheduler, progress=lambda done, total: bar.set(done, total))
     except KeyboardInterrupt:
-        where = f" {case_file}" if case_file else ""
-        _say_error(
-            f"interrupted; every completed point is kept in {out} and its journal. Finish the sweep "
-            f"with: cablesim sweep{where} -o {out} --resume"
-        )
-        raise typer.Exit(130)
-    typer.echo(sweep_summary(case, run.result, time.perf_counter() - t0))
+        again = shlex.join(command_words(ctx, drop=("resume", "output")) + ["--output", str(out), "--resume"])
+        kept = f" (the complete result {out} is untouched)" if snapshot != out else ""
+        say_error(f"interrupted ({interrupts.signal_name()}); every completed point is kept in {snapshot}{kept} "
+                   f"and the journal {out.name}.journal. Finish the sweep with:", command=again)
+        raise typer.Exit(interrupts.exit_status())
+    res = run.result
+    say_warnings(res.warnings)
+    _echo(sweep_summary(case, res, time.perf_counter() - t0))
     msg = f"\nWrote {out}"
     if plot:
         msg += f" and {plot_sweep(out)}"
-    typer.echo(msg)
+    _echo(msg)
+    if res.n_failed:
+        say_error(f"{res.n_failed} of {res.n_total} sweep points stopped early; their values are partial and "
+                   "left out of the peaks (the summary above and /sweep/status name each with its cause). "
+                   + res.failures()[0])
+        raise typer.Exit(3)
 
 
 @app.command("continue")
 @user_errors
 def continue_(
+    ctx: typer.Context,
     case_file: Optional[Path] = CASE_ARG,
-    overrides: Optional[list[str]] = typer.Option(None, "--set", help="Override a case-file value, KEY=VALUE with a dotted key (e.g. continuation.period=2); repeatable."),
-    output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file [default: runs/<name>/continuation.h5]"),
-    analysis: Optional[Analysis] = typer.Option(None, "--analysis", help="Override the case file's analysis."),
+    overrides: Optional[list[str]] = SET_OPT,
+    output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file (default: runs/<name>/continuation.h5); the plot goes beside it as .png."),
+    analysis: Optional[Analysis] = ANALYSIS_OPT,
     overlay: Optional[Path] = typer.Option(None, "--overlay", metavar="SWEEP.h5", help="Draw a sweep file's points on the plot."),
     plot: bool = typer.Option(True, "--plot/--no-plot", help="Draw the response diagram."),
 ):
@@ -318,32 +498,25 @@ def continue_(
     from .io.report import continuation_summary
     from .plots.continuation import plot_continuation
 
+    _begin(ctx)
     case = api.load_case(case_file, overrides)
     out = output if output is not None else Path("runs") / case.name / "continuation.h5"
     if overlay is not None and not overlay.is_file():
         raise CablesimError(f"--overlay {overlay}: no such sweep file; give the output of cablesim sweep.")
-
-    shown = {"t": 0.0}
-
-    def update(point):
-        # One status line on a terminal, refreshed at most ten times a second.
-        now = time.monotonic()
-        if sys.stderr.isatty() and now - shown["t"] > 0.1:
-            shown["t"] = now
-            sys.stderr.write(f"\rcontinuing: branch {point.branch} (period {point.period}), "
-                             f"{point.parameter:.5g}, orbit {point.index}   ")
-            sys.stderr.flush()
+    _check_outputs(out, case_file, (lambda o: [o.with_suffix(".png")]) if plot else [])
+    _effective(ctx, output=out)
+    _compile_notice()
 
     t0 = time.perf_counter()
-    run = api.continuation(case, analysis.value if analysis else None, progress=update)
-    if shown["t"]:
-        sys.stderr.write("\n")
+    with StatusLine(quiet=_OUT["quiet"]) as status:
+        run = api.continuation(case, analysis.value if analysis else None, progress=lambda p: status(
+            f"continuing: branch {p.branch} (period {p.period}), {p.parameter:.5g}, orbit {p.index}"))
     run.to_hdf5(out)
-    typer.echo(continuation_summary(case, run.result, time.perf_counter() - t0))
+    _echo(continuation_summary(case, run.result, time.perf_counter() - t0))
     msg = f"\nWrote {out}"
     if plot:
         msg += f" and {plot_continuation(out, out.with_suffix('.png'), overlay=overlay)}"
-    typer.echo(msg)
+    _echo(msg)
 
 
 @app.command()
@@ -359,18 +532,21 @@ def plot(
 ):
     """Redraw figures from stored results, recomputing nothing: the figure: section of the stored
     case (or of --figure) as one PNG from all the files, or else each file's standard plots."""
+    from .io.paths import check_output
     from .plots.redraw import redraw
 
+    if output is not None:
+        check_output(output, inputs=[*results, figure], suffixes=(".png", ""))
     paths = redraw(results, output, figure=figure)
-    typer.echo("Wrote " + ", ".join(str(p) for p in paths))
+    _echo("Wrote " + ", ".join(str(p) for p in paths))
 
 
 @app.command()
 @user_errors
 def stress(
     reduced: bool = typer.Option(False, "--reduced", help="Fewer values per axis and short runs (~15 s; the test suite's version)."),
-    md: Path = typer.Option(Path("docs/stability.md"), "--md", help="Markdown table to write."),
-    png: Path = typer.Option(Path("docs/stability.png"), "--png", help="PNG map to write."),
+    md: Path = typer.Option(Path("runs/stress/stability.md"), "--md", help="Markdown table to write (docs/stability.md holds the project's last full run)."),
+    png: Path = typer.Option(Path("runs/stress/stability.png"), "--png", help="PNG map to write."),
     jobs: int = typer.Option(2, "--jobs", "-j", help="Parallel worker processes (cases are independent)."),
 ):
     """Stability under stress: sweep EA, sag, load scale, n, step size, duration and slackening
@@ -378,10 +554,12 @@ def stress(
     clean failure. Exit status 0 if no run FAILED, else 1."""
     import time
 
+    from .io.paths import check_output
     from .stress import FAILED, build_cases, format_summary, format_table, run_stress, write_report
 
-    if jobs == 0 or jobs < -1:
-        raise CablesimError("--jobs must be a positive number of processes, or -1 for all cores.")
+    _check_jobs(jobs)
+    check_output(md, flag="--md", suffixes=(".md",))
+    check_output(png, flag="--png", suffixes=(".png",))
     total = len(build_cases(reduced))
     done = {"n": 0}
 
@@ -389,18 +567,18 @@ def stress(
         done["n"] += 1
         r = rows[0]
         outcomes = ", ".join(x["outcome"] for x in rows)
-        sys.stderr.write(f"[{done['n']}/{total}] {r['axis']}: {r['label']} -> {outcomes}\n")
+        _note(f"[{done['n']}/{total}] {r['axis']}: {r['label']} -> {outcomes}")
 
     t0 = time.perf_counter()
     rows = run_stress(reduced, jobs=jobs, progress=progress)
     wall = time.perf_counter() - t0
     md_path, png_path = write_report(rows, md, png, wall)
-    typer.echo(format_table(rows))
-    typer.echo(format_summary(rows, wall))
-    typer.echo(f"\nWrote {md_path} and {png_path}")
+    _echo(format_table(rows))
+    _echo(format_summary(rows, wall))
+    _echo(f"\nWrote {md_path} and {png_path}")
     failed = sum(r["outcome"] == FAILED for r in rows)
     if failed:
-        _say_error(f"{failed} stress run(s) FAILED (listed above and in {md_path}); each is a bug to fix.")
+        say_error(f"{failed} stress run(s) FAILED (listed above and in {md_path}); each is a bug to fix.")
         raise typer.Exit(1)
 
 

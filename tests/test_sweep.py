@@ -137,7 +137,11 @@ def test_resume_of_a_complete_sweep(invoke_cli, write_case, tmp_path):
     write_case(case_text(dict(GOOD, omega=[3.0])))
     res = invoke_cli("sweep", "case.yaml", "-o", "out.h5", "--jobs", "1", "--no-plot")
     assert res.returncode == 0, res.stderr
-    _check_user_error(invoke_cli("sweep", "case.yaml", "-o", "out.h5", "--resume", "--no-plot"), "already complete")
+    before = (tmp_path / "out.h5").read_bytes()
+    again = invoke_cli("sweep", "case.yaml", "-o", "out.h5", "--resume", "--no-plot")
+    assert again.returncode == 0, again.stderr  # a finished sweep: nothing to do, not an error
+    assert "Nothing to do" in again.stdout and "complete" in again.stdout
+    assert (tmp_path / "out.h5").read_bytes() == before
 
 
 def test_settings_error_leaves_no_journal(invoke_cli, write_case, tmp_path):

@@ -2,17 +2,86 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
 
 from ..case import Case
+from ..dynamics import kernels as kn
+from ..dynamics.equations import EquationsOfMotion
 from ..dynamics.integrators import Integrator
 from ..dynamics.result import HistoryResult
 from ..dynamics.simulate import simulate
 from ..errors import CablesimError
+from .cost import Cost, history_cost
 from .setup import build_equations, make_integrator, mode_velocity, need_inextensible, output_interval
 from .static import StaticResult, run_static
+
+
+@dataclass(frozen=True)
+class HistoryPlan:
+    """A time history ready to run: every input checked, the integrator and steps chosen.
+
+    :meth:`cost` estimates it before anything is integrated; :meth:`run` integrates it.
+    """
+
+    what: str  # "history" or "free-vibration"
+    static: StaticResult
+    eom: EquationsOfMotion
+    integrator: Integrator
+    omega_interest: float
+    duration: float
+    output_step: float
+    s0: np.ndarray | None
+    split: bool
+
+    def cost(self) -> Cost:
+        """Steps, saved instants, memory and disk of this run (:mod:`cablesim.analyses.cost`)."""
+        return history_cost(self.what, self.eom, self.integrator, self.omega_interest, self.duration,
+                            self.output_step, self.split)
+
+    def run(self, progress: Callable[[float], None] | None = None) -> tuple[StaticResult, HistoryResult, Integrator]:
+        """Integrate: ``(static, history, integrator)``."""
+        hist = simulate(self.eom, self.integrator, self.duration, self.output_step, s0=self.s0, progress=progress,
+                        split=self.split)
+        return self.static, hist, self.integrator
+
+
+def plan_history(
+    case: Case,
+    omega: float | None = None,
+    duration: float | None = None,
+    output_step: float | None = None,
+    analysis: str | None = None,
+    integrator: str | None = None,
+    split: bool | None = None,
+) -> HistoryPlan:
+    """Check and set up a forced response (see :func:`run_history`), without integrating."""
+    omega = omega if omega is not None else case.history.omega
+    if omega is None or omega <= 0:
+        raise CablesimError(
+            "No forcing frequency: give --omega W (rad/s) or history.omega in the case file.",
+            field="history.omega",
+        )
+    if not np.any(case.FL):
+        raise CablesimError(
+            "loads.FL is zero, so there is no forcing; give peak harmonic loads FL in the case "
+            "file (or use free-vibration).",
+            field="loads.FL",
+        )
+    duration = duration if duration is not None else case.history.duration
+    static = run_static(case, analysis, all_models=False)
+    need_inextensible(static)
+    eom = build_equations(case, static, omega=omega)
+    w_int = max(omega, float(static.modes.omega[0]))
+    step = output_interval(output_step or case.history.output_step, w_int, duration)
+    integ = make_integrator(case.integrator, eom, w_int, integrator)
+    split = case.outputs.split if split is None else split
+    s0 = eom.initial_state()
+    check_initial_state(s0, "loads.F0")
+    return HistoryPlan("history", static, eom, integ, w_int, duration, step, None, split)
+
 
 def run_history(
     case: Case,
@@ -34,28 +103,97 @@ def run_history(
     history : HistoryResult
     integrator : Integrator
     """
-    omega = omega if omega is not None else case.history.omega
-    if omega is None or omega <= 0:
+    return plan_history(case, omega, duration, output_step, analysis, integrator, split).run(progress)
+
+
+def check_initial_state(s0: np.ndarray, field: str) -> None:
+    """Refuse an initial state that is not finite (the equations of motion cannot start there)."""
+    if not np.all(np.isfinite(s0)):
         raise CablesimError(
-            "No forcing frequency: give --omega W (rad/s) or history.omega in the case file.",
-            field="history.omega",
+            f"The initial state at t = 0 is not finite (NaN or infinity): the cable cannot start from "
+            f"what {field} describes. Give smaller initial displacements or velocities, or check the loads.",
+            field=field,
         )
-    if not np.any(case.FL):
-        raise CablesimError(
-            "loads.FL is zero, so there is no forcing; give peak harmonic loads FL in the case "
-            "file (or use free-vibration).",
-            field="loads.FL",
-        )
-    duration = duration if duration is not None else case.history.duration
+
+
+def plan_free_vibration(
+    case: Case,
+    mode: int | None = None,
+    peak_velocity: float | None = None,
+    damping_ratio: float | None = None,
+    duration: float | None = None,
+    output_step: float | None = None,
+    analysis: str | None = None,
+    integrator: str | None = None,
+    split: bool | None = None,
+) -> HistoryPlan:
+    """Check and set up a free vibration (see :func:`run_free_vibration`), without integrating."""
+    fv = case.free_vibration
+    mode = mode if mode is not None else fv.mode
+    peak_velocity = peak_velocity if peak_velocity is not None else fv.peak_velocity
+    damping_ratio = damping_ratio if damping_ratio is not None else fv.damping_ratio
+    duration = duration if duration is not None else fv.duration
     static = run_static(case, analysis, all_models=False)
     need_inextensible(static)
-    eom = build_equations(case, static, omega=omega)
-    w_int = max(omega, float(static.modes.omega[0]))
-    step = output_interval(output_step or case.history.output_step, w_int, duration)
+    n_dof = static.cable.n_dof
+    explicit = fv.z0 is not None or fv.v0 is not None
+    if mode is None and not explicit:
+        raise CablesimError(
+            "No initial condition: give --mode K and --peak-velocity V, or free_vibration.mode and "
+            "peak_velocity (or z0/v0) in the case file.",
+            field="free_vibration.mode",
+        )
+    eom = build_equations(case, static, omega=0.0, load_scale=0.0, damping_ratio=damping_ratio)
+    if mode is not None:
+        z0, v0, w_int = _mode_start(static, mode, peak_velocity, n_dof)
+    else:
+        v0 = None if fv.v0 is None else np.array(fv.v0)
+        z0 = None if fv.z0 is None else np.array(fv.z0)
+        if z0 is not None and static.analysis == "approximate":
+            raise CablesimError(
+                "free_vibration.z0 needs the exact analysis: the approximate analysis defines the "
+                "configuration through the loads, so it starts from its equilibrium (use v0).",
+                field="free_vibration.z0",
+            )
+        w_int = float(static.modes.omega[-1]) if n_dof <= 4 else float(static.modes.omega[min(3, n_dof - 1)])
+    s0 = eom.initial_state(z0=z0, v0=v0)
+    check_initial_state(s0, "free_vibration.z0 and v0" if mode is None else "free_vibration.peak_velocity")
+    if z0 is not None:
+        _check_taut_start(static, z0)
+    step = output_interval(output_step or fv.output_step, w_int, duration)
     integ = make_integrator(case.integrator, eom, w_int, integrator)
     split = case.outputs.split if split is None else split
-    hist = simulate(eom, integ, duration, step, progress=progress, split=split)
-    return static, hist, integ
+    return HistoryPlan("free-vibration", static, eom, integ, w_int, duration, step, s0, split)
+
+
+def _check_taut_start(static: StaticResult, z0: np.ndarray) -> None:
+    """Refuse an initial displacement that leaves a segment slack (the model needs tension)."""
+    cable = static.cable
+    T = np.empty(cable.n_segments)
+    kn.exact_tensions(static.y0 + z0, cable.S, cable.EA, cable.L, cable.H, T)
+    k = int(np.argmin(T))
+    if not T[k] > 0:
+        raise CablesimError(
+            f"free_vibration.z0 leaves segment {k + 1} slack at t = 0 (its tension would be {T[k]:.4g} N, "
+            f"against {static.T0[k]:.4g} N at equilibrium), and this model needs every segment taut. Give a "
+            "smaller initial displacement z0 (m, from the equilibrium).",
+            field="free_vibration.z0",
+        )
+
+
+def _mode_start(static: StaticResult, mode: int, peak_velocity: float | None, n_dof: int):
+    if not 1 <= mode <= n_dof:
+        raise CablesimError(f"--mode must be between 1 and {n_dof}; got {mode}.", field="free_vibration.mode")
+    if peak_velocity is None:
+        raise CablesimError(
+            f"Mode {mode} gives the shape of the initial velocities but not their size: give "
+            "--peak-velocity V too (the largest initial velocity, m/s), or free_vibration.peak_velocity "
+            "in the case file.",
+            field="free_vibration.peak_velocity",
+        )
+    if not peak_velocity > 0:
+        raise CablesimError("--peak-velocity must be a positive speed in m/s.", field="free_vibration.peak_velocity")
+    return None, mode_velocity(static, mode, peak_velocity), float(static.modes.omega[mode - 1])
 
 
 def run_free_vibration(
@@ -75,43 +213,5 @@ def run_free_vibration(
     The initial velocities follow linear mode ``mode``, scaled so that their largest component
     equals ``peak_velocity`` (and is positive); or the case's explicit ``z0``/``v0``.
     """
-    fv = case.free_vibration
-    mode = mode if mode is not None else fv.mode
-    peak_velocity = peak_velocity if peak_velocity is not None else fv.peak_velocity
-    damping_ratio = damping_ratio if damping_ratio is not None else fv.damping_ratio
-    duration = duration if duration is not None else fv.duration
-    static = run_static(case, analysis, all_models=False)
-    need_inextensible(static)
-    n_dof = static.cable.n_dof
-    explicit = fv.z0 is not None or fv.v0 is not None
-    if mode is None and not explicit:
-        raise CablesimError(
-            "No initial condition: give --mode K and --peak-velocity V, or free_vibration.mode and "
-            "peak_velocity (or z0/v0) in the case file.",
-            field="free_vibration.mode",
-        )
-    eom = build_equations(case, static, omega=0.0, load_scale=0.0, damping_ratio=damping_ratio)
-    if mode is not None:
-        if not 1 <= mode <= n_dof:
-            raise CablesimError(f"--mode must be between 1 and {n_dof}; got {mode}.", field="free_vibration.mode")
-        if peak_velocity is None or peak_velocity <= 0:
-            raise CablesimError("--peak-velocity must be a positive speed in m/s.", field="free_vibration.peak_velocity")
-        v0 = mode_velocity(static, mode, peak_velocity)
-        z0 = None
-        w_int = float(static.modes.omega[mode - 1])
-    else:
-        v0 = None if fv.v0 is None else np.array(fv.v0)
-        z0 = None if fv.z0 is None else np.array(fv.z0)
-        if z0 is not None and static.analysis == "approximate":
-            raise CablesimError(
-                "free_vibration.z0 needs the exact analysis: the approximate analysis defines the "
-                "configuration through the loads, so it starts from its equilibrium (use v0).",
-                field="free_vibration.z0",
-            )
-        w_int = float(static.modes.omega[-1]) if n_dof <= 4 else float(static.modes.omega[min(3, n_dof - 1)])
-    s0 = eom.initial_state(z0=z0, v0=v0)
-    step = output_interval(output_step or fv.output_step, w_int, duration)
-    integ = make_integrator(case.integrator, eom, w_int, integrator)
-    split = case.outputs.split if split is None else split
-    hist = simulate(eom, integ, duration, step, s0=s0, progress=progress, split=split)
-    return static, hist, integ
+    return plan_free_vibration(case, mode, peak_velocity, damping_ratio, duration, output_step, analysis,
+                               integrator, split).run(progress)

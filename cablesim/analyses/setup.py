@@ -168,6 +168,8 @@ def make_integrator(
     -------
     Integrator
     """
+    if name is not None and name != spec.name:
+        check_override(spec, name)
     name = name or spec.name
     w_int = max(omega_interest, float(eom.frequencies[0]))
     if name is None:
@@ -193,6 +195,21 @@ def make_integrator(
     if name == "newmark":
         return Newmark(dt=dt)
     return GeneralizedAlpha(dt=dt, rho_inf=spec.rho_inf if spec.rho_inf is not None else 0.8)
+
+
+def check_override(spec: IntegratorSpec, name: str) -> None:
+    """Refuse an ``--integrator`` that would silently ignore settings of the case file."""
+    given = [k for k in ("rtol", "atol", "dt", "rho_inf") if getattr(spec, k) is not None]
+    applies = {"dopri5": ("rtol", "atol"), "rk4": ("dt",), "newmark": ("dt",), "generalized-alpha": ("dt", "rho_inf")}
+    ignored = [k for k in given if k not in applies.get(name, ())]
+    if ignored:
+        keys = " and ".join(f"integrator.{k}" for k in ignored)
+        raise CablesimError(
+            f"--integrator {name} conflicts with the case file: {keys} would be ignored ({name} uses "
+            f"{', '.join(applies[name])}). Remove {keys} (e.g. --set integrator.{ignored[0]}=null), or choose "
+            "the integrator in the case file with its settings.",
+            field="integrator",
+        )
 
 
 def output_interval(step: float | None, omega_interest: float, duration: float) -> float:

@@ -55,6 +55,8 @@ class StaticResult:
         The ``n - 1`` finite frequencies of the inextensible cable, rad/s.
     sole_inextensible_omega : float or None
         The paper's closed-form sole inextensible frequency (n = 2 only), rad/s.
+    warnings : tuple of str
+        Plausibility warnings (a strain of several per cent); they never stop a run.
     """
 
     cable: Cable
@@ -70,6 +72,7 @@ class StaticResult:
     damping_ratios: np.ndarray
     inextensible_omega: np.ndarray
     sole_inextensible_omega: float | None
+    warnings: tuple[str, ...] = ()
 
     @property
     def y0(self) -> np.ndarray:
@@ -121,14 +124,25 @@ def run_static(case: Case, analysis: str | None = None, all_models: bool = True)
             "`analysis: exact` for a pretensioned cable.",
             field="cable.S",
         )
+    if not taut and not np.any(P):
+        raise CablesimError(
+            "loads.F0 is all zero. Segment tensions would all be zero (every segment slack): a weightless "
+            "cable longer than its chord takes no definite shape without sustained loads, so there is no "
+            "equilibrium to solve. Give the sustained nodal loads F0 in N (for instance each node's weight "
+            "m*g as its vertical component, positive down); changing cable.S does not help.",
+            field="loads.F0",
+        )
     inext = approx = exact = None
+    if not taut:
+        inext = inextensible_equilibrium(cable, P)
+        check_resolvable(cable, inext.T)
     if analysis == "approximate" or (all_models and not taut):
         approx = approximate_equilibrium(cable, P)
         inext = approx.inextensible
-    elif not taut:
-        inext = inextensible_equilibrium(cable, P)
     if analysis == "exact" or all_models:
         exact = exact_equilibrium(cable, P)
+        if taut:
+            check_resolvable(cable, exact.T)
     K0 = exact.K if analysis == "exact" else approx.K
     modes = modal_analysis(K0, cable.mass_diagonal)
     a0, a1 = damping_coefficients(case, modes.omega)
@@ -152,4 +166,43 @@ def run_static(case: Case, analysis: str | None = None, all_models: bool = True)
         damping_ratios=modal_damping_ratios(modes.omega, a0, a1),
         inextensible_omega=inext_omega,
         sole_inextensible_omega=sole,
+        warnings=strain_warnings(cable, exact.T if exact is not None else approx.T),
+    )
+
+
+#: Smallest largest strain T/EA that double precision resolves well: below it the elastic
+#: stretch l - S is lost in rounding (at 3e-12 the lowest frequency of the paper's example is
+#: already 6e-5 off, at 3e-16 40 % off), and the cable is inextensible for all purposes.
+MIN_STRAIN = 1e-10
+#: Largest strain T/EA before the static summary warns that the model is stretched beyond
+#: small strains (linear elasticity of T = EA (l - S) / S).
+PLAUSIBLE_STRAIN = 0.05
+
+
+def check_resolvable(cable: Cable, T: np.ndarray) -> None:
+    """Refuse an EA so large that the strains under the loads are below double precision."""
+    strain = float(np.max(np.abs(T))) / cable.EA
+    if strain < MIN_STRAIN:
+        limit = float(np.max(np.abs(T))) / MIN_STRAIN
+        raise CablesimError(
+            f"cable.EA = {cable.EA:.4g} N is too stiff for these loads: the largest strain T/EA would be "
+            f"{strain:.2g}, below the {MIN_STRAIN:g} that double precision resolves, so the elastic stretch "
+            "would be rounding noise (and the frequencies wrong). The cable is inextensible for all "
+            f"purposes, and this run is refused rather than treated as inextensible: give cable.EA at "
+            f"most {limit:.2g} N (already inextensible in effect), or larger loads.",
+            field="cable.EA",
+        )
+
+
+def strain_warnings(cable: Cable, T: np.ndarray) -> tuple[str, ...]:
+    """A warning when the static strain exceeds :data:`PLAUSIBLE_STRAIN` (never an error)."""
+    strain = np.asarray(T, dtype=float) / cable.EA
+    k = int(np.argmax(strain))
+    if strain[k] <= PLAUSIBLE_STRAIN:
+        return ()
+    return (
+        f"the static strain T/EA of segment {k + 1} is {100 * strain[k]:.3g} % (sum of cable.S "
+        f"{cable.total_length:.6g} m, chord {cable.chord_length:.6g} m, EA {cable.EA:.4g} N): the model "
+        "assumes small strains, so results beyond a few per cent are not those of a real cable. "
+        "Check cable.S, cable.EA and the loads.",
     )

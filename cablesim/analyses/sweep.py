@@ -15,6 +15,9 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import multiprocessing
+import os
+import threading
 import time
 from dataclasses import dataclass, field
 from typing import Callable, Iterable, Protocol
@@ -28,6 +31,7 @@ from ..dynamics.status import Status
 from ..dynamics.steady import SteadyCriterion, steady_response
 from ..orbits.accelerate import accelerated_steady_response
 from ..errors import CablesimError
+from .cost import Cost, sweep_cost
 from .setup import build_equations, make_integrator
 from .static import run_static
 
@@ -64,6 +68,7 @@ class SweepResult:
     settings: dict = field(default_factory=dict)
     data: dict = field(default_factory=dict)
     states: dict = field(default_factory=dict)  # (curve, index) -> final state (chains)
+    warnings: list = field(default_factory=list)  # e.g. journal records that were skipped
 
     @property
     def n_done(self) -> int:
@@ -74,6 +79,22 @@ class SweepResult:
     def n_total(self) -> int:
         """Points over all curves."""
         return len(self.curves) * self.omega.size
+
+    @property
+    def n_failed(self) -> int:
+        """Points that stopped early (a slack segment, a blow-up): their values are partial."""
+        return int(sum((d["failed"] & d["done"]).sum() for d in self.data.values()))
+
+    def failures(self) -> list[str]:
+        """``"w = 5.05 rad/s (up): stopped at t = 12.3 s: segment 2 went slack ..."`` per failed point."""
+        out = []
+        for c, curve in enumerate(self.curves):
+            d = self.data[c]
+            g = "" if self.gamma is None else f", gamma = {self.gamma[curve.gamma_index]:g}"
+            label = "" if curve.direction == "independent" and not g else f" ({curve.direction}{g})"
+            for i in np.flatnonzero(d["failed"] & d["done"]):
+                out.append(f"w = {self.omega[i]:.6g} rad/s{label}: {d['status'][i]}")
+        return out
 
     @property
     def complete(self) -> bool:
@@ -116,6 +137,7 @@ class PointJob:
     curve: int
     index: int
     start: tuple | None  # initial state for chains
+    parent: int = 0  # process id of the sweep's driver (workers end when it ends)
 
 
 @functools.lru_cache(maxsize=8)
@@ -124,8 +146,36 @@ def _static_for(case_text: str, analysis: str | None):
     return case, run_static(case, analysis, all_models=False)
 
 
+_WATCHDOG: list[int] = []
+
+
+def end_with_parent(parent: int, interval: float = 0.5) -> None:
+    """In a local worker process: exit as soon as the sweep's driver ``parent`` is gone.
+
+    A worker whose driver was killed would otherwise finish its point (minutes, for a long cap)
+    with nobody to report to. A daemon thread watches the parent process id; the compiled time
+    loop returns to Python many times a second, so the thread gets its turn.
+    """
+    if _WATCHDOG or parent <= 0 or os.getpid() == parent:
+        return  # already watching, or in the driver itself (one job: no workers)
+    if not multiprocessing.current_process().name.startswith("LokyProcess"):
+        return  # not a local worker of this sweep (a Dask worker belongs to its cluster)
+    if os.getppid() != parent:
+        os._exit(1)  # the driver died while this worker was starting
+    _WATCHDOG.append(parent)
+
+    def watch():
+        while True:
+            time.sleep(interval)
+            if os.getppid() != parent:
+                os._exit(1)
+
+    threading.Thread(target=watch, name="cablesim-end-with-parent", daemon=True).start()
+
+
 def solve_point(job: PointJob) -> dict:
     """Steady response of one sweep point (the unit of parallel work)."""
+    end_with_parent(job.parent)
     case, static = _static_for(job.case_text, job.analysis)
     sw = case.sweep
     eom = build_equations(case, static, omega=job.omega, load_scale=job.gamma)
@@ -141,8 +191,8 @@ def solve_point(job: PointJob) -> dict:
         "curve": job.curve,
         "index": job.index,
         "omega": job.omega,
-        "amplitude": r.amplitude.tolist(),
-        "halfrange": r.halfrange.tolist(),
+        "amplitude": [None if not np.isfinite(x) else float(x) for x in r.amplitude],
+        "halfrange": [None if not np.isfinite(x) else float(x) for x in r.halfrange],
         "response_frequency": [None if not np.isfinite(x) else float(x) for x in r.response_frequency],
         "period": int(r.period),
         "steady": bool(r.steady),
@@ -152,7 +202,7 @@ def solve_point(job: PointJob) -> dict:
         "multipliers": None if r.multipliers is None else [[float(m.real), float(m.imag)] for m in r.multipliers],
         "status": r.message,
         "code": int(r.status),
-        "final_state": r.final_state.tolist(),
+        "final_state": r.final_state.tolist() if np.all(np.isfinite(r.final_state)) else None,
         "wall": time.perf_counter() - t0,
         "integrator": integ.name,
     }
@@ -179,6 +229,7 @@ def _empty_result(omega, gamma, direction, channels, curves, **meta) -> SweepRes
             "decided": np.full(P, "", dtype=object),
             "multipliers": np.full((P, 2 * n_dof), np.nan + 0j),
             "done": np.zeros(P, dtype=bool),
+            "status": np.full(P, "", dtype=object),
         }
     return res
 
@@ -199,9 +250,49 @@ def record_point(res: SweepResult, rec: dict) -> None:
     if rec.get("multipliers"):
         mu = np.array([complex(a, b) for a, b in rec["multipliers"]])
         d["multipliers"][i, : mu.size] = mu
+    d["status"][i] = str(rec.get("status", ""))
     d["done"][i] = True
     # Only a point that ran to its end (at forcing phase 0) can start the next one of a chain.
-    res.states[(rec["curve"], i)] = None if d["failed"][i] else rec["final_state"]
+    res.states[(rec["curve"], i)] = None if d["failed"][i] else rec.get("final_state")
+
+
+_NUMBER = (int, float)
+
+
+def _numbers(x, n: int, none_ok: bool = True) -> bool:
+    return isinstance(x, list) and len(x) == n and all(
+        (v is None and none_ok) or (isinstance(v, _NUMBER) and not isinstance(v, bool)) for v in x)
+
+
+def check_record(res: SweepResult, rec) -> str | None:
+    """Why a journal record cannot be entered into ``res`` (None if it can)."""
+    if not isinstance(rec, dict):
+        return "it is not a record"
+    need = ("curve", "index", "omega", "amplitude", "halfrange", "response_frequency", "period", "steady",
+            "t_end", "code", "floquet")
+    missing = [k for k in need if k not in rec]
+    if missing:
+        return f"it lacks {', '.join(missing)}"
+    c, i = rec["curve"], rec["index"]
+    if not all(isinstance(v, int) and not isinstance(v, bool) for v in (c, i, rec["period"], rec["code"])):
+        return "curve, index, period and code must be whole numbers"
+    if not 0 <= c < len(res.curves) or not 0 <= i < res.omega.size:
+        return f"point ({c}, {i}) is not a point of this sweep"
+    if not isinstance(rec["omega"], _NUMBER) or not abs(rec["omega"] - res.omega[i]) <= 1e-9 * res.omega[i]:
+        return f"its frequency {rec['omega']!r} is not that of point {i + 1} ({res.omega[i]:g} rad/s)"
+    C = len(res.channels)
+    if not all(_numbers(rec[k], C) for k in FLOAT_FIELDS):
+        return f"its per-channel values are not {C} numbers each"
+    if rec["code"] not in {int(s) for s in Status}:
+        return f"its status code {rec['code']} is unknown"
+    if not isinstance(rec["steady"], bool) or not _numbers([rec["t_end"], rec.get("wall", 0.0)], 2, none_ok=False):
+        return "steady must be true or false, t_end and wall numbers"
+    if not _numbers([rec["floquet"]], 1):
+        return "floquet must be a number or null"
+    final, n = rec.get("final_state"), 3 * res.modal_omega.size
+    if final is not None and n and not _numbers(final, n, none_ok=False):
+        return f"its final state is not a list of {n} numbers"
+    return None
 
 
 # ----------------------------------------------------------------------------------------------
@@ -287,6 +378,20 @@ def new_sweep_result(case: Case, case_text: str, analysis: str | None = None) ->
                          settings=settings)
 
 
+def estimate_sweep(case: Case, analysis: str | None = None, integrator: str | None = None) -> Cost:
+    """Upper bound of the cost of the case's sweep (:mod:`cablesim.analyses.cost`), nothing integrated."""
+    res = new_sweep_result(case, case.text, analysis)
+    static = _static_for(case.text, analysis)[1] if case.text else run_static(case, analysis, all_models=False)
+    w1 = float(static.modes.omega[0])
+    picks = np.unique(np.linspace(0, res.omega.size - 1, min(res.omega.size, 12)).round().astype(int))
+    points = []
+    for w in res.omega[picks]:
+        eom = build_equations(case, static, omega=float(w))
+        points.append((eom, make_integrator(case.integrator, eom, max(float(w), w1), integrator), float(w)))
+    sw = case.sweep
+    return sweep_cost(points, res.omega.size, len(res.curves), sw.duration, sw.window, len(res.channels))
+
+
 def _chain_batches(res: SweepResult, make_job):
     """Rounds of up/down chains: each round advances every unfinished chain by one point."""
     n = res.omega.size
@@ -344,13 +449,19 @@ def run_sweep(
     res = new_sweep_result(case, case_text, analysis)
     _, idx = channel_indices(case, case.sweep.channels)
     for rec in recorder.previous():
-        record_point(res, rec)
+        why = check_record(res, rec)
+        if why is None:
+            record_point(res, rec)
+        else:
+            where = f"journal line {rec['line']}" if isinstance(rec, dict) and "line" in rec else "a journal record"
+            res.warnings.append(f"{where} was skipped ({why}); its point is computed again")
+    res.warnings[:0] = list(getattr(recorder, "warnings", ()))
     gamma = res.gamma
 
     def job(c: int, i: int, start) -> PointJob:
         g = 1.0 if gamma is None else float(gamma[res.curves[c].gamma_index])
         return PointJob(case_text, analysis, integrator, g, float(res.omega[i]), tuple(int(x) for x in idx), c, i,
-                        None if start is None else tuple(start))
+                        None if start is None else tuple(start), os.getpid())
 
     config, parallel, client = _parallel(n_jobs, backend, scheduler)  # settings errors first
     _warm_up(case_text, analysis, integrator, idx)

@@ -3,35 +3,53 @@
 from __future__ import annotations
 
 import re
+import stat
 from importlib import resources
 from pathlib import Path
+from typing import Optional
 
 import yaml
 from pydantic import BaseModel, ConfigDict, ValidationError
 
 from ..errors import CablesimError
+from . import strict_yaml
 from .model import Case
+from .numbers import DURATION, check_flag
 from .sections import HINTS, FigureSpec
 
 EXAMPLE_RESOURCE = "paper-example.yaml"
 
 
-class _Loader(yaml.SafeLoader):
-    """YAML 1.1 reads ``1.0e9`` as a string; people write numbers that way, so accept it."""
+#: Largest case file read, bytes (a case file is a few kilobytes).
+MAX_CASE_BYTES = 1_000_000
 
 
-_Loader.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(
-        r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
-        |[-+]?(?:[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)
-        |\.[0-9_]+(?:[eE][-+][0-9]+)?
-        |[-+]?\.(?:inf|Inf|INF)
-        |\.(?:nan|NaN|NAN))$""",
-        re.X,
-    ),
-    list("-+0123456789."),
-)
+def _yaml(text: str, source: str):
+    """Parse case-file YAML strictly (:mod:`cablesim.case.strict_yaml`), naming the file."""
+    if len(text) > MAX_CASE_BYTES:
+        raise CablesimError(
+            f"Case file {source} is {len(text)} characters long, more than the {MAX_CASE_BYTES} a case file "
+            "may have; give the YAML case file itself (`cablesim example` prints one)."
+        )
+    if "\0" in text:
+        raise CablesimError(f"Case file {source} contains NUL characters, so it is not a text file; give a YAML case file.")
+    try:
+        return strict_yaml.load(text)
+    except strict_yaml.StrictYamlError as exc:
+        where = f" at line {exc.line}" if exc.line else ""
+        raise CablesimError(f"Case file {source} is refused{where}: {exc}.") from None
+    except yaml.YAMLError as exc:
+        where = ""
+        mark = getattr(exc, "problem_mark", None)
+        if mark is not None:
+            where = f" at line {mark.line + 1}, column {mark.column + 1}"
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise CablesimError(
+            f"Case file {source} is not valid YAML{where}: {problem}. Check indentation and that "
+            "lists are written [a, b, c]."
+        ) from None
+    except RecursionError:
+        raise CablesimError(f"Case file {source} nests too deeply to be a case file.") from None
 
 
 def _field_name(loc) -> str:
@@ -40,7 +58,10 @@ def _field_name(loc) -> str:
         if isinstance(p, int):
             parts.append(f"[{p + 1}]")
         else:
-            parts.append(("." if parts else "") + str(p))
+            text = str(p)
+            if not text.isprintable():  # a key with a line break must not break the paragraph
+                text = text.encode("unicode_escape").decode("ascii")
+            parts.append(("." if parts else "") + text)
     return "".join(parts) or "(top level)"
 
 
@@ -55,7 +76,8 @@ def format_validation_error(err: ValidationError, source: str) -> str:
         if msg is None:
             msg = e["msg"].removeprefix("Value error, ")
             if "input" in e and e["type"] not in ("model_type",) and not isinstance(e["input"], dict):
-                msg += f" (got {e['input']!r})"
+                got = repr(e["input"])
+                msg += f" (got {got if len(got) <= 80 else got[:72] + ' ...' + got[-4:]})"
         items.append(f"`{field}` {msg}" if e["loc"] else msg)
     return f"Case file {source} is not valid: " + "; ".join(items) + "."
 
@@ -76,10 +98,42 @@ def apply_overrides(data: dict, overrides, source: str) -> dict:
                 raise CablesimError(f"--set {key}: `{part}` in {source} is not a section.")
             node = child
         try:
-            node[parts[-1]] = yaml.load(value, Loader=_Loader)
-        except yaml.YAMLError:
+            node[parts[-1]] = strict_yaml.load(value)
+        except (yaml.YAMLError, strict_yaml.StrictYamlError, RecursionError):
             raise CablesimError(f"--set {key}: the value {value!r} is not valid YAML.") from None
     return data
+
+
+def sweep_flag_overrides(omega: Optional[str], duration: Optional[float], channels: Optional[str]) -> list[str]:
+    """``--omega``, ``--duration`` and ``--channels`` of ``sweep`` as ``--set`` overrides (so that
+    they are recorded with the case and checked like it)."""
+    sets = []
+    if omega is not None:
+        parts = omega.split(":") if ":" in omega else None
+        try:
+            if parts is not None:
+                if len(parts) != 3:
+                    raise ValueError
+                start, stop, num = float(parts[0]), float(parts[1]), int(parts[2])
+                sets.append(f"sweep.omega={{start: {start!r}, stop: {stop!r}, num: {num}}}")
+            else:
+                values = [float(x) for x in omega.split(",") if x.strip()]
+                if not values:
+                    raise ValueError
+                sets.append(f"sweep.omega=[{', '.join(repr(x) for x in values)}]")
+        except ValueError:
+            raise CablesimError(
+                f"--omega {omega!r}: give the frequencies in rad/s as a list W1,W2,... or a grid START:STOP:NUM "
+                "(e.g. 0.5:6:56).", field="sweep.omega") from None
+    if duration is not None:
+        check_flag(DURATION, duration, "--duration", "sweep.duration")
+        sets.append(f"sweep.duration={duration!r}")
+    if channels is not None:
+        names = [c.strip() for c in channels.split(",") if c.strip()]
+        if not names:
+            raise CablesimError("--channels is empty; give DOF names such as z2,z4.", field="sweep.channels")
+        sets.append(f"sweep.channels=[{', '.join(names)}]")
+    return sets
 
 
 def parse_case(text: str, source: str = "<case>", default_name: str = "case", overrides=None) -> Case:
@@ -105,18 +159,7 @@ def parse_case(text: str, source: str = "<case>", default_name: str = "case", ov
     CablesimError
         For malformed YAML or any invalid field.
     """
-    try:
-        data = yaml.load(text, Loader=_Loader)
-    except yaml.YAMLError as exc:
-        where = ""
-        mark = getattr(exc, "problem_mark", None)
-        if mark is not None:
-            where = f" at line {mark.line + 1}, column {mark.column + 1}"
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise CablesimError(
-            f"Case file {source} is not valid YAML{where}: {problem}. Check indentation and that "
-            "lists are written [a, b, c]."
-        ) from None
+    data = _yaml(text, source)
     if not isinstance(data, dict):
         raise CablesimError(
             f"Case file {source} must be a YAML mapping with at least the keys `cable` and `loads` "
@@ -152,12 +195,7 @@ def load_case(path: str | Path | None, overrides=None) -> tuple[Case, str]:
         case = parse_case(text, source="(embedded paper example)", default_name="paper-example", overrides=overrides)
         return case, case.text
     p = Path(path)
-    try:
-        text = p.read_text()
-    except FileNotFoundError:
-        raise CablesimError(f"Case file {p} does not exist. Check the path.") from None
-    except (IsADirectoryError, PermissionError, UnicodeDecodeError) as exc:
-        raise CablesimError(f"Case file {p} cannot be read ({exc.__class__.__name__}).") from None
+    text = read_text_file(p, "Case file", MAX_CASE_BYTES)
     # A valid case name starts with a letter or digit; derive one from the file stem.
     stem = re.sub(r"[^A-Za-z0-9._-]", "-", p.stem).lstrip("._-") or "case"
     case = parse_case(text, source=str(p), default_name=stem, overrides=overrides)
@@ -191,6 +229,34 @@ def stored_overrides(text: str) -> list[str]:
     return [line[len(OVERRIDES_MARK):].strip() for line in text.splitlines() if line.startswith(OVERRIDES_MARK)]
 
 
+def read_text_file(path: Path, what: str, limit: int) -> str:
+    """The text of a small regular file, or a message saying why it cannot be read.
+
+    Devices (``/dev/zero``), pipes and folders are refused before anything is read, and at most
+    ``limit`` bytes are read.
+    """
+    try:
+        st = path.stat()
+    except FileNotFoundError:
+        raise CablesimError(f"{what} {path} does not exist. Check the path.") from None
+    except OSError as exc:
+        raise CablesimError(f"{what} {path} cannot be read ({exc.strerror or exc.__class__.__name__}).") from None
+    if stat.S_ISDIR(st.st_mode):
+        raise CablesimError(f"{what} {path} cannot be read (IsADirectoryError): it is a folder; give a YAML file.")
+    if not stat.S_ISREG(st.st_mode):
+        raise CablesimError(f"{what} {path} cannot be read: it is not a regular file (a device or a pipe); give a YAML file.")
+    if st.st_size > limit:
+        raise CablesimError(f"{what} {path} is {st.st_size} bytes, more than the {limit} a case file may have; give the YAML file itself.")
+    try:
+        with open(path, "rb") as f:
+            raw = f.read(limit + 1)
+        return raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise CablesimError(f"{what} {path} cannot be read (UnicodeDecodeError): it is not UTF-8 text; give a YAML file.") from None
+    except OSError as exc:
+        raise CablesimError(f"{what} {path} cannot be read ({exc.strerror or exc.__class__.__name__}).") from None
+
+
 def example_text() -> str:
     """The embedded default case (the paper's example), as commented YAML."""
     return resources.files("cablesim").joinpath("data", EXAMPLE_RESOURCE).read_text()
@@ -209,15 +275,12 @@ def read_figure(path):
         If the file is missing, not YAML, has no ``figure:`` section or an invalid one.
     """
     path = Path(path)
+    text = read_text_file(path, "The figure file", MAX_CASE_BYTES)
     try:
-        text = path.read_text()
-    except FileNotFoundError:
-        raise CablesimError(f"The figure file {path} does not exist. Check the path.") from None
-    except (IsADirectoryError, PermissionError, UnicodeDecodeError) as exc:
-        raise CablesimError(f"The figure file {path} cannot be read ({exc.__class__.__name__}).") from None
-    try:
-        data = yaml.load(text, Loader=_Loader)
-    except yaml.YAMLError:
+        data = strict_yaml.load(text)
+    except strict_yaml.StrictYamlError as exc:
+        raise CablesimError(f"The figure file {path} is refused: {exc}.") from None
+    except (yaml.YAMLError, RecursionError):
         raise CablesimError(f"The figure file {path} is not valid YAML; check its indentation.") from None
     if not isinstance(data, dict) or not isinstance(data.get("figure"), dict):
         raise CablesimError(

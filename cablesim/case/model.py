@@ -6,9 +6,12 @@ import re
 from typing import Literal
 
 import numpy as np
+import yaml
 from pydantic import Field, PrivateAttr, field_validator, model_validator
 
 from ..cable import Cable
+from ..channels import channel_index
+from ..errors import CablesimError
 from ..names import ANALYSES
 from .sections import (
     CableSpec,
@@ -76,9 +79,27 @@ class Case(StrictModel):
             v = getattr(fv, key)
             if v is not None and len(v) != 2 * n:
                 raise ValueError(f"free_vibration.{key} has {len(v)} values; it needs 2n = {2 * n}")
+        length = sum(self.cable.S)
+        if fv.z0 is not None and max(abs(x) for x in fv.z0) > length:
+            raise ValueError(f"free_vibration.z0 moves a node by more than the cable's whole length ({length:g} m); "
+                             "give displacements from the equilibrium smaller than that, in m")
         if fv.mode is not None and fv.mode > 2 * n:
             raise ValueError(f"free_vibration.mode must be between 1 and 2n = {2 * n}")
+        for section in ("history", "free_vibration", "sweep", "outputs"):
+            spec = getattr(self, section)
+            for name in (getattr(spec, "channels", None) or ()) if spec is not None else ():
+                try:
+                    channel_index(name, 2 * n)
+                except CablesimError as exc:
+                    raise ValueError(f"{section}.channels: {exc}".rstrip(".")) from None
         return self
+
+    def effective_yaml(self) -> str:
+        """The case as it will run, every default filled in, as YAML (``cablesim check``)."""
+        data = self.model_dump(mode="json", exclude_none=True)
+        if isinstance(self.sweep, SweepSpec) and isinstance(self.sweep.omega, tuple):
+            data["sweep"]["omega"] = list(self.sweep.omega)
+        return yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
 
     # -- derived objects ---------------------------------------------------------------------
     def to_cable(self) -> Cable:

@@ -3,12 +3,24 @@
 from __future__ import annotations
 
 import math
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from ..names import CONTINUATION_PARAMETERS, DIRECTIONS, INTEGRATORS
+from .numbers import (
+    DAMPING_RATIO,
+    DURATION,
+    MODE,
+    OMEGA,
+    OUTPUT_STEP,
+    PEAK_VELOCITY,
+    in_range,
+    integer,
+    plain_number,
+    real,
+)
 
 #: Plain-words messages for pydantic's error types.
 HINTS = {
@@ -16,7 +28,23 @@ HINTS = {
     "(`cablesim example` prints a complete case file)",
     "missing": "is required; add it",
     "finite_number": "must be a finite number, not NaN or infinity",
+    "float_parsing": "must be a number",
+    "float_type": "must be a number",
+    "int_parsing": "must be a whole number",
+    "int_type": "must be a whole number",
+    "int_from_float": "must be a whole number",
 }
+
+#: Most interior nodes a cable may have (its matrices grow as the square).
+MAX_NODES = 1000
+#: Ranges of the values of lists (the message names the item).
+SEGMENT_RANGE = (1e-3, 1e6, "m")
+MASS_RANGE = (1e-6, 1e10, "kg")
+LOAD_RANGE = (-1e12, 1e12, "N")
+
+Positive = real(0.0, None, lo_open=True)
+Load = Annotated[float, BeforeValidator(plain_number)]
+
 
 
 class StrictModel(BaseModel):
@@ -34,20 +62,30 @@ def _finite(v: float, what: str) -> float:
 class CableSpec(StrictModel):
     """Geometry, axial rigidity and masses (section ``cable:``)."""
 
-    L: float = Field(gt=0, description="horizontal distance A->B, m")
-    H: float = Field(description="vertical distance A->B, m, positive = B below A")
-    S: tuple[float, ...] = Field(min_length=2, description="natural segment lengths, m (n+1)")
-    EA: float | None = Field(default=None, gt=0, description="axial rigidity, N")
-    E: float | None = Field(default=None, gt=0, description="Young's modulus, N/m^2")
-    A: float | None = Field(default=None, gt=0, description="cross-section area, m^2")
-    masses: tuple[float, ...] = Field(min_length=1, description="lumped nodal masses, kg (n)")
+    L: real(0.0, 1e5, "m", lo_open=True) = Field(description="horizontal distance A->B, m")
+    H: real(-1e5, 1e5, "m") = Field(description="vertical distance A->B, m, positive = B below A")
+    S: tuple[Load, ...] = Field(description="natural segment lengths, m (n+1)")
+    EA: Positive | None = Field(default=None, description="axial rigidity, N")
+    E: Positive | None = Field(default=None, description="Young's modulus, N/m^2")
+    A: Positive | None = Field(default=None, description="cross-section area, m^2")
+    masses: tuple[Load, ...] = Field(description="lumped nodal masses, kg (n)")
 
     @field_validator("S", "masses")
     @classmethod
     def _positive(cls, v, info):
+        least = 2 if info.field_name == "S" else 1
+        if len(v) < least:
+            raise ValueError(f"needs at least {least} value{'s' if least > 1 else ''}, one per "
+                             f"{'segment' if least > 1 else 'interior node'}")
         for i, x in enumerate(v):
             if not math.isfinite(x) or x <= 0:
                 raise ValueError(f"every value must be a positive finite number; item {i + 1} is {x}")
+        if info.field_name == "S" and len(v) > MAX_NODES + 1:
+            raise ValueError(
+                f"has {len(v)} segments; cablesim handles at most {MAX_NODES} interior nodes "
+                f"({MAX_NODES + 1} segments): merge segments"
+            )
+        in_range(v, *(SEGMENT_RANGE if info.field_name == "S" else MASS_RANGE))
         return v
 
     @model_validator(mode="after")
@@ -83,8 +121,15 @@ class CableSpec(StrictModel):
 class LoadsSpec(StrictModel):
     """Sustained and harmonic nodal loads (section ``loads:``), N, 2n values each."""
 
-    F0: tuple[float, ...] = Field(description="sustained nodal loads, N")
-    FL: tuple[float, ...] | None = Field(default=None, description="peak harmonic loads, N")
+    F0: tuple[Load, ...] = Field(description="sustained nodal loads, N")
+    FL: tuple[Load, ...] | None = Field(default=None, description="peak harmonic loads, N")
+
+    @field_validator("F0", "FL")
+    @classmethod
+    def _range(cls, v):
+        if v is not None:
+            in_range(v, *LOAD_RANGE, what="load")
+        return v
 
 
 class DampingSpec(StrictModel):
@@ -93,10 +138,10 @@ class DampingSpec(StrictModel):
     Either a damping ratio for two modes (default: 1 and 2) or the coefficients themselves.
     """
 
-    ratio: float | None = Field(default=None, ge=0, lt=1, description="damping ratio xi")
-    modes: tuple[int, int] = Field(default=(1, 2), description="the two modes given ratio xi")
-    a0: float | None = Field(default=None, ge=0, description="mass-proportional coefficient, 1/s")
-    a1: float | None = Field(default=None, ge=0, description="stiffness-proportional coefficient, s")
+    ratio: DAMPING_RATIO | None = Field(default=None, description="damping ratio xi")
+    modes: tuple[MODE, MODE] = Field(default=(1, 2), description="the two modes given ratio xi")
+    a0: real(0.0, 1e4, "1/s") | None = Field(default=None, description="mass-proportional coefficient, 1/s")
+    a1: real(0.0, 1e4, "s") | None = Field(default=None, description="stiffness-proportional coefficient, s")
 
     @model_validator(mode="after")
     def _one_way(self):
@@ -122,10 +167,10 @@ class IntegratorSpec(StrictModel):
     """
 
     name: Literal[INTEGRATORS] | None = None
-    dt: float | None = Field(default=None, gt=0, description="fixed step, s (rk4, newmark, generalized-alpha)")
-    rtol: float | None = Field(default=None, gt=0, lt=1, description="relative tolerance (dopri5)")
-    atol: float | None = Field(default=None, gt=0, description="absolute displacement tolerance, m (dopri5)")
-    rho_inf: float | None = Field(default=None, ge=0, le=1, description="spectral radius (generalized-alpha)")
+    dt: real(1e-9, 1e3, "s") | None = Field(default=None, description="fixed step, s (rk4, newmark, generalized-alpha)")
+    rtol: real(1e-14, 0.5) | None = Field(default=None, description="relative tolerance (dopri5)")
+    atol: real(1e-16, 1e3, "m") | None = Field(default=None, description="absolute displacement tolerance, m (dopri5)")
+    rho_inf: real(0.0, 1.0) | None = Field(default=None, description="spectral radius (generalized-alpha)")
 
     @model_validator(mode="after")
     def _fits(self):
@@ -141,9 +186,9 @@ class IntegratorSpec(StrictModel):
 class HistorySpec(StrictModel):
     """Forced response at one frequency (section ``history:``)."""
 
-    omega: float | None = Field(default=None, gt=0, description="forcing frequency, rad/s")
-    duration: float = Field(default=600.0, gt=0, description="simulated time, s")
-    output_step: float | None = Field(default=None, gt=0, description="interval between saved instants, s")
+    omega: OMEGA | None = Field(default=None, description="forcing frequency, rad/s")
+    duration: DURATION = Field(default=600.0, description="simulated time, s")
+    output_step: OUTPUT_STEP | None = Field(default=None, description="interval between saved instants, s")
     channels: tuple[str, ...] | None = Field(default=None, description="DOF to plot, e.g. [z2, z4]")
 
 
@@ -153,13 +198,13 @@ class FreeVibrationSpec(StrictModel):
     Either ``mode`` with ``peak_velocity``, or explicit initial conditions ``z0``/``v0``.
     """
 
-    mode: int | None = Field(default=None, ge=1, description="linear mode giving the initial velocities")
-    peak_velocity: float | None = Field(default=None, gt=0, description="largest initial velocity, m/s")
-    z0: tuple[float, ...] | None = Field(default=None, description="initial displacement from equilibrium, m")
-    v0: tuple[float, ...] | None = Field(default=None, description="initial velocities, m/s")
-    damping_ratio: float | None = Field(default=None, ge=0, lt=1, description="overrides damping.ratio")
-    duration: float = Field(default=20.0, gt=0, description="simulated time, s")
-    output_step: float | None = Field(default=None, gt=0, description="interval between saved instants, s")
+    mode: MODE | None = Field(default=None, description="linear mode giving the initial velocities")
+    peak_velocity: PEAK_VELOCITY | None = Field(default=None, description="largest initial velocity, m/s")
+    z0: tuple[real(-1e5, 1e5, "m"), ...] | None = Field(default=None, description="initial displacement from equilibrium, m")
+    v0: tuple[real(-1e3, 1e3, "m/s"), ...] | None = Field(default=None, description="initial velocities, m/s")
+    damping_ratio: DAMPING_RATIO | None = Field(default=None, description="overrides damping.ratio")
+    duration: DURATION = Field(default=20.0, description="simulated time, s")
+    output_step: OUTPUT_STEP | None = Field(default=None, description="interval between saved instants, s")
     channels: tuple[str, ...] | None = Field(default=None, description="DOF to plot, e.g. [z2, z4]")
 
     @model_validator(mode="after")
@@ -173,9 +218,9 @@ class FreeVibrationSpec(StrictModel):
 class OmegaGrid(StrictModel):
     """An evenly spaced frequency grid, rad/s: ``num`` points from ``start`` to ``stop``."""
 
-    start: float = Field(gt=0, description="first frequency, rad/s")
-    stop: float = Field(gt=0, description="last frequency, rad/s")
-    num: int = Field(ge=1, le=1_000_000, description="number of points")
+    start: OMEGA = Field(description="first frequency, rad/s")
+    stop: OMEGA = Field(description="last frequency, rad/s")
+    num: integer(1, 1_000_000) = Field(description="number of points")
 
     @model_validator(mode="after")
     def _order(self):
@@ -188,13 +233,13 @@ class SweepSpec(StrictModel):
     """Frequency-domain response sweep (section ``sweep:``)."""
 
     omega: Any = Field(description="grid {start, stop, num} or a list, rad/s")
-    duration: float = Field(default=3000.0, gt=0, description="cap on simulated seconds per point")
-    window: float = Field(default=200.0, gt=0, description="seconds at the end used when not steady")
+    duration: DURATION = Field(default=3000.0, description="cap on simulated seconds per point")
+    window: DURATION = Field(default=200.0, description="seconds at the end used when not steady")
     direction: Literal[DIRECTIONS] = "independent"
     channels: tuple[str, ...] | None = Field(default=None, description="DOF reported, e.g. [z2, z4]")
-    gamma: tuple[float, ...] | None = Field(default=None, description="scales of FL, one curve each")
-    tol: float = Field(default=1e-5, gt=0, lt=0.1, description="relative periodicity tolerance")
-    max_period: int = Field(default=6, ge=1, le=50, description="largest response period sought")
+    gamma: tuple[Load, ...] | None = Field(default=None, description="scales of FL, one curve each")
+    tol: real(0.0, 0.1, lo_open=True, hi_open=True) = Field(default=1e-5, description="relative periodicity tolerance")
+    max_period: integer(1, 50) = Field(default=6, description="largest response period sought")
     floquet: bool = Field(default=True, description="check the stability of periodic responses")
     accelerate: bool = Field(default=True, description="decide steady points by shooting from the transient")
 
@@ -216,12 +261,14 @@ class SweepSpec(StrictModel):
             out = []
             for i, w in enumerate(v):
                 try:
-                    w = float(w)
-                except (TypeError, ValueError):
-                    raise ValueError(f"item {i + 1} ({w!r}) is not a number") from None
+                    w = float(plain_number(w))
+                except (TypeError, ValueError) as exc:
+                    why = str(exc) if isinstance(exc, ValueError) and " " in str(exc) else "must be a number"
+                    raise ValueError(f"item {i + 1} ({w!r}) {why}") from None
                 if not math.isfinite(w) or w <= 0:
                     raise ValueError(f"frequencies must be positive (rad/s); item {i + 1} is {w}")
                 out.append(w)
+            in_range(out, 1e-4, 1e4, "rad/s", what="frequency")
             return tuple(out)
         raise ValueError("give a grid {start: .., stop: .., num: ..} or a list of frequencies in rad/s")
 
@@ -232,8 +279,8 @@ class SweepSpec(StrictModel):
             if len(v) == 0:
                 raise ValueError("gamma is empty; omit it or give at least one scale")
             for i, g in enumerate(v):
-                if not math.isfinite(g) or g <= 0:
-                    raise ValueError(f"gamma values scale FL and must be positive; item {i + 1} is {g}")
+                if not math.isfinite(g) or g <= 0 or g > 1e6:
+                    raise ValueError(f"gamma values scale FL and must be positive, at most 1e6; item {i + 1} is {g}")
         return v
 
     @model_validator(mode="after")

@@ -1,7 +1,8 @@
 """Time histories: integrate the equations of motion and observe the outputs.
 
-:func:`simulate` drives any integrator chunk by chunk: between chunks it reports progress and
-honours Ctrl-C, so an interrupted run returns everything computed so far. A run that fails
+:func:`simulate` drives any integrator chunk by chunk, each bounded in steps and in wall time:
+between chunks it reports progress and honours Ctrl-C and SIGTERM within about a second, so an
+interrupted run returns everything computed so far. A run that fails
 (a segment goes slack, the state blows up, an inner solve fails) also returns everything up to
 the last good instant, with a status that says what happened and what to try.
 """
@@ -9,7 +10,6 @@ the last good instant, with a status that says what happened and what to try.
 from __future__ import annotations
 
 import signal
-import threading
 import time
 from typing import Callable
 
@@ -20,6 +20,7 @@ from ..errors import CablesimError, SlackSegmentError
 from ..modal import fastest_rate
 from ..statics import inextensible_equilibrium, resisting_force
 from . import kernels as kn
+from .interrupts import MAX_CHUNK_STEPS, MIN_CHUNK_STEPS, Deferred, received
 from .equations import EquationsOfMotion, approximate_workspace, observe
 from .integrators import Integrator
 from .result import HistoryResult
@@ -34,28 +35,36 @@ def _observe_all(prm, t, S, warm, zc, ze, T, residual, slack, awk, split):
         slack[i] = seg[0]
 
 
-class _Interrupt:
-    """Catch SIGINT between chunks (main thread only) instead of raising mid-assignment."""
-
-    def __init__(self):
-        self.hit = False
-        self._old = None
-
-    def __enter__(self):
-        if threading.current_thread() is threading.main_thread():
-            self._old = signal.signal(signal.SIGINT, self._handle)
-        return self
-
-    def _handle(self, signum, frame):
-        self.hit = True
-
-    def __exit__(self, *exc):
-        if self._old is not None:
-            signal.signal(signal.SIGINT, self._old)
-        return False
+def step_size(integrator: Integrator, state) -> float:
+    """The current step of a scheme, s (the fixed ``dt``, or the adaptive scheme's last step)."""
+    if integrator.fixed_step:
+        return float(integrator.dt)
+    return float(state.extra.get("h", 0.0)) or 1e-3
 
 
-def _failure_text(code: int, t: float, eom: EquationsOfMotion, integrator: Integrator, state_s) -> str:
+def advance_in_chunks(integrator: Integrator, prm, state, t_end: float, t_out: np.ndarray, out: np.ndarray,
+                      max_steps: int = MAX_CHUNK_STEPS) -> tuple[int, int]:
+    """``integrator.advance`` to ``t_end`` in calls of at most about ``max_steps`` steps each.
+
+    The compiled loop then returns to Python often enough for Ctrl-C and SIGTERM to act within
+    about a second, whatever the step size. The steps taken are the same as in one call (fixed
+    steps stay on their grid; the adaptive scheme never shortens a step to meet a chunk's end).
+
+    Returns
+    -------
+    n_written, status : int
+        As :meth:`Integrator.advance`.
+    """
+    written = 0
+    while True:
+        t_stop = min(t_end, state.t + max_steps * step_size(integrator, state))
+        n, code = integrator.advance(prm, state, t_stop, t_out[written:], out[written:])
+        written += n
+        if code != kn.OK or state.t >= t_end - 1e-12 * max(abs(t_end), 1.0) or t_stop >= t_end:
+            return written, code
+
+
+def failure_text(code: int, t: float, eom: EquationsOfMotion, integrator: Integrator, state_s) -> str:
     where = f"at t = {t:.6g} s"
     rate = fastest_rate(eom.frequencies, eom.a0, eom.a1)
     dt = getattr(integrator, "dt", None)
@@ -135,7 +144,8 @@ def simulate(
         Compute the configurational/elastic split ``z_c``, ``z_e`` (one inner solve per saved
         instant).
     chunk_seconds : float
-        Wall-clock length of a chunk between progress reports and Ctrl-C checks.
+        Wall-clock length of a chunk between progress reports and checks for Ctrl-C and SIGTERM
+        (a chunk is also bounded in steps, :data:`~cablesim.dynamics.interrupts.MAX_CHUNK_STEPS`).
 
     Returns
     -------
@@ -152,26 +162,27 @@ def simulate(
     state = integrator.start(eom, s0)
     written = 0
     code = state.extra.get("code", kn.OK)
-    chunk = min(duration, 50.0 * output_step, 10.0)
+    steps = float(MIN_CHUNK_STEPS)  # steps per chunk, adapted to about `chunk_seconds` of wall time
     status, message, t_stop = Status.COMPLETED, Status.COMPLETED.text, None
-    with _Interrupt() as stop:
+    with Deferred() as stop:
         while code == kn.OK and state.t < duration - 1e-12 * max(duration, 1.0):
             if stop.hit:
                 status, t_stop = Status.INTERRUPTED, state.t
-                message = f"interrupted at t = {state.t:.6g} s"
+                by = " (SIGTERM)" if received() == signal.SIGTERM else ""
+                message = f"interrupted at t = {state.t:.6g} s{by}"
                 break
-            t_end = min(state.t + chunk, duration)
+            h = step_size(integrator, state)
+            t_end = min(state.t + min(steps * h, 50.0 * output_step + h, 10.0 + h), duration)
             wall = time.perf_counter()
             n, code = integrator.advance(prm, state, t_end, t_out[written:], out[1 + written :])
             written += n
             if progress is not None:
                 progress(min(state.t, duration))
-            # Keep each chunk near `chunk_seconds` of wall time.
             spent = time.perf_counter() - wall
-            chunk *= float(np.clip(chunk_seconds / max(spent, 1e-4), 0.5, 4.0))
+            steps = float(np.clip(steps * np.clip(chunk_seconds / max(spent, 1e-4), 0.5, 4.0), 1.0, MAX_CHUNK_STEPS))
     if code != kn.OK:
         status, t_stop = Status(code), state.t
-        message = _failure_text(code, state.t, eom, integrator, state.s).rstrip(".")
+        message = failure_text(code, state.t, eom, integrator, state.s).rstrip(".")
     m = written + 1
     t = np.concatenate([[0.0], t_out[:written]])
     S = out[:m]
@@ -183,6 +194,8 @@ def simulate(
     _observe_all(prm, t, S, np.array(eom.F1, dtype=float), zc, ze, T, residual, slack, approximate_workspace(eom.cable.n_nodes), split)
     # Nothing non-finite leaves silently: cut the record at the first bad instant.
     bad = ~(np.isfinite(S).all(axis=1) & np.isfinite(T).all(axis=1) & np.isfinite(residual))
+    if split and not (np.isfinite(zc[0]).all() and np.isfinite(ze[0]).all()):
+        split = False  # no inextensible split even at the start (a displaced start far from it): none
     if split:
         bad |= ~(np.isfinite(zc).all(axis=1) & np.isfinite(ze).all(axis=1))
     if bad.any():

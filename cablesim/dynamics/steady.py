@@ -31,6 +31,7 @@ import numpy as np
 from . import kernels as kn
 from .equations import EquationsOfMotion
 from .integrators import DOPRI5, Integrator
+from .simulate import advance_in_chunks, failure_text
 from .status import Status
 
 #: Most forcing periods between two calls of a ``decide`` hook of :func:`steady_response`.
@@ -182,7 +183,7 @@ def monodromy_multipliers(
     def flow(s0: np.ndarray) -> np.ndarray:
         st = integrator.start(eom, s0)
         out = np.empty((1, s0.size))
-        n, code = integrator.advance(prm, st, p * T, np.array([p * T]), out)
+        n, code = advance_in_chunks(integrator, prm, st, p * T, np.array([p * T]), out)
         if code != kn.OK or n != 1:
             raise FloatingPointError("flow failed")
         return out[0]
@@ -278,9 +279,9 @@ def steady_response(
         else:
             t_out = T * np.arange(k + 1, kk + 1)
         out = np.empty((t_out.size, 3 * nd))
-        n, code = integrator.advance(prm, state, t_out[-1], t_out, out)
+        n, code = advance_in_chunks(integrator, prm, state, t_out[-1], t_out, out)
         if code != kn.OK:
-            return _failed(eom, channels, w, out[:n], t_out[:n], state, code, fine, spp, T)
+            return _failed(eom, integrator, channels, out[:n], state, code, fine)
         if in_window:
             fine.append(out)
             sel = out[spp - 1 :: spp]
@@ -422,9 +423,9 @@ def _finish_steady(eom, integrator, prm, state, channels, p, k, T, spp, floquet)
     nd = eom.n_dof
     t_out = T * (k + np.arange(1, p * spp + 1) / spp)
     out = np.empty((t_out.size, 3 * nd))
-    n, code = integrator.advance(prm, state, t_out[-1], t_out, out)
+    n, code = advance_in_chunks(integrator, prm, state, t_out[-1], t_out, out)
     if code != kn.OK:
-        return _failed(eom, channels, eom.omega, out[:n], t_out[:n], state, code, [], spp, T)
+        return _failed(eom, integrator, channels, out[:n], state, code, [])
     z = out[:, :nd][:, channels]
     amp, half = _amplitudes(z, periodic=True)
     return PointResult(
@@ -442,14 +443,14 @@ def _finish_steady(eom, integrator, prm, state, channels, p, k, T, spp, floquet)
     )
 
 
-def _failed(eom, channels, w, out, t_out, state, code, fine, spp, T) -> PointResult:
+def _failed(eom, integrator, channels, out, state, code, fine) -> PointResult:
     nd = eom.n_dof
     pieces = [f for f in fine] + ([out] if out.shape[0] else [])
     rec = np.concatenate(pieces) if pieces else state.s[None, :]
     z = rec[:, :nd][:, channels]
     amp, half = _amplitudes(z, periodic=False)
     return PointResult(
-        omega=w,
+        omega=eom.omega,
         amplitude=amp,
         halfrange=half,
         period=0,
@@ -459,6 +460,6 @@ def _failed(eom, channels, w, out, t_out, state, code, fine, spp, T) -> PointRes
         floquet=np.nan,
         final_state=state.s.copy(),
         status=Status(code),
-        message=f"stopped at t = {state.t:.6g} s: {Status(code).text}",
+        message=failure_text(code, state.t, eom, integrator, state.s).rstrip("."),
         decided="failed",
     )

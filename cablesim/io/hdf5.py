@@ -13,8 +13,9 @@ Layout (every dataset has a ``units`` attribute; every file has the root attribu
 - ``cablesim sweep``: see :func:`cablesim.io.sweeps.write_sweep`;
 - ``cablesim continue``: see :func:`cablesim.io.continuation.write_continuation`.
 
-Files are written atomically: into ``NAME.part`` beside the target, then renamed over it, so a
-failed or interrupted run never leaves a corrupt or half-written result under the real name.
+Files are written atomically: into ``NAME.<pid>.part`` beside the target, then renamed over
+it, so a failed or interrupted run never leaves a corrupt or half-written result under the real
+name (and the next run removes the temporary a killed writer left).
 Every dataset carries a ``units`` attribute; non-finite numbers are refused unless a caller
 says explicitly that they mark missing values.
 """
@@ -22,6 +23,7 @@ says explicitly that they mark missing values.
 from __future__ import annotations
 
 import datetime
+import json
 import os
 import shutil
 from contextlib import contextmanager
@@ -36,6 +38,8 @@ from ..dynamics.result import HistoryResult
 from ..dynamics.status import Status
 from ..errors import CablesimError
 from ..version import __version__
+from . import provenance
+from .paths import part_path, remove_stale_parts, write_error
 
 
 @contextmanager
@@ -54,27 +58,51 @@ def atomic_h5(path: str | Path, mode: str = "w"):
     h5py.File
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".part")
-    if mode == "a" and path.exists():
-        shutil.copyfile(path, tmp)
+    remove_stale_parts(path)
+    tmp = part_path(path)
     try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        if mode == "a" and path.exists():
+            shutil.copyfile(path, tmp)
         with h5py.File(tmp, "a" if mode == "a" else "w") as f:
             yield f
         os.replace(tmp, path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise write_error(path, exc) from None
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
 
 
+#: Units of the numeric group attributes (stored per group as the JSON attribute ``units``).
+ATTRIBUTE_UNITS = {
+    "omega": "rad/s", "t_stop": "s", "duration": "s", "output_step": "s", "a0": "1/s", "a1": "s",
+    "integrator_dt": "s", "integrator_dt_max": "s", "integrator_rtol": "1", "integrator_atol": "m",
+    "integrator_rho_inf": "1", "omega_c": "J", "omega_e": "J", "sole_inextensible_omega": "rad/s",
+    "cap": "s", "window": "s", "tol": "1", "max_period": "forcing periods", "points_done": "1",
+    "points_total": "1", "points_failed": "1", "peak_velocity": "m/s", "damping_ratio": "1",
+}
+
+
 def stamp(f: h5py.File, case_text: str, command: str, **attrs) -> None:
-    """Root attributes every cablesim file has: the case, the version, the command."""
+    """Root attributes every cablesim file has: the case, the command, the versions, the platform,
+    the git commit, the command line and every effective option (:mod:`cablesim.io.provenance`)."""
     f.attrs["case_yaml"] = case_text
     f.attrs["cablesim_version"] = __version__
     f.attrs["command"] = command
     f.attrs["created_utc"] = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    for k, v in provenance.record().items():
+        f.attrs[k] = v
     for k, v in attrs.items():
         f.attrs[k] = v
+
+
+def attribute_units(group: h5py.Group) -> None:
+    """Store the units of the group's numeric attributes as its JSON attribute ``units``."""
+    units = {k: ATTRIBUTE_UNITS[k] for k in group.attrs if k in ATTRIBUTE_UNITS}
+    if units:
+        group.attrs["units"] = json.dumps(units, sort_keys=True)
 
 
 def put(group: h5py.Group, name: str, data, units: str, description: str = "", allow_nan: bool = False):
@@ -115,6 +143,7 @@ def write_static(path: str | Path, result, case_text: str) -> Path:
             put(g, "B", r.inextensible.B, "1", "tangent transformation dT/dP")
             put(g, "D", r.inextensible.D, "m/N", "configurational flexibility dx/dP")
             g.attrs["omega_c"] = r.inextensible.omega_c
+            attribute_units(g)
         if r.approximate is not None:
             a = r.approximate
             g = st.create_group("approximate")
@@ -132,6 +161,7 @@ def write_static(path: str | Path, result, case_text: str) -> Path:
                 put(g, name, val, units, desc)
             g.attrs["omega_c"] = a.omega_c
             g.attrs["omega_e"] = a.omega_e
+            attribute_units(g)
         if r.exact is not None:
             g = st.create_group("exact")
             put(g, "y", r.exact.y, "m", "deformed node coordinates")
@@ -148,6 +178,7 @@ def write_static(path: str | Path, result, case_text: str) -> Path:
         m.attrs["a1"] = r.a1
         if r.sole_inextensible_omega is not None:
             m.attrs["sole_inextensible_omega"] = r.sole_inextensible_omega
+        attribute_units(m)
     return path
 
 
@@ -184,6 +215,7 @@ def write_history(path: str | Path, hist, case_text: str, command: str, extra_at
             g.attrs[k] = v
         for k, v in (extra_attrs or {}).items():
             g.attrs[k] = v
+        attribute_units(g)
         m = f.create_group("modal")
         put(m, "omega", hist.modal_omega, "rad/s", "linear modal frequencies about the equilibrium")
     return Path(path)
@@ -226,6 +258,25 @@ class ResultInfo:
     command: str
     family: str
     case_text: str
+
+
+def is_complete_result(path) -> bool:
+    """Whether ``path`` holds a cablesim result that an incomplete run must not replace:
+    a static file, a completed history, or a complete sweep (unreadable files are not)."""
+    path = Path(path)
+    if not path.is_file():
+        return False
+    try:
+        with h5py.File(path, "r") as f:
+            if "command" not in f.attrs:
+                return False
+            if "history" in f:
+                return bool(f["history"].attrs.get("completed", False))
+            if "sweep" in f:
+                return bool(f["sweep"].attrs.get("complete", False))
+            return True
+    except (OSError, KeyError, ValueError):
+        return False
 
 
 def inspect_result(path) -> ResultInfo:
@@ -309,12 +360,17 @@ def read_history(path):
                 f"The history file {path} is malformed: /history/{{{', '.join(missing)}}} missing. "
                 "Rerun the history."
             )
-        data = {k: np.asarray(g[k][()]) for k in need}
-        zc = np.asarray(g["zc"][()]) if "zc" in g else None
-        ze = np.asarray(g["ze"][()]) if "ze" in g else None
-        dof = tuple(int(d) for d in np.asarray(g["dof"][()]).ravel()) if "dof" in g else None
-        attrs = {k: _plain(v) for k, v in g.attrs.items()}
-        modal = np.asarray(f["modal/omega"][()], dtype=float) if "modal/omega" in f else np.empty(0)
+        try:
+            data = {k: np.asarray(g[k][()], dtype=float) for k in need}
+            zc = np.asarray(g["zc"][()], dtype=float) if "zc" in g else None
+            ze = np.asarray(g["ze"][()], dtype=float) if "ze" in g else None
+            dof = tuple(int(d) for d in np.asarray(g["dof"][()]).ravel()) if "dof" in g else None
+            attrs = {k: _plain(v) for k, v in g.attrs.items()}
+            modal = np.asarray(f["modal/omega"][()], dtype=float) if "modal/omega" in f else np.empty(0)
+        except (TypeError, ValueError, KeyError, AttributeError):
+            raise CablesimError(f"The history file {path} is malformed: a dataset under /history is not an "
+                                "array of numbers. Rerun the history.") from None
+    _check_history_shapes(path, data, zc, ze)
     if dof is not None and dof == tuple(range(1, data["y0"].size + 1)):
         dof = None  # every DOF, in order
     omega = attrs.pop("omega", None)
@@ -331,11 +387,27 @@ def read_history(path):
     t_stop = attrs.pop("t_stop", None)
     t_stop = None if t_stop is None or not np.isfinite(float(t_stop)) else float(t_stop)
     attrs.pop("forced", None)  # derived from omega
+    attrs.pop("units", None)  # the units of these attributes
     return HistoryResult(
         t=data["t"], z=data["z"], v=data["v"], zc=zc, ze=ze, T=data["T"], residual=data["residual"],
         y0=data["y0"], T0=data["T0"], omega=omega, analysis=analysis, integrator=integrator,
         status=status, message=message, t_stop=t_stop, modal_omega=modal, settings=attrs, dof=dof,
     )
+
+
+def _check_history_shapes(path, data: dict, zc, ze) -> None:
+    """Refuse a history file whose arrays do not fit together (time along the first axis)."""
+    m = data["t"].shape[0] if data["t"].ndim == 1 else -1
+    want = {"z": 2, "v": 2, "T": 2, "residual": 1}
+    bad = [k for k, nd in want.items() if data[k].ndim != nd or data[k].shape[0] != m]
+    bad += [k for k, a in (("zc", zc), ("ze", ze)) if a is not None and a.shape != data["z"].shape]
+    if m < 1 or data["z"].shape != data["v"].shape:
+        bad.append("t")
+    if bad:
+        raise CablesimError(
+            f"The history file {path} is malformed: /history/{{{', '.join(sorted(set(bad)))}}} do not match "
+            "the saved instants /history/t. Rerun the history."
+        )
 
 
 def read_static_drawing(path: Path, case):

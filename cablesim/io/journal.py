@@ -16,7 +16,9 @@ import time
 from pathlib import Path
 
 from ..errors import CablesimError
-from .sweeps import write_sweep
+from .hdf5 import is_complete_result
+from .paths import OutputLock, beside
+from .sweeps import stored_sweep_state, write_sweep
 
 
 def fingerprint(case_text: str, analysis, integrator) -> str:
@@ -28,36 +30,69 @@ def fingerprint(case_text: str, analysis, integrator) -> str:
     return h.hexdigest()[:16]
 
 
-def read_journal(path: Path, fingerprint: str) -> list[dict]:
-    """The records of a journal, after checking that it belongs to this sweep; a torn last
-    record (a kill mid-write) is cut off the file."""
-    records = []
-    with open(path) as f:
-        lines = f.read().split("\n")
-    if not lines or not lines[0].strip():
-        return records
-    head = json.loads(lines[0])
-    if head.get("fingerprint") != fingerprint:
+def _damaged(path: Path, what: str) -> CablesimError:
+    return CablesimError(
+        f"The journal {path} is damaged ({what}), so --resume cannot trust it. Run the same command "
+        "without --resume to start the sweep afresh (the journal is replaced), or give another -o.",
+        field="sweep",
+    )
+
+
+def read_journal(path: Path, fingerprint: str) -> tuple[list[dict], list[str]]:
+    """The records of a journal after checking that it belongs to this sweep, and warnings.
+
+    A record that cannot be read or belongs to other settings is skipped with a warning (its
+    point is computed again); a torn last record (a kill mid-write) is cut off the file. A
+    journal whose first line does not name this sweep's settings is refused.
+    """
+    try:
+        with open(path, "rb") as f:
+            raw = f.read()
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise _damaged(path, "it is not text") from None
+    except OSError as exc:
+        raise _damaged(path, f"it cannot be read: {exc.strerror}") from None
+    lines = text.split("\n")
+    if not lines[0].strip():
+        raise _damaged(path, "its first line, which names the sweep's settings, is empty")
+    try:
+        head = json.loads(lines[0])
+    except json.JSONDecodeError:
+        raise _damaged(path, "its first line is not a JSON record") from None
+    if not isinstance(head, dict) or not isinstance(head.get("fingerprint"), str):
+        raise _damaged(path, "its first line does not name the sweep's settings")
+    if head["fingerprint"] != fingerprint:
         raise CablesimError(
             f"The journal {path} belongs to a different case or different settings, so --resume "
             "cannot continue it. Run without --resume to start afresh (the journal is replaced), "
             "or give another output file with -o.",
             field="sweep",
         )
-    good = len(lines[0]) + 1
-    for line in lines[1:]:
-        if not line.strip():
-            good += len(line) + 1
-            continue
-        try:
-            records.append(json.loads(line))
-        except json.JSONDecodeError:
-            break  # a record torn by a kill: everything before it is intact
-        good += len(line) + 1
+    records, warnings = [], []
+    good = len(lines[0].encode()) + 1
+    last = max((i for i, line in enumerate(lines) if line.strip()), default=0)
+    for number, line in enumerate(lines[1:], start=2):
+        if line.strip():
+            try:
+                rec = json.loads(line)
+            except json.JSONDecodeError:
+                if number - 1 == last:
+                    break  # a record torn by a kill: everything before it is intact
+                warnings.append(f"journal line {number} is not a JSON record; its point is computed again")
+                rec = None
+            if rec is not None:
+                if not isinstance(rec, dict) or rec.get("fingerprint") != fingerprint:
+                    warnings.append(f"journal line {number} does not carry this sweep's fingerprint (another "
+                                    "run's or damaged); its point is computed again")
+                else:
+                    rec = dict(rec, line=number)
+                    records.append(rec)
+        good += len(line.encode()) + 1
     # Cut a torn tail off, so that new records start on a line of their own.
     with open(path, "r+b") as f:
-        f.truncate(min(good, os.path.getsize(path)))
-    return records
+        f.truncate(min(good, len(raw)))
+    return records, warnings
 
 
 class _Journal:
@@ -91,23 +126,35 @@ class SweepFile:
     Parameters
     ----------
     out : Path
-        The HDF5 file; the journal is ``out`` + ``.journal``.
+        The HDF5 file; the journal is ``out`` + ``.journal``, the lock ``out`` + ``.lock``.
     fingerprint : str
-        From :func:`fingerprint`; a journal of other settings is refused on resume.
+        From :func:`fingerprint`; stored with every record and in the HDF5 file, and checked on
+        resume.
     resume : bool
         Continue from the journal of an interrupted run.
     snapshot_every : float
         Seconds between atomic rewrites of the HDF5 file.
+    command : str
+        The command line, recorded in the lock so that a second writer is told who holds it.
+
+    While it runs, the sweep holds ``out.lock`` (a second sweep writing the same file is
+    refused). If ``out`` already holds a complete result, the snapshots of this run go beside
+    it (:func:`cablesim.io.paths.beside`) and replace it only once the sweep is complete.
     """
 
-    def __init__(self, out: Path, fingerprint: str, resume: bool = False, snapshot_every: float = 3.0):
+    def __init__(self, out: Path, fingerprint: str, resume: bool = False, snapshot_every: float = 3.0,
+                 command: str = ""):
         self.out = Path(out)
         self.journal_path = self.out.with_name(self.out.name + ".journal")
         self.fingerprint = fingerprint
         self.resume = resume
         self.snapshot_every = snapshot_every
+        self.lock = OutputLock(self.out, command)
+        self.snapshot = snapshot_path(self.out)
+        self.warnings: list[str] = []
         self._journal = None
         self._last = time.monotonic()
+        self.lock.refuse_if_taken()
 
     def previous(self) -> list[dict]:
         """Records of the interrupted run (empty unless resuming)."""
@@ -116,23 +163,55 @@ class SweepFile:
         if not self.journal_path.exists():
             if self.out.exists():
                 raise CablesimError(f"{self.out} is already complete (no journal to resume); nothing to do.")
-            raise CablesimError(f"There is no interrupted sweep to resume at {self.out} (no {self.journal_path.name}).")
-        return read_journal(self.journal_path, self.fingerprint)
+            raise CablesimError(
+                f"There is no interrupted sweep to resume at {self.out} (no {self.journal_path.name}); "
+                "run the command without --resume."
+            )
+        records, warnings = read_journal(self.journal_path, self.fingerprint)
+        self.warnings += warnings
+        return records
 
     def begin(self) -> None:
-        """Open the journal (a fresh one unless resuming)."""
+        """Take the lock and open the journal (a fresh one unless resuming)."""
+        self.lock.acquire()
         self._journal = _Journal(self.journal_path, self.fingerprint, fresh=not self.resume)
         self._last = time.monotonic()
 
     def point(self, record: dict, result) -> None:
         """Journal one point; rewrite the HDF5 file if the last snapshot is old enough."""
-        self._journal.append(record)
+        self._journal.append(dict(record, fingerprint=self.fingerprint))
         if time.monotonic() - self._last >= self.snapshot_every:
-            write_sweep(self.out, result)
+            write_sweep(self.snapshot, result, self.fingerprint)
             self._last = time.monotonic()
 
     def end(self, result, complete: bool) -> None:
-        """Write the HDF5 file; remove the journal if the sweep is complete."""
-        write_sweep(self.out, result)
-        if self._journal is not None:
+        """Write the HDF5 file (the final name once complete); remove the journal if complete."""
+        try:
+            if self._journal is None:
+                return  # never began: nothing was computed, nothing is written
+            if complete:
+                write_sweep(self.out, result, self.fingerprint)
+                if self.snapshot != self.out:
+                    self.snapshot.unlink(missing_ok=True)
+            else:
+                write_sweep(self.snapshot, result, self.fingerprint)
             self._journal.close(remove=complete)
+        finally:
+            self.lock.release()
+
+
+def snapshot_path(out: Path) -> Path:
+    """Where an unfinished sweep writes: ``out``, or beside it if ``out`` holds a complete result."""
+    return beside(out) if is_complete_result(out) else Path(out)
+
+
+def nothing_to_resume(out: Path, fingerprint_now: str) -> bool:
+    """Whether ``--resume`` finds ``out`` already complete with these settings (nothing to do)."""
+    if out.with_name(out.name + ".journal").exists() or not out.is_file():
+        return False
+    complete, fp = stored_sweep_state(out)
+    if complete and fp not in (None, fingerprint_now):
+        raise CablesimError(
+            f"{out} holds a complete sweep of another case or other settings, so there is nothing to resume: "
+            "run the command without --resume to replace it, or give another -o.", field="sweep")
+    return complete

@@ -125,7 +125,8 @@ def history_summary(case, hist, integ, wall: float) -> str:
 
 
 def sweep_summary(case, res, wall: float) -> str:
-    """Summary of a sweep: points, steady fraction, resonance peaks per curve and channel."""
+    """Summary of a sweep: points, steady fraction, resonance peaks per curve and channel, and
+    every point that stopped early with why (such points hold partial values: never a peak)."""
     lines = [
         f"cablesim {__version__}: sweep of '{case.name}', {res.omega.size} frequencies from "
         f"{res.omega.min():.4g} to {res.omega.max():.4g} rad/s, {len(res.curves)} curve(s), "
@@ -138,10 +139,14 @@ def sweep_summary(case, res, wall: float) -> str:
         done = d["done"]
         if not done.any():
             continue
+        good = done & ~d["failed"]
         for j, name in enumerate(res.channels):
-            a = np.where(done, d["amplitude"][:, j], -np.inf)
-            i = int(np.argmax(a))
-            rows.append([label, name, f"{res.omega[i]:.4g}", _g(d["amplitude"][i, j], 5)])
+            a = np.where(good & np.isfinite(d["amplitude"][:, j]), d["amplitude"][:, j], -np.inf)
+            if np.isfinite(a).any():
+                i = int(np.argmax(a))
+                rows.append([label, name, f"{res.omega[i]:.4g}", _g(d["amplitude"][i, j], 5)])
+            else:
+                rows.append([label, name, "-", "no point ran to its end"])
         steady = d["steady"][done]
         failed = d["failed"][done]
         capped = ~steady & ~failed
@@ -150,9 +155,13 @@ def sweep_summary(case, res, wall: float) -> str:
             f"  {label}: {steady.sum()} of {done.sum()} points steady"
             + (f", {sub.sum()} subharmonic (period >= 2)" if sub.any() else "")
             + (f", {capped.sum()} reached the cap" if capped.any() else "")
-            + (f", {failed.sum()} stopped early (e.g. a slack segment; values partial)" if failed.any() else "")
+            + (f", {failed.sum()} FAILED (stopped early; listed below, left out of the peaks)" if failed.any() else "")
         )
     lines.append(_table(["curve", "channel", "peak at (rad/s)", "peak amplitude (m)"], rows))
+    failures = res.failures()
+    if failures:
+        lines += ["", f"{len(failures)} point(s) failed (values partial, not used as peaks):"]
+        lines += [f"  {f}" for f in failures]
     return "\n".join(lines)
 
 

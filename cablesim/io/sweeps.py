@@ -12,10 +12,10 @@ import numpy as np
 from ..channels import normalise_channel
 from ..errors import CablesimError
 from ..names import DIRECTIONS
-from .hdf5 import DIRECTION_GROUPS, atomic_h5, attr_text, put, stamp
+from .hdf5 import DIRECTION_GROUPS, atomic_h5, attr_text, attribute_units, put, stamp
 
 
-def write_sweep(path: str | Path, res) -> Path:
+def write_sweep(path: str | Path, res, fingerprint: str | None = None) -> Path:
     """Write a (possibly incomplete) :class:`~cablesim.analyses.sweep.SweepResult` atomically.
 
     Layout: ``/sweep/omega``, optional ``/sweep/gamma`` (then every result dataset has a
@@ -23,7 +23,10 @@ def write_sweep(path: str | Path, res) -> Path:
     steady, response_frequency, t_end, floquet, done}``, for up/down sweeps the same under
     ``/sweep/up/`` and ``/sweep/down/``; ``/modal/omega``. Points not yet computed have
     ``done = False`` and NaN in the float datasets; a point that stopped early (``failed``) may
-    have NaN response frequencies. These marked gaps are the only NaN cablesim writes.
+    have NaN response frequencies. These marked gaps are the only NaN cablesim writes. ``status``
+    holds each point's outcome in words (``"steady"``, ``"cap reached"``, ``"stopped at t = ...:
+    segment 2 went slack ..."``, ``""`` when not computed). ``fingerprint`` (of the case and
+    settings, :func:`cablesim.io.journal.fingerprint`) is stored as an attribute of ``/sweep``.
     """
     units = {
         "amplitude": ("m", "peak |z| from the static equilibrium"),
@@ -51,8 +54,12 @@ def write_sweep(path: str | Path, res) -> Path:
             if k in res.settings:
                 g.attrs[k] = res.settings[k]
         g.attrs["complete"] = res.complete
+        if fingerprint is not None:
+            g.attrs["fingerprint"] = fingerprint
+        g.attrs["points_failed"] = res.n_failed
         g.attrs["points_done"] = res.n_done
         g.attrs["points_total"] = res.n_total
+        attribute_units(g)
         dirs = sorted({c.direction for c in res.curves}, key=DIRECTIONS.index)
         for d in dirs:
             target = g if d == "independent" else g.create_group(d)
@@ -65,9 +72,27 @@ def write_sweep(path: str | Path, res) -> Path:
             decided = [np.array([str(x) for x in res.data[k].get("decided", [])], dtype="S") for k in cs]
             put(target, "decided", np.stack(decided) if res.gamma is not None else decided[0], "1",
                 "how each point was decided: integrated, shooting, cap, failed (empty: not computed)")
+            texts = [res.data[k]["status"] for k in cs]
+            texts = np.stack(texts) if res.gamma is not None else texts[0]
+            ds = target.create_dataset("status", data=np.asarray(texts, dtype=object), dtype=h5py.string_dtype())
+            ds.attrs["units"] = "text"
+            ds.attrs["description"] = "outcome of each point in words ('' if not computed)"
         m = f.create_group("modal")
         put(m, "omega", res.modal_omega, "rad/s", "linear modal frequencies about the equilibrium")
     return Path(path)
+
+
+def stored_sweep_state(path) -> tuple[bool, str | None]:
+    """``(complete, fingerprint)`` of the sweep file ``path`` (``(False, None)`` if unreadable)."""
+    try:
+        with h5py.File(path, "r") as f:
+            g = f.get("sweep")
+            if not isinstance(g, h5py.Group):
+                return False, None
+            fp = g.attrs.get("fingerprint")
+            return bool(g.attrs.get("complete", False)), None if fp is None else attr_text(fp)
+    except (OSError, KeyError, ValueError):
+        return False, None
 
 
 @dataclass
@@ -155,6 +180,7 @@ def _curve_data(data: dict, P: int) -> dict:
     data["failed"] = data["failed"].astype(bool) if "failed" in data else np.zeros(P, dtype=bool)
     finite = np.all(np.isfinite(amp), axis=1)
     data["done"] = (data["done"].astype(bool) & finite) if "done" in data else finite
+    data["failed"] = data["failed"].astype(bool) if "failed" in data else np.zeros(P, dtype=bool)
     return data
 
 

@@ -10,6 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io.paths import part_path, remove_stale_parts, write_error
+
 #: Largest number of points drawn per line in the time-domain plots.
 MAX_LINE_POINTS = 20000
 
@@ -27,11 +29,14 @@ def pyplot():
 def save_atomic(fig, path: str | Path, dpi: int = 130) -> Path:
     """Save a figure through a temporary file so a failure never leaves a broken PNG."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.stem + ".part.png")
+    remove_stale_parts(path)
+    tmp = part_path(path)
     try:
-        fig.savefig(tmp, dpi=dpi, bbox_inches="tight")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(tmp, dpi=dpi, bbox_inches="tight", format="png")
         tmp.replace(path)
+    except OSError as exc:
+        raise write_error(path, exc) from None
     finally:
         tmp.unlink(missing_ok=True)
         pyplot().close(fig)

@@ -1,0 +1,165 @@
+"""What a run will cost, before it starts: time steps, saved instants, memory, disk.
+
+The command line prints the estimate of a long run and refuses one above :data:`MAX_STEPS`
+steps or :data:`MAX_MEMORY` bytes unless ``--force`` is given; a run whose results could not fit
+in this machine's memory at all is refused even then (it would only fail later).
+
+Step counts are exact for the fixed-step schemes (``duration / dt``) and an estimate for
+``dopri5``, whose step is set by stability (about ``3.3 / rate``, the fastest damped rate of
+the linearised cable) or accuracy (a fraction ``rtol ** (1/5)`` of the forcing period),
+whichever is smaller. A sweep's count is an upper bound: every point integrated to the cap.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..dynamics.equations import EquationsOfMotion
+from ..dynamics.integrators import Integrator
+from ..errors import CablesimError
+from ..modal import fastest_rate
+
+#: Most time steps a time history may take without ``--force`` (a few minutes to half an hour of
+#: compiled stepping, at 4 to 30 microseconds a step on the paper's example).
+MAX_STEPS = 1e8
+#: The same for a sweep, whose count is an upper bound (points stop once steady, usually far
+#: sooner: the paper's Fig. 3a sweep of 551 points is bounded by 6e7).
+MAX_SWEEP_STEPS = 1e9
+#: Most bytes a run may hold in memory without ``--force``.
+MAX_MEMORY = 4e9
+#: Fine samples per forcing period a sweep point keeps in its last window.
+SWEEP_SAMPLES_PER_PERIOD = 128
+
+
+def physical_memory() -> float:
+    """Bytes of memory of this machine (a large number if unknown)."""
+    try:
+        return float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):
+        return 1e15
+
+
+def _size(n: float) -> str:
+    for unit, scale in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if n >= scale:
+            return f"{n / scale:.3g} {unit}"
+    return f"{n:.0f} bytes"
+
+
+@dataclass(frozen=True)
+class Cost:
+    """The estimated cost of one run.
+
+    Attributes
+    ----------
+    what : str
+        ``"history"``, ``"free-vibration"`` or ``"sweep"``.
+    steps : float
+        Time steps (an estimate for adaptive schemes; for sweeps an upper bound).
+    samples : float
+        Saved instants (time histories) or points (sweeps).
+    memory : float
+        Bytes held in memory.
+    disk : float
+        Bytes written.
+    detail : str
+        How the steps were counted (scheme, step, duration).
+    """
+
+    what: str
+    steps: float
+    samples: float
+    memory: float
+    disk: float
+    detail: str = ""
+
+    def text(self) -> str:
+        """One line: ``about 6e+11 time steps (rk4, dt = 1e-09 s over 600 s), 12001 saved instants, ...``."""
+        unit = "points" if self.what == "sweep" else "saved instants"
+        bound = "at most " if self.what == "sweep" else "about "
+        return (f"{self.what}: {bound}{self.steps:.3g} time steps ({self.detail}), {self.samples:.0f} {unit}, "
+                f"{_size(self.memory)} in memory, {_size(self.disk)} on disk")
+
+    def excess(self) -> str | None:
+        """Why this run needs ``--force`` (None if it does not)."""
+        why = []
+        limit = MAX_SWEEP_STEPS if self.what == "sweep" else MAX_STEPS
+        if not self.steps <= limit:
+            why.append(f"{self.steps:.3g} time steps, more than the {limit:.0e} allowed")
+        if not self.memory <= MAX_MEMORY:
+            why.append(f"{_size(self.memory)} of memory, more than the {_size(MAX_MEMORY)} allowed")
+        return "; ".join(why) or None
+
+    def refusal(self, force: bool, fix: str) -> CablesimError | None:
+        """The error refusing this run (None if it may run): above the limits without ``force``,
+        or impossible on this machine at all. ``fix`` says what to change."""
+        why = self.impossible()
+        if why is not None:
+            return CablesimError(f"This {self.what} cannot run on this machine: {why} ({self.text()}). {fix}.")
+        why = self.excess()
+        if why is not None and not force:
+            return CablesimError(
+                f"This {self.what} would need {why} ({self.text()}). {fix}, or add --force to run it anyway.")
+        return None
+
+    def impossible(self) -> str | None:
+        """Why this run cannot be done on this machine at all (None if it can)."""
+        ram = physical_memory()
+        if not self.memory <= ram:
+            return f"its results need {_size(self.memory)} of memory and this machine has {_size(ram)}"
+        if not math.isfinite(self.steps) or self.steps > 1e15:
+            return f"it would take {self.steps:.3g} time steps"
+        return None
+
+
+def steps_per_second(eom: EquationsOfMotion, integ: Integrator, omega_interest: float) -> float:
+    """Time steps per simulated second (exact for fixed steps, estimated for dopri5)."""
+    if integ.fixed_step:
+        return 1.0 / integ.dt
+    rate = fastest_rate(eom.frequencies, eom.a0, eom.a1)
+    h_stability = 3.3 / rate
+    rtol = float(getattr(integ, "rtol", 1e-8))
+    h_accuracy = 2.0 * np.pi / omega_interest * max(rtol, 1e-16) ** 0.2
+    h = min(h_stability, h_accuracy, float(getattr(integ, "dt_max", np.inf)))
+    return 1.0 / h
+
+
+def _detail(integ: Integrator, duration: float, per_s: float) -> str:
+    if integ.fixed_step:
+        return f"{integ.name}, dt = {integ.dt:.3g} s over {duration:.6g} s"
+    return f"{integ.name}, steps of about {1.0 / per_s:.3g} s over {duration:.6g} s"
+
+
+def history_cost(what: str, eom: EquationsOfMotion, integ: Integrator, omega_interest: float, duration: float,
+                 output_step: float, split: bool = True) -> Cost:
+    """Cost of a time history of ``duration`` seconds saved every ``output_step``."""
+    per_s = steps_per_second(eom, integ, omega_interest)
+    nd, ns = eom.n_dof, eom.cable.n_segments
+    samples = math.floor(duration / output_step + 1e-9) + 1
+    per_sample = 8.0 * (3 * nd + (2 * nd if split else 0) + ns + 2)
+    stored = 8.0 * (2 * nd + (2 * nd if split else 0) + ns + 2)
+    return Cost(what, duration * per_s, samples, 2.0 * samples * per_sample, samples * stored,
+                _detail(integ, duration, per_s))
+
+
+def sweep_cost(points: list[tuple[EquationsOfMotion, Integrator, float]], n_points: int, curves: int, cap: float,
+               window: float, channels: int) -> Cost:
+    """Upper bound of a sweep's cost: every point integrated to the cap.
+
+    ``points`` holds ``(eom, integrator, omega)`` at a few frequencies of the grid; the largest
+    step rate among them stands for every point.
+    """
+    per_s = max(steps_per_second(eom, integ, max(w, float(eom.frequencies[0]))) for eom, integ, w in points)
+    w_low = min(w for _, _, w in points)
+    nd = points[0][0].n_dof
+    total = n_points * curves
+    fine = window * w_low / (2 * np.pi) * SWEEP_SAMPLES_PER_PERIOD  # last-window samples of one point
+    strobes = cap * w_low / (2 * np.pi)
+    memory = 8.0 * (total * (4 * channels + 8 + 3 * nd) + 2 * (fine * 3 * nd + strobes * 2 * nd))
+    disk = 8.0 * total * (3 * channels + 8) + 80.0 * total
+    return Cost("sweep", total * cap * per_s, total, memory, disk,
+                f"{total} points of up to {cap:.6g} s, {points[0][1].name}, up to {per_s:.3g} steps per simulated second")

@@ -1,0 +1,126 @@
+"""The terminal: error and warning paragraphs, progress bars, usage errors as paragraphs.
+
+Light on purpose (the command line imports it before anything heavy).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import textwrap
+import time
+
+import typer
+from typer.core import TyperGroup
+
+
+def say_error(message: str, command: str | None = None) -> None:
+    """A refusal or failure: one ``error:`` paragraph on standard error, then ``command`` (one to
+    copy, such as the --resume hint) whole on a line of its own."""
+    sys.stderr.write(textwrap.fill("error: " + message, width=100) + "\n")
+    if command:  # a command to copy: whole, on one line of its own
+        sys.stderr.write(command + "\n")
+
+
+def say_warnings(warnings) -> None:
+    """Plausibility warnings: one paragraph each on standard error; they never stop a run."""
+    for w in warnings or ():
+        sys.stderr.write(textwrap.fill("warning: " + w, width=100) + "\n")
+
+
+class CommandGroup(TyperGroup):
+    """Usage errors (an unknown option, ``--omega abc``) as one ``error:`` paragraph with exit
+    status 2, like every other refusal; a closed output pipe (``cablesim example | head``) ends
+    the command quietly."""
+
+    def main(self, *args, standalone_mode: bool = True, **kwargs):
+        if not standalone_mode:
+            return super().main(*args, standalone_mode=False, **kwargs)
+        try:
+            code = super().main(*args, standalone_mode=False, **kwargs)
+        except BrokenPipeError:
+            quiet_pipe()
+            sys.exit(141)
+        except Exception as exc:  # click's exception classes (typer carries its own copy of click)
+            kinds = {c.__name__ for c in type(exc).__mro__}
+            if "NoArgsIsHelpError" in kinds:  # `cablesim` alone: the help, which is no error
+                typer.echo(exc.ctx.get_help() if getattr(exc, "ctx", None) is not None else exc.format_message())
+                sys.exit(0)
+            if "UsageError" in kinds:
+                ctx = getattr(exc, "ctx", None)
+                where = f"cablesim {ctx.info_name}" if ctx is not None and ctx.parent is not None else "cablesim"
+                msg = exc.format_message().replace("Value error, ", "").rstrip()
+                say_error(f"{msg}{'' if msg.endswith(('.', '!', '?')) else '.'} See `{where} --help` for the "
+                           "options and their values.")
+                sys.exit(2)
+            if "Abort" in kinds:
+                sys.stderr.write("error: aborted.\n")
+                sys.exit(1)
+            raise
+        sys.exit(code if isinstance(code, int) else 0)
+
+
+def quiet_pipe() -> None:
+    """The reader went away: point stdout at /dev/null so that the interpreter's last flush is silent."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass
+
+
+class LazyBar:
+    """A progress bar on standard error that appears only once there is progress to show
+    (so that an input error is never preceded by a bar's label); none if ``quiet``."""
+
+    def __init__(self, length: int, label: str, quiet: bool = False, **kw):
+        self._args = dict(length=length, label=label, file=sys.stderr, **kw)
+        self._bar = None
+        self.done = 0
+        self.quiet = quiet
+
+    def __enter__(self):
+        return self
+
+    def set(self, done: int, length: int | None = None):
+        if self.quiet:
+            return
+        if self._bar is None:
+            if length is not None:
+                self._args["length"] = length
+            self._bar = typer.progressbar(**self._args).__enter__()
+        if length is not None:
+            self._bar.length = length
+        if done > self.done:
+            self._bar.update(done - self.done)
+            self.done = done
+
+    def __exit__(self, *exc):
+        if self._bar is not None:
+            self._bar.__exit__(*exc)
+        return False
+
+
+class StatusLine:
+    """One status line on a terminal for a run of unknown length (``cablesim continue``),
+    refreshed at most ten times a second; silent when quiet or when standard error is not a
+    terminal. Use as a context manager; call it with the text to show."""
+
+    def __init__(self, quiet: bool = False):
+        self.quiet = quiet
+        self.shown = 0.0
+
+    def __enter__(self):
+        return self
+
+    def __call__(self, text: str) -> None:
+        now = time.monotonic()
+        if not self.quiet and sys.stderr.isatty() and now - self.shown > 0.1:
+            self.shown = now
+            sys.stderr.write(f"\r{text}   ")
+            sys.stderr.flush()
+
+    def __exit__(self, *exc):
+        if self.shown:
+            sys.stderr.write("\n")
+        return False

@@ -23,7 +23,7 @@ from typing import Optional
 import typer
 
 from .errors import CablesimError
-from .io.terminal import CommandGroup, LazyBar, say_error, say_warnings
+from .io.terminal import CommandGroup, LazyBar, compiling, say_error, say_warnings
 from .names import ANALYSES, INTEGRATORS
 from .version import __version__
 
@@ -66,7 +66,10 @@ def user_errors(func):
     def wrapper(*args, **kwargs):
         from .dynamics import interrupts
 
+        from .io.provenance import set_invocation
+
         interrupts.install()
+        set_invocation("", {})  # a command that records none leaves none from an earlier one
         try:
             with warnings.catch_warnings():
                 # cablesim checks its numbers itself; numpy's notes on NaN would only precede the message
@@ -124,13 +127,6 @@ def _effective(ctx, **values) -> None:
     inv = invocation()
     set_invocation(inv["command_line"], {**inv["options"], **{k: plain(v) for k, v in values.items()}})
     _note("effective options: " + ", ".join(f"{k} = {plain(v)}" for k, v in values.items()), verbose_only=True)
-
-
-def _compile_notice(cache: Path | None = None) -> None:
-    """One line when the compiled kernels are not yet in numba's cache (the first run)."""
-    cache = cache if cache is not None else Path(__file__).resolve().parent / "dynamics" / "__pycache__"
-    if not list(cache.glob("equations.rate-*.nbi")):
-        _note("compiling the numerical kernels on first use (about a minute; cached for later runs) ...")
 
 
 # ----------------------------------------------------------------------------------------------
@@ -281,7 +277,8 @@ def static(
     out = output if output is not None else Path("runs") / case.name / "static.h5"
     _check_outputs(out, case_file, (lambda o: [o.with_suffix(".png")]) if plot else [])
     _effective(ctx, output=out)
-    run = api.static(case, analysis.value if analysis else None)
+    with compiling(_note, "kernels.closure_solve-*.nbi"):
+        run = api.static(case, analysis.value if analysis else None)
     say_warnings(run.result.warnings)
     _echo(static_summary(case, run.result))
     run.to_hdf5(out)
@@ -329,14 +326,14 @@ def history(
     out = output if output is not None else Path("runs") / case.name / f"history-w{w:g}-d{dur:g}.h5"
     chans = parse_channels(channels, case.history.channels, 2 * case.cable.n_nodes)
     _check_outputs(out, case_file, _history_pngs if plot else [])
-    planned = api.plan_history_run(case, omega, dur, output_step, analysis.value if analysis else None,
-                                   integrator.value if integrator else None)
-    say_warnings(planned.plan.static.warnings)
-    _guard(planned.cost(), force, "Shorten --duration, raise --output-step or integrator.dt", out)
-    _effective(ctx, output=out, omega=w, duration=dur, output_step=planned.plan.output_step,
-               integrator={"name": planned.plan.integrator.name, **planned.plan.integrator.settings()})
-    _compile_notice()
-    run, wall = _simulate(planned, dur)
+    with compiling(_note):
+        planned = api.plan_history_run(case, omega, dur, output_step, analysis.value if analysis else None,
+                                       integrator.value if integrator else None)
+        say_warnings(planned.plan.static.warnings)
+        _guard(planned.cost(), force, "Shorten --duration, raise --output-step or integrator.dt", out)
+        _effective(ctx, output=out, omega=w, duration=dur, output_step=planned.plan.output_step,
+                   integrator={"name": planned.plan.integrator.name, **planned.plan.integrator.settings()})
+        run, wall = _simulate(planned, dur)
     _finish_history(run, out, plot, chans, wall)
 
 
@@ -378,14 +375,15 @@ def free_vibration(
     out = output if output is not None else Path("runs") / case.name / f"{stem}.h5"
     chans = parse_channels(channels, fv.channels, 2 * case.cable.n_nodes)
     _check_outputs(out, case_file, _history_pngs if plot else [])
-    planned = api.plan_free_vibration_run(case, mode, peak_velocity, damping_ratio, dur, output_step,
-                                          analysis.value if analysis else None, integrator.value if integrator else None)
-    say_warnings(planned.plan.static.warnings)
-    _guard(planned.cost(), force, "Shorten --duration, raise --output-step or integrator.dt", out)
-    _effective(ctx, output=out, mode=k, peak_velocity=v, duration=dur, output_step=planned.plan.output_step,
-               integrator={"name": planned.plan.integrator.name, **planned.plan.integrator.settings()})
-    _compile_notice()
-    run, wall = _simulate(planned, dur)
+    with compiling(_note):
+        planned = api.plan_free_vibration_run(case, mode, peak_velocity, damping_ratio, dur, output_step,
+                                              analysis.value if analysis else None,
+                                              integrator.value if integrator else None)
+        say_warnings(planned.plan.static.warnings)
+        _guard(planned.cost(), force, "Shorten --duration, raise --output-step or integrator.dt", out)
+        _effective(ctx, output=out, mode=k, peak_velocity=v, duration=dur, output_step=planned.plan.output_step,
+                   integrator={"name": planned.plan.integrator.name, **planned.plan.integrator.settings()})
+        run, wall = _simulate(planned, dur)
     _finish_history(run, out, plot, chans, wall)
 
 
@@ -434,11 +432,11 @@ def sweep(
     if resume and nothing_to_resume(out, fingerprint(case.text, an, integ)):
         _echo(f"Nothing to do: {out} already holds this sweep, complete.")
         return
-    _guard(api.sweep_cost(case, an, integ), force, "Use fewer points (sweep.omega), a shorter sweep.duration "
-           "or a larger integrator.dt", out)
-    _effective(ctx, output=out)
-    _compile_notice()
-    _run_sweep(ctx, case, out, jobs, resume, an, integ, None if backend == Backend.loky else "dask", scheduler, plot)
+    with compiling(_note):
+        _guard(api.sweep_cost(case, an, integ), force, "Use fewer points (sweep.omega), a shorter sweep.duration "
+               "or a larger integrator.dt", out)
+        _effective(ctx, output=out)
+        _run_sweep(ctx, case, out, jobs, resume, an, integ, None if backend == Backend.loky else "dask", scheduler, plot)
 
 
 def _run_sweep(ctx, case, out: Path, jobs, resume, analysis, integrator, backend, scheduler, plot: bool):

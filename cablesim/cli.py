@@ -450,7 +450,7 @@ def _run_sweep(ctx, case, out: Path, jobs, resume, analysis, integrator, backend
     from .plots.sweep import plot_sweep
 
     bar = LazyBar(1, "sweeping", quiet=_OUT["quiet"], show_pos=True, show_eta=True)
-    snapshot = out if resume else snapshot_path(out)
+    snapshot = snapshot_path(out)
     t0 = time.perf_counter()
     try:
         with bar:

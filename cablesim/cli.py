@@ -324,7 +324,7 @@ def history(
             field="history.omega",
         )
     out = output if output is not None else Path("runs") / case.name / f"history-w{w:g}-d{dur:g}.h5"
-    chans = parse_channels(channels, case.history.channels, 2 * case.cable.n_nodes)
+    chans = parse_channels(channels, case.history.channels, 2 * case.cable.n_nodes, kept=case.outputs.channels)
     _check_outputs(out, case_file, _history_pngs if plot else [])
     with compiling(_note):
         planned = api.plan_history_run(case, omega, dur, output_step, analysis.value if analysis else None,
@@ -373,7 +373,7 @@ def free_vibration(
     v = peak_velocity if peak_velocity is not None else fv.peak_velocity
     stem = "free-vibration" + (f"-mode{k}" if k is not None else "") + (f"-v{v:g}" if v is not None and k else "")
     out = output if output is not None else Path("runs") / case.name / f"{stem}.h5"
-    chans = parse_channels(channels, fv.channels, 2 * case.cable.n_nodes)
+    chans = parse_channels(channels, fv.channels, 2 * case.cable.n_nodes, kept=case.outputs.channels)
     _check_outputs(out, case_file, _history_pngs if plot else [])
     with compiling(_note):
         planned = api.plan_free_vibration_run(case, mode, peak_velocity, damping_ratio, dur, output_step,

@@ -183,8 +183,9 @@ def column_description(result, col: int) -> str:
     return channel_description(result.dof_numbers[col] - 1)
 
 
-def parse_channels(spec: str | None, fallback, n_dof: int, flag: str = "--channels") -> list[str] | None:
-    """The channels of a ``z2,z4`` option (or ``fallback``), each checked against ``n_dof``.
+def parse_channels(spec: str | None, fallback, n_dof: int, flag: str = "--channels", kept=None) -> list[str] | None:
+    """The channels of a ``z2,z4`` option (or ``fallback``), each checked against ``n_dof`` and,
+    if the result keeps only some channels (``kept``, the case's ``outputs.channels``), against those.
 
     Raises
     ------
@@ -199,4 +200,13 @@ def parse_channels(spec: str | None, fallback, n_dof: int, flag: str = "--channe
             channel_index(name, n_dof)
         except CablesimError as exc:
             raise CablesimError(f"{flag}: {exc}", field="channels") from None
+    if kept and names:
+        have = [normalise_channel(c) for c in kept]
+        missing = [c for c in names if normalise_channel(c) not in have]
+        if missing:
+            raise CablesimError(
+                f"{flag} {','.join(missing)}: the case keeps only {', '.join(have)} (outputs.channels), so "
+                "nothing else can be plotted; choose among those, or add the channel to outputs.channels.",
+                field="channels",
+            )
     return names

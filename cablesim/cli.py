@@ -23,7 +23,7 @@ from typing import Optional
 import typer
 
 from .errors import CablesimError
-from .io.terminal import CommandGroup, LazyBar, StatusLine, say_error, say_warnings
+from .io.terminal import CommandGroup, LazyBar, StatusLine, compiling, say_error, say_warnings
 from .names import ANALYSES, INTEGRATORS
 from .version import __version__
 
@@ -66,7 +66,10 @@ def user_errors(func):
     def wrapper(*args, **kwargs):
         from .dynamics import interrupts
 
+        from .io.provenance import set_invocation
+
         interrupts.install()
+        set_invocation("", {})  # a command that records none leaves none from an earlier one
         try:
             with warnings.catch_warnings():
                 # cablesim checks its numbers itself; numpy's notes on NaN would only precede the message
@@ -124,13 +127,6 @@ def _effective(ctx, **values) -> None:
     inv = invocation()
     set_invocation(inv["command_line"], {**inv["options"], **{k: plain(v) for k, v in values.items()}})
     _note("effective options: " + ", ".join(f"{k} = {plain(v)}" for k, v in values.items()), verbose_only=True)
-
-
-def _compile_notice(cache: Path | None = None) -> None:
-    """One line when the compiled kernels are not yet in numba's cache (the first run)."""
-    cache = cache if cache is not None else Path(__file__).resolve().parent / "dynamics" / "__pycache__"
-    if not list(cache.glob("equations.rate-*.nbi")):
-        _note("compiling the numerical kernels on first use (about a minute; cached for later runs) ...")
 
 
 # ----------------------------------------------------------------------------------------------
@@ -281,7 +277,8 @@ def static(
     out = output if output is not None else Path("runs") / case.name / "static.h5"
     _check_outputs(out, case_file, (lambda o: [o.with_suffix(".png")]) if plot else [])
     _effective(ctx, output=out)
-    run = api.static(case, analysis.value if analysis else None)
+    with compiling(_note, "kernels.closure_solve-*.nbi"):
+        run = api.static(case, analysis.value if analysis else None)
     say_warnings(run.result.warnings)
     _echo(static_summary(case, run.result))
     run.to_hdf5(out)
@@ -327,16 +324,16 @@ def history(
             field="history.omega",
         )
     out = output if output is not None else Path("runs") / case.name / f"history-w{w:g}-d{dur:g}.h5"
-    chans = parse_channels(channels, case.history.channels, 2 * case.cable.n_nodes)
+    chans = parse_channels(channels, case.history.channels, 2 * case.cable.n_nodes, kept=case.outputs.channels)
     _check_outputs(out, case_file, _history_pngs if plot else [])
-    planned = api.plan_history_run(case, omega, dur, output_step, analysis.value if analysis else None,
-                                   integrator.value if integrator else None)
-    say_warnings(planned.plan.static.warnings)
-    _guard(planned.cost(), force, "Shorten --duration, raise --output-step or integrator.dt", out)
-    _effective(ctx, output=out, omega=w, duration=dur, output_step=planned.plan.output_step,
-               integrator={"name": planned.plan.integrator.name, **planned.plan.integrator.settings()})
-    _compile_notice()
-    run, wall = _simulate(planned, dur)
+    with compiling(_note):
+        planned = api.plan_history_run(case, omega, dur, output_step, analysis.value if analysis else None,
+                                       integrator.value if integrator else None)
+        say_warnings(planned.plan.static.warnings)
+        _guard(planned.cost(), force, "Shorten --duration, raise --output-step or integrator.dt", out)
+        _effective(ctx, output=out, omega=w, duration=dur, output_step=planned.plan.output_step,
+                   integrator={"name": planned.plan.integrator.name, **planned.plan.integrator.settings()})
+        run, wall = _simulate(planned, dur)
     _finish_history(run, out, plot, chans, wall)
 
 
@@ -376,16 +373,17 @@ def free_vibration(
     v = peak_velocity if peak_velocity is not None else fv.peak_velocity
     stem = "free-vibration" + (f"-mode{k}" if k is not None else "") + (f"-v{v:g}" if v is not None and k else "")
     out = output if output is not None else Path("runs") / case.name / f"{stem}.h5"
-    chans = parse_channels(channels, fv.channels, 2 * case.cable.n_nodes)
+    chans = parse_channels(channels, fv.channels, 2 * case.cable.n_nodes, kept=case.outputs.channels)
     _check_outputs(out, case_file, _history_pngs if plot else [])
-    planned = api.plan_free_vibration_run(case, mode, peak_velocity, damping_ratio, dur, output_step,
-                                          analysis.value if analysis else None, integrator.value if integrator else None)
-    say_warnings(planned.plan.static.warnings)
-    _guard(planned.cost(), force, "Shorten --duration, raise --output-step or integrator.dt", out)
-    _effective(ctx, output=out, mode=k, peak_velocity=v, duration=dur, output_step=planned.plan.output_step,
-               integrator={"name": planned.plan.integrator.name, **planned.plan.integrator.settings()})
-    _compile_notice()
-    run, wall = _simulate(planned, dur)
+    with compiling(_note):
+        planned = api.plan_free_vibration_run(case, mode, peak_velocity, damping_ratio, dur, output_step,
+                                              analysis.value if analysis else None,
+                                              integrator.value if integrator else None)
+        say_warnings(planned.plan.static.warnings)
+        _guard(planned.cost(), force, "Shorten --duration, raise --output-step or integrator.dt", out)
+        _effective(ctx, output=out, mode=k, peak_velocity=v, duration=dur, output_step=planned.plan.output_step,
+                   integrator={"name": planned.plan.integrator.name, **planned.plan.integrator.settings()})
+        run, wall = _simulate(planned, dur)
     _finish_history(run, out, plot, chans, wall)
 
 
@@ -434,11 +432,11 @@ def sweep(
     if resume and nothing_to_resume(out, fingerprint(case.text, an, integ)):
         _echo(f"Nothing to do: {out} already holds this sweep, complete.")
         return
-    _guard(api.sweep_cost(case, an, integ), force, "Use fewer points (sweep.omega), a shorter sweep.duration "
-           "or a larger integrator.dt", out)
-    _effective(ctx, output=out)
-    _compile_notice()
-    _run_sweep(ctx, case, out, jobs, resume, an, integ, None if backend == Backend.loky else "dask", scheduler, plot)
+    with compiling(_note):
+        _guard(api.sweep_cost(case, an, integ), force, "Use fewer points (sweep.omega), a shorter sweep.duration "
+               "or a larger integrator.dt", out)
+        _effective(ctx, output=out)
+        _run_sweep(ctx, case, out, jobs, resume, an, integ, None if backend == Backend.loky else "dask", scheduler, plot)
 
 
 def _run_sweep(ctx, case, out: Path, jobs, resume, analysis, integrator, backend, scheduler, plot: bool):
@@ -452,7 +450,7 @@ def _run_sweep(ctx, case, out: Path, jobs, resume, analysis, integrator, backend
     from .plots.sweep import plot_sweep
 
     bar = LazyBar(1, "sweeping", quiet=_OUT["quiet"], show_pos=True, show_eta=True)
-    snapshot = out if resume else snapshot_path(out)
+    snapshot = snapshot_path(out)
     t0 = time.perf_counter()
     try:
         with bar:
@@ -505,10 +503,8 @@ def continue_(
         raise CablesimError(f"--overlay {overlay}: no such sweep file; give the output of cablesim sweep.")
     _check_outputs(out, case_file, (lambda o: [o.with_suffix(".png")]) if plot else [])
     _effective(ctx, output=out)
-    _compile_notice()
-
     t0 = time.perf_counter()
-    with StatusLine(quiet=_OUT["quiet"]) as status:
+    with compiling(_note), StatusLine(quiet=_OUT["quiet"]) as status:
         run = api.continuation(case, analysis.value if analysis else None, progress=lambda p: status(
             f"continuing: branch {p.branch} (period {p.period}), {p.parameter:.5g}, orbit {p.index}"))
     run.to_hdf5(out)

@@ -3,6 +3,8 @@ compile, sweep flags like history's, --quiet and --verbose."""
 
 from __future__ import annotations
 
+import sys
+
 import h5py
 import pytest
 import yaml
@@ -59,13 +61,30 @@ def test_history_help_states_each_default(invoke_cli):
 
 
 def test_the_compile_notice_appears_only_without_cached_kernels(tmp_path, capsys):
-    from cablesim.cli import _compile_notice
+    from cablesim.io.terminal import compile_notice
 
-    _compile_notice(tmp_path)
+    def note(line):
+        print(line, file=sys.stderr)
+
+    assert compile_notice(note, tmp_path)
     assert "compiling the numerical kernels on first use" in capsys.readouterr().err
     (tmp_path / "equations.rate-88.py311.nbi").write_bytes(b"")
-    _compile_notice(tmp_path)
+    assert not compile_notice(note, tmp_path)
     assert capsys.readouterr().err == ""
+
+
+def test_the_compile_notice_waits_so_a_quick_refusal_comes_alone(monkeypatch, tmp_path, capsys):
+    from cablesim.io import terminal
+
+    monkeypatch.setattr(terminal, "KERNEL_CACHE", tmp_path)  # a cold cache
+    lines = []
+    with terminal.compiling(lines.append, delay=60.0):
+        pass  # refused at once: the notice never comes
+    with terminal.compiling(lines.append, delay=0.0):
+        import time
+
+        time.sleep(0.5)
+    assert lines == ["compiling the numerical kernels on first use (about a minute; cached for later runs) ..."]
 
 
 def test_sweep_takes_omega_duration_and_channels_like_history(invoke_cli, tmp_path):

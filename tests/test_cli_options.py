@@ -92,3 +92,10 @@ def test_a_closed_output_pipe_is_no_traceback(tmp_path):
 def test_a_displacement_beyond_the_cable_is_refused(invoke_cli, tmp_path):
     res = invoke_cli("free-vibration", "--set", "free_vibration.z0=[1.0e5, 0.0, 0.0, 0.0]", "--no-plot")
     assert_refused(res, tmp_path, "free_vibration.z0 moves a node by more than the cable's whole length (340 m)")
+
+
+def test_plot_channels_outside_the_kept_ones_are_refused_before_the_run(invoke_cli, write_case, tmp_path):
+    """--channels z1 with outputs.channels [z2] failed in the plot, after the file was written."""
+    case = write_case(EXAMPLE + "outputs:\n  channels: [z2]\n")
+    res = invoke_cli("history", case, "--omega", "2.4", "--duration", "5", "--channels", "z1", "-o", "h.h5")
+    assert_refused(res, tmp_path, "--channels z1", "keeps only z2 (outputs.channels)", keep=(case,))

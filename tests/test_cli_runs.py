@@ -35,6 +35,7 @@ COSTLY = {
     "sweep-of-a-million-points": (["sweep", "--set", "sweep.omega.num=1000000"],
                                   ["1000000 points", "time steps", "--force"]),
     "sweep-omega-flag": (["sweep", "--omega", "0.5:6:1000000"], ["1000000 points", "--force"]),
+    "sweep-point-too-fast": (["sweep", "--omega", "1e4"], ["time steps for one point", "GB of memory", "--force"]),
     "free-vibration-dt-1e-9": (["free-vibration", "--mode", "1", "--peak-velocity", "1", "--integrator", "newmark",
                                 "--set", "integrator.dt=1e-9", "--duration", "1e6"], ["time steps", "--force"]),
 }

@@ -138,3 +138,32 @@ def test_resume_without_an_interrupted_sweep_says_so(small, invoke_cli, tmp_path
     case, _ = small
     assert_refused(invoke_cli("sweep", case, *ARGS, "--resume"), tmp_path, "no interrupted sweep",
                    "without --resume", keep=(case,))
+
+
+def test_an_interrupted_sweep_never_replaces_a_complete_result(small, invoke_cli, tmp_path, monkeypatch):
+    case, _ = small
+    assert invoke_cli("sweep", case, *ARGS).returncode == 0
+    out = tmp_path / "out.h5"
+    before = out.read_bytes()
+    from cablesim.io.journal import SweepFile
+
+    point = SweepFile.point
+
+    def interrupted(self, record, result):
+        point(self, record, result)
+        raise KeyboardInterrupt  # Ctrl-C after the first point
+
+    monkeypatch.setattr(SweepFile, "point", interrupted)
+    args = [case, "--set", "sweep.tol=2.0e-5", *ARGS]
+    res = invoke_cli("sweep", *args)
+    assert res.returncode == 130, res.stderr
+    assert out.read_bytes() == before
+    partial = tmp_path / "out.partial.h5"
+    assert partial.is_file() and "out.partial.h5" in flat(res.stderr) and "is untouched" in flat(res.stderr)
+    assert "--resume" in res.stderr.splitlines()[-1]
+    monkeypatch.setattr(SweepFile, "point", point)
+    done = invoke_cli("sweep", *args, "--resume")
+    assert done.returncode == 0, done.stderr
+    assert not partial.exists() and not (tmp_path / "out.h5.journal").exists()
+    with h5py.File(out) as f:
+        assert f["sweep"].attrs["complete"] and f["sweep"].attrs["tol"] == 2.0e-5

@@ -68,6 +68,8 @@ class Cost:
         Bytes written.
     detail : str
         How the steps were counted (scheme, step, duration).
+    per_point : float
+        A sweep's steps for one point at most (0 for a time history).
     """
 
     what: str
@@ -76,6 +78,7 @@ class Cost:
     memory: float
     disk: float
     detail: str = ""
+    per_point: float = 0.0
 
     def text(self) -> str:
         """One line: ``about 6e+11 time steps (rk4, dt = 1e-09 s over 600 s), 12001 saved instants, ...``."""
@@ -90,6 +93,8 @@ class Cost:
         limit = MAX_SWEEP_STEPS if self.what == "sweep" else MAX_STEPS
         if not self.steps <= limit:
             why.append(f"{self.steps:.3g} time steps, more than the {limit:.0e} allowed")
+        if not self.per_point <= MAX_STEPS:
+            why.append(f"up to {self.per_point:.3g} time steps for one point, more than the {MAX_STEPS:.0e} allowed")
         if not self.memory <= MAX_MEMORY:
             why.append(f"{_size(self.memory)} of memory, more than the {_size(MAX_MEMORY)} allowed")
         return "; ".join(why) or None
@@ -154,12 +159,13 @@ def sweep_cost(points: list[tuple[EquationsOfMotion, Integrator, float]], n_poin
     step rate among them stands for every point.
     """
     per_s = max(steps_per_second(eom, integ, max(w, float(eom.frequencies[0]))) for eom, integ, w in points)
-    w_low = min(w for _, _, w in points)
+    w_high = max(w for _, _, w in points)
     nd = points[0][0].n_dof
     total = n_points * curves
-    fine = window * w_low / (2 * np.pi) * SWEEP_SAMPLES_PER_PERIOD  # last-window samples of one point
-    strobes = cap * w_low / (2 * np.pi)
+    fine = window * w_high / (2 * np.pi) * SWEEP_SAMPLES_PER_PERIOD  # last-window samples of one point
+    strobes = cap * w_high / (2 * np.pi)
     memory = 8.0 * (total * (4 * channels + 8 + 3 * nd) + 2 * (fine * 3 * nd + strobes * 2 * nd))
     disk = 8.0 * total * (3 * channels + 8) + 80.0 * total
     return Cost("sweep", total * cap * per_s, total, memory, disk,
-                f"{total} points of up to {cap:.6g} s, {points[0][1].name}, up to {per_s:.3g} steps per simulated second")
+                f"{total} points of up to {cap:.6g} s, {points[0][1].name}, up to {per_s:.3g} steps per simulated second",
+                per_point=cap * per_s)

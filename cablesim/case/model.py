@@ -60,6 +60,8 @@ class Case(StrictModel):
     def _safe_name(cls, v):
         if v is not None and not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9._-]*", v):
             raise ValueError("use letters, digits, '.', '_' and '-' only (it names the output folder)")
+        if v is not None and len(v) > 100:
+            raise ValueError(f"is {len(v)} characters long; keep it to 100 (it names the output folder)")
         return v
 
     @model_validator(mode="after")

@@ -1,17 +1,25 @@
-"""The terminal: error and warning paragraphs, progress bars, usage errors as paragraphs.
+"""The terminal: error and warning paragraphs, progress bars, usage errors as paragraphs, and
+the notice while the kernels compile on first use.
 
 Light on purpose (the command line imports it before anything heavy).
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 import textwrap
+import threading
 import time
+from pathlib import Path
 
 import typer
 from typer.core import TyperGroup
+
+
+#: Where numba caches the compiled kernels (their index files tell whether a run must compile).
+KERNEL_CACHE = Path(__file__).resolve().parents[1] / "dynamics" / "__pycache__"
 
 
 def say_error(message: str, command: str | None = None) -> None:
@@ -124,3 +132,28 @@ class StatusLine:
         if self.shown:
             sys.stderr.write("\n")
         return False
+
+
+def compile_notice(note, cache: Path | None = None, pattern: str = "equations.rate-*.nbi") -> bool:
+    """Tell ``note`` (a line to print) that the compiled kernels are not yet in numba's cache."""
+    cache = cache if cache is not None else KERNEL_CACHE
+    if list(cache.glob(pattern)):
+        return False
+    note("compiling the numerical kernels on first use (about a minute; cached for later runs) ...")
+    return True
+
+
+@contextlib.contextmanager
+def compiling(note, pattern: str = "equations.rate-*.nbi", delay: float = 1.5):
+    """Say that the kernels are being compiled, if they are (cold cache) and it takes a while:
+    a refusal found in the first moments is then never preceded by the notice."""
+    timer = None
+    if not list(KERNEL_CACHE.glob(pattern)):
+        timer = threading.Timer(delay, compile_notice, args=(note,), kwargs={"pattern": pattern})
+        timer.daemon = True
+        timer.start()
+    try:
+        yield
+    finally:
+        if timer is not None:
+            timer.cancel()

@@ -130,83 +130,79 @@ def _approx_size(nd):
         + 2 * (nn + 1) * nd + 2 * (nn + 1) + (nn + 1) + 4 * nd + 3 * nd + 4
 
 
-@njit(cache=True)
-def _end(v, k, n, L, H, support_b):
-    """Coordinates of the end of segment k's start (``support_b`` False) or end node."""
-    j = k if support_b else k - 1  # node block index
+@njit(cache=True, inline="always")
+def _node(prm, o_y0, j, n, L, H):
+    """Equilibrium coordinates of node ``j`` (``0 .. n-1`` the masses, ``-1`` and ``n`` the
+    supports), from ``y0`` at ``prm[o_y0:]``."""
     if j < 0:
         return 0.0, 0.0
     if j >= n:
         return L, H
-    return v[2 * j], v[2 * j + 1]
+    return prm[o_y0 + 2 * j], prm[o_y0 + 2 * j + 1]
 
 
-@njit(cache=True)
-def force_and_stiffness(z, y0, S, EA, L, H, P, K):
-    """Resisting force ``P(y0 + z)`` and tangent stiffness ``K`` (displacement form, module
-    docstring); returns the first slack segment or -1."""
-    n = S.size - 1
-    P[:] = 0.0
-    K[:, :] = 0.0
+@njit(cache=True, inline="always")
+def force_and_stiffness(x, prm, o_y0, o_S, EA, L, H, P, o_P, J, nd):
+    """Resisting force ``P(y0 + z)`` into ``P[o_P : o_P + nd]`` and tangent stiffness ``K`` into
+    ``J[nd:, :nd]`` (displacement form, module docstring; ``z = x[:nd]``, ``y0`` at
+    ``prm[o_y0:]``, ``S`` at ``prm[o_S:]``); returns the first slack segment or -1. Indexes its
+    arrays directly (no views: this runs at every stage of every step)."""
+    n = nd // 2
+    for i in range(nd):
+        P[o_P + i] = 0.0
+        for j in range(nd):
+            J[nd + i, j] = 0.0
     slack = -1
     for k in range(n + 1):
-        ax, ay = _end(y0, k, n, L, H, False)
-        bx, by = _end(y0, k, n, L, H, True)
+        ax, ay = _node(prm, o_y0, k - 1, n, L, H)
+        bx, by = _node(prm, o_y0, k, n, L, H)
         d0x = bx - ax
         d0y = by - ay
-        if k == 0:
-            zax, zay = 0.0, 0.0
-        else:
-            zax, zay = z[2 * k - 2], z[2 * k - 1]
-        if k == n:
-            zbx, zby = 0.0, 0.0
-        else:
-            zbx, zby = z[2 * k], z[2 * k + 1]
+        zax, zay = (0.0, 0.0) if k == 0 else (x[2 * k - 2], x[2 * k - 1])
+        zbx, zby = (0.0, 0.0) if k == n else (x[2 * k], x[2 * k + 1])
         ddx = zbx - zax
         ddy = zby - zay
         dx = d0x + ddx
         dy = d0y + ddy
         l = np.sqrt(dx * dx + dy * dy)
-        num = (d0x * d0x + d0y * d0y - S[k] * S[k]) + 2.0 * (d0x * ddx + d0y * ddy) + (ddx * ddx + ddy * ddy)
-        stretch = num / (l + S[k])
-        T = EA * stretch / S[k]
+        Sk = prm[o_S + k]
+        num = (d0x * d0x + d0y * d0y - Sk * Sk) + 2.0 * (d0x * ddx + d0y * ddy) + (ddx * ddx + ddy * ddy)
+        stretch = num / (l + Sk)
+        T = EA * stretch / Sk
         if T <= 0.0 and slack < 0:
             slack = k
         e0, e1 = dx / l, dy / l
-        ka = EA / S[k]
+        ka = EA / Sk
         kg = T / l
         k00 = kg + (ka - kg) * e0 * e0
         k01 = (ka - kg) * e0 * e1
         k11 = kg + (ka - kg) * e1 * e1
-        i = k - 1
-        j = k
-        if j < n:
-            P[2 * j] += T * e0
-            P[2 * j + 1] += T * e1
-            K[2 * j, 2 * j] += k00
-            K[2 * j, 2 * j + 1] += k01
-            K[2 * j + 1, 2 * j] += k01
-            K[2 * j + 1, 2 * j + 1] += k11
-        if i >= 0:
-            P[2 * i] -= T * e0
-            P[2 * i + 1] -= T * e1
-            K[2 * i, 2 * i] += k00
-            K[2 * i, 2 * i + 1] += k01
-            K[2 * i + 1, 2 * i] += k01
-            K[2 * i + 1, 2 * i + 1] += k11
-        if i >= 0 and j < n:
-            K[2 * i, 2 * j] -= k00
-            K[2 * i, 2 * j + 1] -= k01
-            K[2 * i + 1, 2 * j] -= k01
-            K[2 * i + 1, 2 * j + 1] -= k11
-            K[2 * j, 2 * i] -= k00
-            K[2 * j, 2 * i + 1] -= k01
-            K[2 * j + 1, 2 * i] -= k01
-            K[2 * j + 1, 2 * i + 1] -= k11
+        a = 2 * (k - 1)  # DOFs of the segment's start node (a mass if k > 0)
+        b = 2 * k  # and of its end node (a mass if k < n)
+        if k < n:
+            P[o_P + b] += T * e0
+            P[o_P + b + 1] += T * e1
+            _add_block(J, nd + b, b, k00, k01, k11)
+        if k > 0:
+            P[o_P + a] -= T * e0
+            P[o_P + a + 1] -= T * e1
+            _add_block(J, nd + a, a, k00, k01, k11)
+        if k > 0 and k < n:
+            _add_block(J, nd + a, b, -k00, -k01, -k11)
+            _add_block(J, nd + b, a, -k00, -k01, -k11)
     return slack
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
+def _add_block(J, r, c, k00, k01, k11):
+    """``J[r:r+2, c:c+2] += [[k00, k01], [k01, k11]]``."""
+    J[r, c] += k00
+    J[r, c + 1] += k01
+    J[r + 1, c] += k01
+    J[r + 1, c + 1] += k11
+
+
+@njit(cache=True, inline="always")
 def _second_order(theta, x, prm, P, dx, J, dp, ipar, nd, o_m, o_C, o_F0, o_FL, o_g):
     """Fill dx, the lower blocks of J (K already in ``J[nd:, :nd]``) and dp."""
     sn = np.sin(theta)
@@ -246,13 +242,11 @@ def exact_field(theta, x, prm, work, dx, J, dp, ipar):
     o_FL = o_F0 + nd
     o_g = o_FL + nd
     o_y0 = o_g + 1
-    P = work[nd : 2 * nd]
-    K = J[nd:, :nd]
-    slack = force_and_stiffness(x[:nd], prm[o_y0 : o_y0 + nd], prm[o_S : o_S + nn + 1], prm[o_EA], prm[o_EA + 1],
-                                prm[o_EA + 2], P, K)
+    # P lives in work[nd : 2 nd]
+    slack = force_and_stiffness(x, prm, o_y0, o_S, prm[o_EA], prm[o_EA + 1], prm[o_EA + 2], work, nd, J, nd)
     if slack >= 0:
         return SLACK
-    _second_order(theta, x, prm, P, dx, J, dp, ipar, nd, o_m, o_C, o_F0, o_FL, o_g)
+    _second_order(theta, x, prm, work[nd : 2 * nd], dx, J, dp, ipar, nd, o_m, o_C, o_F0, o_FL, o_g)
     return OK
 
 

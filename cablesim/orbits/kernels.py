@@ -231,13 +231,39 @@ def _variational_rate(J, Ys, dx, dp, KYst, omega, pmode):
     tr = 0.0
     for i in range(n):
         tr += J[i, i]
-        for j in range(ncol):
-            KYst[i, j] = 0.0
-        for r in range(n):
-            jr = J[i, r]
-            if jr != 0.0:
-                for j in range(ncol):
-                    KYst[i, j] += jr * Ys[r, j]
+        j = 0
+        # eight columns at a time in scalar accumulators (registers), each summed over r in
+        # order: the same sums as a column at a time, about twice as fast
+        while j + 8 <= ncol:
+            a0 = a1 = a2 = a3 = a4 = a5 = a6 = a7 = 0.0
+            for r in range(n):
+                jr = J[i, r]
+                if jr != 0.0:
+                    a0 += jr * Ys[r, j]
+                    a1 += jr * Ys[r, j + 1]
+                    a2 += jr * Ys[r, j + 2]
+                    a3 += jr * Ys[r, j + 3]
+                    a4 += jr * Ys[r, j + 4]
+                    a5 += jr * Ys[r, j + 5]
+                    a6 += jr * Ys[r, j + 6]
+                    a7 += jr * Ys[r, j + 7]
+            KYst[i, j] = a0
+            KYst[i, j + 1] = a1
+            KYst[i, j + 2] = a2
+            KYst[i, j + 3] = a3
+            KYst[i, j + 4] = a4
+            KYst[i, j + 5] = a5
+            KYst[i, j + 6] = a6
+            KYst[i, j + 7] = a7
+            j += 8
+        while j < ncol:
+            a0 = 0.0
+            for r in range(n):
+                jr = J[i, r]
+                if jr != 0.0:
+                    a0 += jr * Ys[r, j]
+            KYst[i, j] = a0
+            j += 1
     if ncol > n:
         for i in range(n):
             if pmode == PARAM_OMEGA:

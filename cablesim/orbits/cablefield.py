@@ -15,7 +15,9 @@ constant, in both analyses.
   ``l - S = (|d0|^2 - S^2 + 2 d0.dd + dd.dd) / (l + S)`` from the equilibrium segment vector
   ``d0`` and its change ``dd``, so the force follows a small ``z`` with full relative precision
   instead of the round-off of ``y0 + z`` (about 1e-14 of the coordinates). A slack segment stops
-  the integration with :data:`~cablesim.dynamics.kernels.SLACK`.
+  the integration with :data:`~cablesim.dynamics.kernels.SLACK`. The field runs at every stage
+  of every step: it indexes ``prm``, ``work`` and ``J`` directly (no array views) and its helpers
+  are inlined.
 - Approximate analysis: ``P`` is defined implicitly by ``y = x(P) + u(P)``; an inner damped
   Newton iteration ``P <- P + a N(P)^-1 (y - x(P) - u(P))`` (``N = D + f = dy/dP``), warm-started
   from the previous call, converges to round-off (:func:`solve_loads`); from too far away (the

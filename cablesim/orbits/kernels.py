@@ -27,6 +27,13 @@ derivatives of the discrete flow map. The Jacobian is propagated in *chunks*, re
 identity whenever the divergence integral over the chunk exceeds :data:`CHUNK_DIVERGENCE` in
 modulus, and the chunks are multiplied; the log-determinant is accumulated chunk by chunk, so it
 stays accurate when the monodromy is nearly singular (strongly damped modes).
+
+Cost: the variational product ``J Y`` at every stage is the largest part of a step; it is summed
+eight columns at a time in scalar accumulators (the same sums, in the same order, as one column
+at a time: the flow map is bitwise unchanged), and the cable field indexes its arrays without
+views (:mod:`cablesim.orbits.cablefield`). Measured on the stiff cable of
+``configs/paper/fig8a.yaml`` (8 states, 9 columns, rk8): 8.3 -> 6.7 us of CPU per step; the
+whole 0.4 .. 2 rad/s response (14.8 million steps) 123 -> 99 s of CPU, identical results.
 """
 
 from __future__ import annotations

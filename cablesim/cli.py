@@ -19,7 +19,7 @@ from typing import Optional
 import typer
 
 from .errors import CablesimError
-from .names import ANALYSES, INTEGRATORS
+from .names import ANALYSES, INTEGRATORS, SLACK_POLICIES
 from .version import __version__
 
 app = typer.Typer(
@@ -33,6 +33,13 @@ app = typer.Typer(
 
 Analysis = Enum("Analysis", {a.replace("-", "_"): a for a in ANALYSES}, type=str)
 IntegratorName = Enum("IntegratorName", {a.replace("-", "_"): a for a in INTEGRATORS}, type=str)
+SlackPolicy = Enum("SlackPolicy", {a: a for a in SLACK_POLICIES}, type=str)
+SLACK_OPTION = typer.Option(None, "--slack", help="Exact analysis: continue through slack segments or stop where one goes slack [default: the case's slack].")
+
+
+def _with_slack(overrides, slack):
+    """The ``--set`` overrides with ``--slack`` added as ``slack=...``."""
+    return [*(overrides or []), f"slack={slack.value}"] if slack is not None else overrides
 
 
 def _say_error(message: str) -> None:
@@ -182,6 +189,7 @@ def history(
     output_step: Optional[float] = typer.Option(None, "--output-step", help="Interval between saved instants, s."),
     analysis: Optional[Analysis] = typer.Option(None, "--analysis", help="Override the case file's analysis."),
     integrator: Optional[IntegratorName] = typer.Option(None, "--integrator", help="Time-integration scheme."),
+    slack: Optional[SlackPolicy] = SLACK_OPTION,
     channels: Optional[str] = typer.Option(None, "--channels", help="DOF to plot, e.g. z2,z4."),
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file [default: runs/<name>/history-w<omega>.h5]"),
     plot: bool = typer.Option(True, "--plot/--no-plot", help="Draw waveforms, phase, Lissajous, tension and FFT plots."),
@@ -191,7 +199,7 @@ def history(
 
     from . import api
 
-    case = api.load_case(case_file, overrides)
+    case = api.load_case(case_file, _with_slack(overrides, slack))
     dur = duration if duration is not None else case.history.duration
     if dur <= 0:
         raise CablesimError("--duration must be a positive number of seconds.", field="history.duration")
@@ -217,6 +225,7 @@ def free_vibration(
     output_step: Optional[float] = typer.Option(None, "--output-step", help="Interval between saved instants, s."),
     analysis: Optional[Analysis] = typer.Option(None, "--analysis", help="Override the case file's analysis."),
     integrator: Optional[IntegratorName] = typer.Option(None, "--integrator", help="Time-integration scheme."),
+    slack: Optional[SlackPolicy] = SLACK_OPTION,
     channels: Optional[str] = typer.Option(None, "--channels", help="DOF to plot, e.g. z2,z4."),
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file [default: runs/<name>/free-vibration-mode<K>.h5]"),
     plot: bool = typer.Option(True, "--plot/--no-plot", help="Draw waveforms, phase, Lissajous, tension and FFT plots."),
@@ -226,7 +235,7 @@ def free_vibration(
 
     from . import api
 
-    case = api.load_case(case_file, overrides)
+    case = api.load_case(case_file, _with_slack(overrides, slack))
     if damping_ratio is not None and not 0 <= damping_ratio < 1:
         raise CablesimError("--damping-ratio must be in [0, 1).", field="free_vibration.damping_ratio")
     dur = duration if duration is not None else case.free_vibration.duration
@@ -259,6 +268,7 @@ def sweep(
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file [default: runs/<name>/sweep.h5]"),
     analysis: Optional[Analysis] = typer.Option(None, "--analysis", help="Override the case file's analysis."),
     integrator: Optional[IntegratorName] = typer.Option(None, "--integrator", help="Time-integration scheme."),
+    slack: Optional[SlackPolicy] = SLACK_OPTION,
     backend: Backend = typer.Option(Backend.loky, "--backend", help="Run points locally (loky) or on a Dask cluster."),
     scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Dask scheduler address, with --backend dask."),
     plot: bool = typer.Option(True, "--plot/--no-plot", help="Draw the frequency-response plot."),
@@ -270,7 +280,7 @@ def sweep(
     from .io.report import sweep_summary
     from .plots.sweep import plot_sweep
 
-    case = api.load_case(case_file, overrides)
+    case = api.load_case(case_file, _with_slack(overrides, slack))
     if jobs == 0 or jobs < -1:
         raise CablesimError("--jobs must be a positive number of processes, or -1 for all cores.")
     out = output if output is not None else Path("runs") / case.name / "sweep.h5"

@@ -11,7 +11,8 @@ The state integrated is ``s = (z, y', y'')`` with ``z = y - y(0)`` measured from
 equilibrium (so tolerances act on the displacement, not on absolute coordinates).
 
 Numba functions take the model as a tuple ``prm`` built by :meth:`EquationsOfMotion.params`:
-``(model, S, EA, L, H, m, C, F0, FL, w, y0, x0, u0, K0, tol)``.
+``(model, S, EA, L, H, m, C, F0, FL, w, y0, x0, u0, K0, tol, slack)`` with ``slack`` 1 when the exact
+analysis continues through slack segments (:data:`CONTINUE`) and 0 when it stops there.
 """
 
 from __future__ import annotations
@@ -29,6 +30,9 @@ from . import kernels as kn
 
 EXACT = 0
 APPROXIMATE = 1
+#: ``prm[15]``: whether the exact analysis stops where a segment goes slack or continues.
+STOP = 0
+CONTINUE = 1
 
 
 @njit(cache=True)
@@ -217,6 +221,10 @@ class EquationsOfMotion:
     modal_omega : ndarray, optional
         Linear modal frequencies about the equilibrium, rad/s, ascending (computed from ``K0``
         and ``mass`` when not given).
+    slack : str
+        ``"continue"`` (default): in the exact analysis segments are tension-only and the
+        integrators locate every slack onset and re-tightening; ``"stop"``: a run stops where a
+        segment first goes slack. The approximate analysis always stops.
     """
 
     cable: Cable
@@ -235,6 +243,7 @@ class EquationsOfMotion:
     a0: float = 0.0
     a1: float = 0.0
     modal_omega: np.ndarray | None = None
+    slack: str = "continue"
 
     @cached_property
     def frequencies(self) -> np.ndarray:
@@ -247,6 +256,11 @@ class EquationsOfMotion:
     def exact(self) -> bool:
         """Whether the exact analysis is in use (else the approximate one)."""
         return self.analysis == "exact"
+
+    @property
+    def continues_slack(self) -> bool:
+        """Whether a run continues through slack segments (exact analysis, ``slack: continue``)."""
+        return self.exact and self.slack == "continue"
 
     @property
     def n_dof(self) -> int:
@@ -279,6 +293,7 @@ class EquationsOfMotion:
             np.ascontiguousarray(self.u0),
             np.ascontiguousarray(self.K0),
             float(tol),
+            CONTINUE if self.continues_slack else STOP,
         )
 
     def initial_state(self, z0: np.ndarray | None = None, v0: np.ndarray | None = None) -> np.ndarray:

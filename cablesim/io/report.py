@@ -121,7 +121,22 @@ def history_summary(case, hist, integ, wall: float) -> str:
         f"(static {', '.join(f'{t / 1e3:.5g}' for t in hist.T0[:6])} kN)"
     )
     lines.append(f"largest drift of eq. 15 (relative to |F0|): {np.max(hist.residual):.2e}")
+    if hist.slack is not None:
+        lines += ["", *slack_lines(hist.slack, float(hist.t[-1]))]
     return "\n".join(lines)
+
+
+def slack_lines(rec, duration: float) -> list[str]:
+    """Per segment: peak tension (the snap load) and when, time slack, episodes."""
+    rows = [
+        [f"{k + 1}", _g(rec.peak_tension[k] / 1e3, 6), f"{rec.peak_time[k]:.6g}", f"{rec.slack_time[k]:.4g}",
+         f"{100.0 * rec.slack_time[k] / duration:.3g}" if duration > 0 else "-", f"{rec.episodes[k]}"]
+        for k in range(rec.peak_tension.size)
+    ]
+    out = [_table(["segment", "peak tension (kN)", "at t (s)", "slack (s)", "slack (%)", "slack episodes"], rows)]
+    if rec.t.size:
+        out.append(f"{rec.t.size} slack/taut transitions located; {rec.chatter_holds} chatter holds ({rec.handling})")
+    return out
 
 
 def sweep_summary(case, res, wall: float) -> str:

@@ -55,8 +55,9 @@ def result_files(root: Path) -> list[Path]:
 def read_history(path: Path) -> dict:
     with h5py.File(path, "r") as f:
         g = f["history"]
-        data = {k: g[k][()] for k in g.keys()}
-        units = {k: g[k].attrs.get("units") for k in g.keys()}
+        keys = [k for k in g.keys() if isinstance(g[k], h5py.Dataset)]  # not the events/segments groups
+        data = {k: g[k][()] for k in keys}
+        units = {k: g[k].attrs.get("units") for k in keys}
         attrs = dict(g.attrs)
         root = dict(f.attrs)
         modal = f["modal/omega"][()]

@@ -286,3 +286,30 @@ def test_slack_record_round_trips_and_is_reported(tmp_path, violent, paper):
     assert "peak tension (kN)" in text and "slack episodes" in text
     pngs = plot_history(back, str(tmp_path / "h"), "test")
     assert any(p.name.endswith("tensions.png") and p.exists() for p in pngs)
+
+
+# ----------------------------------------------------------------------------------------------
+# 6. Sweeps: peak tension and slack fraction per point and segment
+# ----------------------------------------------------------------------------------------------
+def test_sweep_records_peak_tension_and_slack_fraction(tmp_path):
+    import h5py
+
+    from helpers_sweep import do_sweep
+
+    sweep = {"omega": [2.0, 5.0], "duration": 40.0, "window": 20.0, "gamma": [1.0, 15.0], "accelerate": False,
+             "floquet": False}
+    case, _, res = do_sweep(tmp_path / "s.h5", sweep, n_jobs=1)
+    with h5py.File(tmp_path / "s.h5") as f:
+        peak = f["sweep/peak_tension"][()]
+        frac = f["sweep/slack_fraction"][()]
+        assert f["sweep/peak_tension"].attrs["units"] == "N"
+    assert peak.shape == frac.shape == (2, 2, 3)  # gamma, omega, segment
+    assert np.all(np.isfinite(peak)) and np.all((frac >= 0) & (frac <= 1))
+    assert np.all(frac[0] == 0.0)  # the paper's loads: always taut
+    assert frac[1, 1, 2] > 0.0  # FL x 15 at 5 rad/s: segment 3 goes slack
+    assert np.all(peak[1] > peak[0])
+    np.testing.assert_array_equal(res.data[1]["slack_fraction"], frac[1])
+    from cablesim.io.report import sweep_summary
+
+    text = sweep_summary(case, res, 1.0)
+    assert "slack fraction" in text and "peak tension" in text

@@ -202,6 +202,7 @@ def _write_slack(g: h5py.Group, rec: SlackRecord) -> None:
     put(e, "t", rec.t, "s", "instant a segment changed mode (located to 1e-10 s on the step's interpolant)")
     put(e, "segment", rec.segment, "1", "1-based segment")
     ds = e.create_dataset("kind", data=np.array([k.encode() for k in rec.kind], dtype="S5"))
+    ds.attrs["units"] = "1"
     ds.attrs["description"] = "slack (onset: length fell to the natural length) or taut (re-tightening)"
     e.attrs["handling"] = rec.handling
     e.attrs["chatter_holds"] = rec.chatter_holds

@@ -167,6 +167,15 @@ def sweep_summary(case, res, wall: float) -> str:
             + (f", {capped.sum()} reached the cap" if capped.any() else "")
             + (f", {failed.sum()} stopped early (e.g. a slack segment; values partial)" if failed.any() else "")
         )
+        frac = d.get("slack_fraction")
+        if frac is not None and np.any(frac[done] > 0):
+            slack = np.any(frac > 0, axis=1) & done
+            worst = np.nanmax(frac[done], axis=0)
+            lines.append(
+                f"    {slack.sum()} point(s) with slack episodes; largest slack fraction per segment "
+                + ", ".join(f"{100.0 * x:.3g} %" for x in worst)
+                + "; largest peak tension " + ", ".join(f"{x / 1e3:.4g}" for x in np.nanmax(d["peak_tension"][done], axis=0)) + " kN"
+            )
     lines.append(_table(["curve", "channel", "peak at (rad/s)", "peak amplitude (m)"], rows))
     return "\n".join(lines)
 

@@ -28,7 +28,7 @@ T_TOL = 1e-10
 CHATTER_WINDOW = 1e-6
 #: How chattering segments are handled, in words (stored with every result).
 CHATTER_TEXT = (
-    f"a segment changing mode within {CHATTER_WINDOW:g} s of its previous transition keeps its new mode "
+    f"chatter: a segment changing mode within {CHATTER_WINDOW:g} s of its previous transition keeps its new mode "
     f"for {CHATTER_WINDOW:g} s (transitions in that window are not located; one found after it is taken "
     "at the window's end)"
 )

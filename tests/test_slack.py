@@ -313,3 +313,60 @@ def test_sweep_records_peak_tension_and_slack_fraction(tmp_path):
 
     text = sweep_summary(case, res, 1.0)
     assert "slack fraction" in text and "peak tension" in text
+
+
+# ----------------------------------------------------------------------------------------------
+# 7. Chatter; statics unchanged
+# ----------------------------------------------------------------------------------------------
+def test_chattering_segment_is_held_not_stalled(forced_eom):
+    """Transitions of a segment within the chatter window of its previous one hold its mode for
+    the window; a mismatch found after it is taken at the window's end, not located again."""
+    from cablesim.dynamics.integrators.events import CHATTER_WINDOW, locate_event, transition
+
+    eom = forced_eom
+    assert eom.continues_slack
+    st = RK4(dt=1e-3).start(eom, eom.initial_state())
+    t = 1.0
+    transition(st, 2, t)  # slack
+    assert st.extra["chatter_holds"] == 0
+    transition(st, 2, t + 1e-7)  # taut again at once: chatter
+    transition(st, 2, t + 2e-7)  # and slack
+    assert st.extra["chatter_holds"] == 2
+    hold = st.extra["evw"][0]
+    assert hold[2] == pytest.approx(t + 2e-7 + CHATTER_WINDOW)
+    assert [e[2] for e in st.extra["events"]] == ["slack", "taut", "slack"]
+    # segment 3 is physically taut (the equilibrium) but now in the slack mode: the mismatch is
+    # ignored during the hold and taken at its end
+    s = st.s.copy()
+    te, k = locate_event(eom.params(), t + 2e-7, t + 1e-3, s, s, st.wk[0][4], st.extra["evw"])
+    assert k == 2 and te == pytest.approx(hold[2], abs=1e-15)
+    # a step inside the hold finds nothing
+    te, k = locate_event(eom.params(), t + 2e-7, t + 1e-6, s, s, st.wk[0][4], st.extra["evw"])
+    assert k == -1
+
+
+def test_statically_slack_segment_is_still_refused(paper_case):
+    """slack: continue is about motion: a case with a segment slack under F0 is refused as before."""
+    from cablesim.analyses.static import run_static
+
+    paper_case["loads"]["F0"] = [1000e3, 0.0, -1000e3, 0.0]  # nodes pushed towards each other
+    case = case_from_dict(paper_case)
+    assert case.slack == "continue"
+    for analysis in ("exact", "approximate"):
+        with pytest.raises(CablesimError, match=r"Segment 2.*slack"):
+            run_static(case, analysis, all_models=False)
+
+
+def test_command_line_continues_through_slack_and_reports_it(tmp_path, paper_case, write_case, invoke_cli):
+    import h5py
+
+    paper_case["loads"]["FL"] = [50 * x for x in paper_case["loads"]["FL"]]
+    case = write_case(paper_case)
+    r = invoke_cli("history", str(case), "--omega", "2.45", "--duration", "5", "--no-plot", "-o", str(tmp_path / "go.h5"))
+    assert r.returncode == 0, (r.returncode, r.stdout, r.stderr)
+    assert "peak tension (kN)" in r.stdout and "slack episodes" in r.stdout and "transitions located" in r.stdout
+    with h5py.File(tmp_path / "go.h5") as f:
+        assert set(f["history/events"]) == {"t", "segment", "kind"}
+        assert f["history/events/t"].size >= 6
+        assert set(f["history/segments"]) == {"peak_tension", "peak_time", "slack_time", "slack_episodes"}
+        assert f["history"].attrs["slack"] == "continue"

@@ -24,7 +24,7 @@ import typer
 
 from .errors import CablesimError
 from .io.terminal import CommandGroup, LazyBar, StatusLine, compiling, say_error, say_warnings
-from .names import ANALYSES, INTEGRATORS
+from .names import ANALYSES, INTEGRATORS, SLACK_POLICIES
 from .version import __version__
 
 app = typer.Typer(
@@ -41,6 +41,13 @@ app = typer.Typer(
 
 Analysis = Enum("Analysis", {a.replace("-", "_"): a for a in ANALYSES}, type=str)
 IntegratorName = Enum("IntegratorName", {a.replace("-", "_"): a for a in INTEGRATORS}, type=str)
+SlackPolicy = Enum("SlackPolicy", {a: a for a in SLACK_POLICIES}, type=str)
+SLACK_OPTION = typer.Option(None, "--slack", help="Exact analysis: continue through slack segments or stop where one goes slack [default: the case's slack].")
+
+
+def _with_slack(overrides, slack):
+    """The ``--set`` overrides with ``--slack`` added as ``slack=...``."""
+    return [*(overrides or []), f"slack={slack.value}"] if slack is not None else overrides
 
 #: --quiet / --verbose of this invocation.
 _OUT = {"quiet": False, "verbose": False}
@@ -301,6 +308,7 @@ def history(
     integrator: Optional[IntegratorName] = INTEGRATOR_OPT,
     channels: Optional[str] = typer.Option(None, "--channels", help="DOF to plot, e.g. z2,z4 (default: history.channels, else all)."),
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file (default: runs/<name>/history-w<omega>.h5); the plots go beside it."),
+    slack: Optional[SlackPolicy] = SLACK_OPTION,
     plot: bool = typer.Option(True, "--plot/--no-plot", help="Draw waveforms, phase, Lissajous, tension and FFT plots."),
     force: bool = FORCE_OPT,
 ):
@@ -313,7 +321,7 @@ def history(
     check_flag(OMEGA, omega, "--omega", "history.omega")
     check_flag(DURATION, duration, "--duration", "history.duration")
     check_flag(OUTPUT_STEP, output_step, "--output-step", "history.output_step")
-    case = api.load_case(case_file, overrides)
+    case = api.load_case(case_file, _with_slack(overrides, slack))
     dur = duration if duration is not None else case.history.duration
     w = omega if omega is not None else case.history.omega
     if w is None:
@@ -352,6 +360,7 @@ def free_vibration(
     integrator: Optional[IntegratorName] = INTEGRATOR_OPT,
     channels: Optional[str] = typer.Option(None, "--channels", help="DOF to plot, e.g. z2,z4 (default: free_vibration.channels, else all)."),
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file (default: runs/<name>/free-vibration-mode<K>-v<V>.h5); the plots go beside it."),
+    slack: Optional[SlackPolicy] = SLACK_OPTION,
     plot: bool = typer.Option(True, "--plot/--no-plot", help="Draw waveforms, phase, Lissajous, tension and FFT plots."),
     force: bool = FORCE_OPT,
 ):
@@ -366,7 +375,7 @@ def free_vibration(
     check_flag(DAMPING_RATIO, damping_ratio, "--damping-ratio", "free_vibration.damping_ratio")
     check_flag(DURATION, duration, "--duration", "free_vibration.duration")
     check_flag(OUTPUT_STEP, output_step, "--output-step", "free_vibration.output_step")
-    case = api.load_case(case_file, overrides)
+    case = api.load_case(case_file, _with_slack(overrides, slack))
     fv = case.free_vibration
     dur = duration if duration is not None else fv.duration
     k = mode if mode is not None else fv.mode
@@ -406,6 +415,7 @@ def sweep(
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file (default: runs/<name>/sweep.h5); the plot goes beside it."),
     analysis: Optional[Analysis] = ANALYSIS_OPT,
     integrator: Optional[IntegratorName] = INTEGRATOR_OPT,
+    slack: Optional[SlackPolicy] = SLACK_OPTION,
     backend: Backend = typer.Option(Backend.loky, "--backend", help="Run points locally (loky) or on a Dask cluster."),
     scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Dask scheduler address, with --backend dask (e.g. tcp://host:8786)."),
     plot: bool = typer.Option(True, "--plot/--no-plot", help="Draw the frequency-response plot."),
@@ -424,7 +434,7 @@ def sweep(
             f"--scheduler {scheduler} is used only with --backend dask (the default backend, loky, runs "
             "the points on this machine): add --backend dask, or drop --scheduler."
         )
-    case = api.load_case(case_file, [*(overrides or ()), *sweep_flag_overrides(omega, duration, channels)])
+    case = api.load_case(case_file, _with_slack([*(overrides or ()), *sweep_flag_overrides(omega, duration, channels)], slack))
     out = output if output is not None else Path("runs") / case.name / "sweep.h5"
     _check_outputs(out, case_file, lambda o: [o.with_name(o.name + ".journal"), o.with_name(o.name + ".lock"),
                                               *([o.with_suffix(".png")] if plot else [])])

@@ -11,6 +11,9 @@ from __future__ import annotations
 ANALYSES = ("exact", "approximate")
 #: Time-integration schemes (``integrator.name``, ``--integrator``).
 INTEGRATORS = ("rk4", "dopri5", "newmark", "generalized-alpha")
+#: What the exact analysis does when a segment goes slack (``slack:`` in a case file, ``--slack``):
+#: continue through it (tension-only segments) or stop there.
+SLACK_POLICIES = ("continue", "stop")
 #: Sweep directions (``sweep.direction``).
 DIRECTIONS = ("independent", "up", "down", "both")
 #: Continuation parameters (``continuation.parameter``).

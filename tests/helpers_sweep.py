@@ -64,9 +64,13 @@ def run_sweep(case, text, out, n_jobs=1, resume=False, progress=None, backend=No
                      progress=progress).result
 
 
-def case_text(sweep: dict | None, *, xi: float | None = None, integrator: dict | None = None) -> str:
+def case_text(sweep: dict | None, *, xi: float | None = None, integrator: dict | None = None,
+              slack: str | None = None) -> str:
     """The paper example with its sweep section replaced (None: no sweep section)."""
     head = HEAD
+    if slack is not None:
+        head, n = re.subn(r"^slack: continue\b", f"slack: {slack}", head, flags=re.M)
+        assert n == 1
     if xi is not None:
         head, n = re.subn(r"ratio: 0\.01\b", f"ratio: {xi}", head)
         assert n == 1

@@ -70,10 +70,11 @@ def test_up_and_down_sweeps_differ_across_the_jump(hysteresis):
 
 
 def test_chain_does_not_continue_from_a_failed_point(wdir):
-    # gamma = 10: the cable goes slack (a segment shorter than its natural length) at 2.15 rad/s
+    # gamma = 10: the cable goes slack (a segment shorter than its natural length) at 2.15 rad/s,
+    # which with slack: stop fails the point
     sweep = {"omega": [2.15, 2.2, 2.3], "duration": 600.0, "window": 100.0, "direction": "up",
              "channels": ["z2", "z4"], "gamma": [10.0]}
-    _, _, res = do_sweep(wdir / "slack.h5", sweep, n_jobs=1)
+    _, _, res = do_sweep(wdir / "slack.h5", sweep, n_jobs=1, slack="stop")
     d = res.data[0]
     assert not d["steady"][0] and 0.0 < d["t_end"][0] < 600.0  # the slack failure itself
     # every later point must have been integrated, not copied from the failed state

@@ -38,6 +38,7 @@ def build_equations(
     omega: float = 0.0,
     load_scale: float = 1.0,
     damping_ratio: float | None = None,
+    slack: str | None = None,
 ) -> EquationsOfMotion:
     """The equations of motion of a case about its static equilibrium under F0.
 
@@ -52,6 +53,8 @@ def build_equations(
         Multiplies ``FL`` (``gamma`` of the paper's Fig. 4; 0 for free vibration).
     damping_ratio : float, optional
         Overrides the case's damping ratio (same two modes).
+    slack : str, optional
+        ``"continue"`` or ``"stop"``; overrides the case's ``slack``.
 
     Returns
     -------
@@ -86,6 +89,7 @@ def build_equations(
         a0=float(a0),
         a1=float(a1),
         modal_omega=static.modes.omega.copy(),
+        slack=slack or case.slack,
     )
 
 

@@ -203,6 +203,8 @@ def solve_point(job: PointJob) -> dict:
         "status": r.message,
         "code": int(r.status),
         "final_state": r.final_state.tolist() if np.all(np.isfinite(r.final_state)) else None,
+        "peak_tension": None if r.peak_tension is None else r.peak_tension.tolist(),
+        "slack_fraction": None if r.slack_fraction is None else r.slack_fraction.tolist(),
         "wall": time.perf_counter() - t0,
         "integrator": integ.name,
     }
@@ -228,6 +230,8 @@ def _empty_result(omega, gamma, direction, channels, curves, **meta) -> SweepRes
             "wall": np.full(P, np.nan),
             "decided": np.full(P, "", dtype=object),
             "multipliers": np.full((P, 2 * n_dof), np.nan + 0j),
+            "peak_tension": np.full((P, n_dof // 2 + 1), np.nan),
+            "slack_fraction": np.full((P, n_dof // 2 + 1), np.nan),
             "done": np.zeros(P, dtype=bool),
             "status": np.full(P, "", dtype=object),
         }
@@ -247,6 +251,9 @@ def record_point(res: SweepResult, rec: dict) -> None:
     d["floquet"][i] = np.nan if rec["floquet"] is None else rec["floquet"]
     d["wall"][i] = rec.get("wall", np.nan)
     d["decided"][i] = rec.get("decided", "")
+    for f in ("peak_tension", "slack_fraction"):
+        if rec.get(f) is not None:
+            d[f][i] = rec[f]
     if rec.get("multipliers"):
         mu = np.array([complex(a, b) for a, b in rec["multipliers"]])
         d["multipliers"][i, : mu.size] = mu

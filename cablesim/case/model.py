@@ -12,7 +12,7 @@ from pydantic import Field, PrivateAttr, field_validator, model_validator
 from ..cable import Cable
 from ..channels import channel_index
 from ..errors import CablesimError
-from ..names import ANALYSES
+from ..names import ANALYSES, SLACK_POLICIES
 from .sections import (
     CableSpec,
     ContinuationSpec,
@@ -35,6 +35,11 @@ class Case(StrictModel):
     cable: CableSpec
     loads: LoadsSpec
     analysis: Literal[ANALYSES] = "exact"
+    slack: Literal[SLACK_POLICIES] = Field(
+        default="continue",
+        description="exact analysis: 'continue' through slack segments (tension-only, events located) "
+        "or 'stop' where a segment first goes slack; the approximate analysis always stops",
+    )
     damping: DampingSpec = DampingSpec(ratio=0.01)
     integrator: IntegratorSpec = IntegratorSpec()
     history: HistorySpec = HistorySpec()

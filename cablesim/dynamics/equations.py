@@ -11,7 +11,8 @@ The state integrated is ``s = (z, y', y'')`` with ``z = y - y(0)`` measured from
 equilibrium (so tolerances act on the displacement, not on absolute coordinates).
 
 Numba functions take the model as a tuple ``prm`` built by :meth:`EquationsOfMotion.params`:
-``(model, S, EA, L, H, m, C, F0, FL, w, y0, x0, u0, K0, tol)``.
+``(model, S, EA, L, H, m, C, F0, FL, w, y0, x0, u0, K0, tol, slack)`` with ``slack`` 1 when the exact
+analysis continues through slack segments (:data:`CONTINUE`) and 0 when it stops there.
 """
 
 from __future__ import annotations
@@ -29,6 +30,9 @@ from . import kernels as kn
 
 EXACT = 0
 APPROXIMATE = 1
+#: ``prm[15]``: whether the exact analysis stops where a segment goes slack or continues.
+STOP = 0
+CONTINUE = 1
 
 
 @njit(cache=True)
@@ -38,9 +42,10 @@ def load(prm, t):
 
 
 def workspace(n: int):
-    """Scratch arrays for :func:`rate` (no allocation inside the time loop)."""
+    """Scratch arrays for :func:`rate` (no allocation inside the time loop): y, P, Kv, v and the
+    segment modes ``taut`` (1: taut, 0: slack; all taut to start, see :func:`segment_modes`)."""
     nd = 2 * n
-    return (np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd))  # y, P, Kv, v
+    return (np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd), np.ones(n + 1))
 
 
 def approximate_workspace(n: int):
@@ -66,6 +71,9 @@ def approximate_stiffness(prm, P, warm, awk):
     """
     S, EA, L, H, tol = prm[1], prm[2], prm[3], prm[4], prm[14]
     Q, x, u, T, N = awk[0], awk[1], awk[2], awk[3], awk[4]
+    for i in range(P.size):
+        if not abs(P[i]) < 1e100:  # a blown-up state (or NaN): the closure's products would underflow
+            return kn.INNER_SOLVE
     kn.cumulative_loads(P, Q)
     if kn.closure_solve(S, Q, 0.0, L, H, warm, tol, 60) < 0:
         return kn.INNER_SOLVE
@@ -91,7 +99,9 @@ def rate(prm, t, s, warm, ds, wk, awk):
 
     ``awk`` is None for the exact analysis (numba then compiles a version without the
     approximate branch) and :func:`approximate_workspace` for the approximate one. Returns a
-    status code (:data:`cablesim.dynamics.kernels.OK` on success).
+    status code (:data:`cablesim.dynamics.kernels.OK` on success). In the exact analysis the
+    segments count as the modes ``wk[4]`` say (taut or slack); with ``slack: stop`` a segment not
+    longer than its natural length returns :data:`cablesim.dynamics.kernels.SLACK`.
     """
     S, EA, L, H, m, C = prm[1], prm[2], prm[3], prm[4], prm[5], prm[6]
     FL, w, y0 = prm[8], prm[9], prm[10]
@@ -104,7 +114,7 @@ def rate(prm, t, s, warm, ds, wk, awk):
     if awk is None:
         for i in range(nd):
             y[i] = y0[i] + s[i]
-        if kn.exact_force_and_Kv(y, v, S, EA, L, H, P, Kv) >= 0:
+        if kn.exact_force_and_Kv(y, v, S, EA, L, H, P, Kv, wk[4]) >= 0 and prm[15] == STOP:
             return kn.SLACK
     else:
         st = _approximate_Kv(prm, t, s, warm, wk, awk)
@@ -120,6 +130,26 @@ def rate(prm, t, s, warm, ds, wk, awk):
             return kn.NONFINITE
         ds[2 * nd + i] = acc
     return kn.OK
+
+
+@njit(cache=True)
+def consistent_acceleration(prm, t, s, wk):
+    """Exact analysis: set ``y''`` in ``s`` from eq. 15 with the segment modes ``wk[4]``,
+    ``y'' = M^-1 (F(t) - C y' - P(y))`` (eq. 19 at a restart)."""
+    S, EA, L, H, m, C = prm[1], prm[2], prm[3], prm[4], prm[5], prm[6]
+    F0, FL, w, y0 = prm[7], prm[8], prm[9], prm[10]
+    y, P, Kv, v = wk[0], wk[1], wk[2], wk[3]
+    nd = m.size
+    for i in range(nd):
+        y[i] = y0[i] + s[i]
+        v[i] = s[nd + i]
+    kn.exact_force_and_Kv(y, v, S, EA, L, H, P, Kv, wk[4])
+    sw = np.sin(w * t)
+    for i in range(nd):
+        acc = F0[i] + FL[i] * sw - P[i]
+        for j in range(nd):
+            acc -= C[i, j] * v[j]
+        s[2 * nd + i] = acc / m[i]
 
 
 @njit(cache=True)
@@ -139,7 +169,8 @@ def _approximate_Kv(prm, t, s, warm, wk, awk):
 def observe(prm, t, s, warm, zc, ze, T, segment_state, awk, split):
     """Derived outputs at one instant: ``z_c``, ``z_e``, tensions and the drift of eq. 15.
 
-    ``segment_state`` receives the index of a slack segment (exact) or -1. Returns the drift
+    ``segment_state`` receives the index of a slack segment (exact) or -1; tensions follow the
+    tension-only law ``EA max(l - S, 0) / S``. Returns the drift
     residual ``|M y'' + C y' + P - F| / |F0|`` (exact analysis) or, for the approximate analysis
     where eq. 15 defines P, the mismatch between the integrated ``y`` and ``x(P) + u(P)``
     expressed as a force through ``K0``, also relative to ``|F0|``. NaN if the inner solve fails.
@@ -157,8 +188,12 @@ def observe(prm, t, s, warm, zc, ze, T, segment_state, awk, split):
         y = prm[10] + z
         P = np.empty(nd)
         K = np.empty((nd, nd))
-        segment_state[0] = kn.exact_force_and_stiffness(y, S, EA, L, H, P, K)
+        taut = np.empty(S.size)
+        kn.tension_only_mask(y, S, L, H, taut)
+        segment_state[0] = kn.exact_force_and_stiffness(y, S, EA, L, H, P, K, taut)
         kn.exact_tensions(y, S, EA, L, H, T)
+        for k in range(S.size):
+            T[k] *= taut[k]
         if not split:
             zc[:] = 0.0
             ze[:] = 0.0
@@ -217,6 +252,10 @@ class EquationsOfMotion:
     modal_omega : ndarray, optional
         Linear modal frequencies about the equilibrium, rad/s, ascending (computed from ``K0``
         and ``mass`` when not given).
+    slack : str
+        ``"continue"`` (default): in the exact analysis segments are tension-only and the
+        integrators locate every slack onset and re-tightening; ``"stop"``: a run stops where a
+        segment first goes slack. The approximate analysis always stops.
     """
 
     cable: Cable
@@ -235,6 +274,7 @@ class EquationsOfMotion:
     a0: float = 0.0
     a1: float = 0.0
     modal_omega: np.ndarray | None = None
+    slack: str = "continue"
 
     @cached_property
     def frequencies(self) -> np.ndarray:
@@ -247,6 +287,11 @@ class EquationsOfMotion:
     def exact(self) -> bool:
         """Whether the exact analysis is in use (else the approximate one)."""
         return self.analysis == "exact"
+
+    @property
+    def continues_slack(self) -> bool:
+        """Whether a run continues through slack segments (exact analysis, ``slack: continue``)."""
+        return self.exact and self.slack == "continue"
 
     @property
     def n_dof(self) -> int:
@@ -279,6 +324,7 @@ class EquationsOfMotion:
             np.ascontiguousarray(self.u0),
             np.ascontiguousarray(self.K0),
             float(tol),
+            CONTINUE if self.continues_slack else STOP,
         )
 
     def initial_state(self, z0: np.ndarray | None = None, v0: np.ndarray | None = None) -> np.ndarray:

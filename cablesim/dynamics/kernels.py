@@ -57,8 +57,40 @@ def exact_tensions(y, S, EA, L, H, T):
 
 
 @njit(cache=True)
-def exact_force_and_Kv(y, v, S, EA, L, H, P, Kv):
-    """Resisting force ``P(y)`` and the product ``K(y) v``; returns slack segment or -1."""
+def segment_gaps(y, S, L, H, g):
+    """Fill ``g`` with ``l - S`` of every segment (negative: shorter than its natural length)."""
+    n = S.size - 1
+    for k in range(n + 1):
+        dx, dy = _segment(y, k, n, L, H)
+        g[k] = np.sqrt(dx * dx + dy * dy) - S[k]
+
+
+@njit(cache=True)
+def segment_gap(y, k, S, L, H):
+    """``l - S`` of segment k in configuration y."""
+    n = S.size - 1
+    dx, dy = _segment(y, k, n, L, H)
+    return np.sqrt(dx * dx + dy * dy) - S[k]
+
+
+@njit(cache=True)
+def tension_only_mask(y, S, L, H, taut):
+    """``taut[k]`` = 1 where segment k is longer than its natural length, else 0 (slack)."""
+    n = S.size - 1
+    for k in range(n + 1):
+        dx, dy = _segment(y, k, n, L, H)
+        taut[k] = 1.0 if np.sqrt(dx * dx + dy * dy) > S[k] else 0.0
+
+
+@njit(cache=True)
+def exact_force_and_Kv(y, v, S, EA, L, H, P, Kv, taut):
+    """Resisting force ``P(y)`` and the product ``K(y) v``; returns the first segment not longer
+    than its natural length, or -1.
+
+    ``taut[k]`` (1 or 0) multiplies segment k's force and stiffness: a segment the integrator
+    treats as slack contributes nothing; one it treats as taut acts as a linear spring even if it
+    is (within a step, before the event is located) slightly shorter than S.
+    """
     n = S.size - 1
     P[:] = 0.0
     Kv[:] = 0.0
@@ -70,6 +102,7 @@ def exact_force_and_Kv(y, v, S, EA, L, H, P, Kv):
         T = EA * (l - S[k]) / S[k]
         if T <= 0.0 and slack < 0:
             slack = k
+        T *= taut[k]
         # relative velocity of the segment's end over its start
         if k == n:
             dv0, dv1 = 0.0, 0.0
@@ -78,7 +111,7 @@ def exact_force_and_Kv(y, v, S, EA, L, H, P, Kv):
         if k > 0:
             dv0 -= v[2 * k - 2]
             dv1 -= v[2 * k - 1]
-        ka = EA / S[k]
+        ka = taut[k] * EA / S[k]
         kg = T / l
         ed = e0 * dv0 + e1 * dv1
         r0 = kg * dv0 + (ka - kg) * ed * e0
@@ -97,8 +130,9 @@ def exact_force_and_Kv(y, v, S, EA, L, H, P, Kv):
 
 
 @njit(cache=True)
-def exact_force_and_stiffness(y, S, EA, L, H, P, K):
-    """Resisting force ``P(y)`` and the assembled tangent stiffness ``K(y)``; slack or -1."""
+def exact_force_and_stiffness(y, S, EA, L, H, P, K, taut):
+    """Resisting force ``P(y)`` and the assembled tangent stiffness ``K(y)`` of the segments with
+    ``taut[k] = 1`` (see :func:`exact_force_and_Kv`); the first segment not longer than S, or -1."""
     n = S.size - 1
     P[:] = 0.0
     K[:, :] = 0.0
@@ -110,7 +144,8 @@ def exact_force_and_stiffness(y, S, EA, L, H, P, K):
         T = EA * (l - S[k]) / S[k]
         if T <= 0.0 and slack < 0:
             slack = k
-        ka = EA / S[k]
+        T *= taut[k]
+        ka = taut[k] * EA / S[k]
         kg = T / l
         k00 = kg + (ka - kg) * e0 * e0
         k01 = (ka - kg) * e0 * e1

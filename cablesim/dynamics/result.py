@@ -10,6 +10,71 @@ from .status import Status
 
 
 @dataclass(frozen=True)
+class SlackRecord:
+    """Slack episodes of a time history (exact analysis, ``slack: continue``).
+
+    Attributes
+    ----------
+    t : ndarray
+        Instants at which a segment changed mode, s (ascending).
+    segment : ndarray of int
+        1-based segment of each event.
+    kind : ndarray of str
+        ``"slack"`` (onset: the segment's length fell to its natural length) or ``"taut"``
+        (re-tightening).
+    peak_tension : ndarray, shape (n + 1,)
+        Largest tension of each segment over the run, N (tracked at every step, not only at the
+        saved instants).
+    peak_time : ndarray, shape (n + 1,)
+        When it occurred, s.
+    slack_time : ndarray, shape (n + 1,)
+        Time each segment spent slack, s.
+    episodes : ndarray of int, shape (n + 1,)
+        Number of slack episodes of each segment.
+    chatter_holds : int
+        Transitions that came within the chatter window of the previous one of their segment.
+    handling : str
+        How slack segments and chattering were handled, in words.
+    """
+
+    t: np.ndarray
+    segment: np.ndarray
+    kind: np.ndarray
+    peak_tension: np.ndarray
+    peak_time: np.ndarray
+    slack_time: np.ndarray
+    episodes: np.ndarray
+    chatter_holds: int = 0
+    handling: str = ""
+
+    @classmethod
+    def from_events(cls, events, n_segments, t_end, initially_slack, peak, peak_time, chatter_holds=0, handling=""):
+        """Summarise ``events`` (``(t, 0-based segment, kind)``) of a run that reached ``t_end``."""
+        ev = [e for e in events if e[0] <= t_end]
+        t = np.array([e[0] for e in ev], dtype=float)
+        seg = np.array([e[1] + 1 for e in ev], dtype=np.int64)
+        kind = np.array([e[2] for e in ev], dtype=str) if ev else np.array([], dtype="<U5")
+        slack_time = np.zeros(n_segments)
+        episodes = np.asarray(initially_slack, dtype=np.int64).copy()
+        since = np.where(initially_slack, 0.0, np.nan)
+        for ti, k, kd in ev:
+            if kd == "slack":
+                since[k] = ti
+                episodes[k] += 1
+            elif np.isfinite(since[k]):
+                slack_time[k] += ti - since[k]
+                since[k] = np.nan
+        open_ = np.isfinite(since)
+        slack_time[open_] += t_end - since[open_]
+        return cls(t, seg, kind, np.asarray(peak, dtype=float), np.asarray(peak_time, dtype=float), slack_time,
+                   episodes, int(chatter_holds), handling)
+
+    def fraction_of(self, duration: float) -> np.ndarray:
+        """Time spent slack over ``duration`` per segment."""
+        return self.slack_time / duration if duration > 0 else np.zeros_like(self.slack_time)
+
+
+@dataclass(frozen=True)
 class HistoryResult:
     """Time history of the cable about its static equilibrium.
 
@@ -54,6 +119,9 @@ class HistoryResult:
     dof : tuple of int, optional
         1-based DOF numbers of the columns of ``z``, ``v``, ``zc``, ``ze`` when only some
         channels were kept (None: all, in order).
+    slack : SlackRecord, optional
+        Slack events and per-segment peak tension, time slack and episodes (None when not
+        recorded).
     """
 
     t: np.ndarray
@@ -74,6 +142,7 @@ class HistoryResult:
     modal_omega: np.ndarray
     settings: dict = field(default_factory=dict)
     dof: tuple | None = None
+    slack: SlackRecord | None = None
 
     @property
     def dof_numbers(self) -> tuple:

@@ -23,7 +23,8 @@ from . import kernels as kn
 from .interrupts import MAX_CHUNK_STEPS, MIN_CHUNK_STEPS, Deferred, received
 from .equations import EquationsOfMotion, approximate_workspace, observe
 from .integrators import Integrator
-from .result import HistoryResult
+from .integrators.events import CHATTER_TEXT
+from .result import HistoryResult, SlackRecord
 from .status import Status
 
 
@@ -77,14 +78,22 @@ def failure_text(code: int, t: float, eom: EquationsOfMotion, integrator: Integr
             "mode or, with stiffness-proportional damping, the fastest overdamped mode), which is "
             "the likely cause: use a smaller dt, dopri5, or the newmark or generalized-alpha integrator"
         )
+    if code == kn.INNER_SOLVE and not eom.exact:
+        seg = _slack_in_approximate(eom, t, state_s)
+        if seg is not None:
+            return (
+                f"stopped {where}: segment {seg} went slack. The approximate analysis needs every segment "
+                "taut (with a slack segment the inextensible state x(P) is not determined); the exact "
+                "analysis (analysis: exact) can continue through slack segments"
+            )
     if code == kn.SLACK:
         T = np.empty(eom.cable.n_segments)
         kn.exact_tensions(eom.y0 + state_s[: eom.n_dof], eom.cable.S, eom.cable.EA, eom.cable.L, eom.cable.H, T)
         k = int(np.argmin(T)) + 1
         return (
-            f"stopped {where}: segment {k} went slack (its tension fell to zero; this model does not "
-            "handle slack segments). Reduce the harmonic loads FL, raise the sustained loads F0, or "
-            "check that the response is physical."
+            f"stopped {where}: segment {k} went slack (its tension fell to zero; with slack: stop the run "
+            "ends there). Use slack: continue (the default) to continue through slack segments, reduce "
+            "the harmonic loads FL, or raise the sustained loads F0."
         )
     if code in (kn.NONFINITE, kn.STEP_UNDERFLOW):
         return (
@@ -94,6 +103,21 @@ def failure_text(code: int, t: float, eom: EquationsOfMotion, integrator: Integr
     if code == kn.INNER_SOLVE:
         return f"stopped {where}: the inner equilibrium solve failed ({_inner_diagnosis(eom, t, state_s)}); reduce FL or the step size."
     return f"stopped {where}: {Status(code).text}."
+
+
+def _slack_in_approximate(eom: EquationsOfMotion, t: float, s) -> int | None:
+    """The segment (1-based) of the inextensible cable that is slack or nearly so under the
+    internal forces of eq. 15 at the last good state, or None."""
+    nd = eom.n_dof
+    P = eom.F0 + eom.FL * np.sin(eom.omega * t) - eom.C @ s[nd : 2 * nd] - eom.mass * s[2 * nd :]
+    try:
+        inext = inextensible_equilibrium(eom.cable, P)
+    except SlackSegmentError as exc:
+        return int(exc.segment)
+    except CablesimError:
+        return None
+    k = int(np.argmin(inext.T))
+    return k + 1 if inext.T[k] < 1e-3 * eom.T0[k] else None
 
 
 def _inner_diagnosis(eom: EquationsOfMotion, t: float, s) -> str:
@@ -114,6 +138,38 @@ def _inner_diagnosis(eom: EquationsOfMotion, t: float, s) -> str:
         f"segment {k + 1} of the inextensible cable is nearly slack: tension {inext.T[k]:.3g} N "
         f"against {eom.T0[k]:.3g} N at equilibrium"
     )
+
+
+def _slack_record(eom: EquationsOfMotion, state, T: np.ndarray, t: np.ndarray) -> SlackRecord:
+    """Events and per-segment peak tension, time slack and episodes of a run up to ``t[-1]``."""
+    ex = state.extra
+    n1 = eom.cable.n_segments
+    peak = T.max(axis=0)
+    when = t[T.argmax(axis=0)]
+    if "evw" in ex:
+        tracked = (ex["evw"][3] > peak) & (ex["evw"][4] <= t[-1])
+        peak = np.where(tracked, ex["evw"][3], peak)
+        when = np.where(tracked, ex["evw"][4], when)
+    if eom.continues_slack:
+        handling = "tension-only segments; every slack onset and re-tightening located and the integration restarted there; " + CHATTER_TEXT
+    else:
+        handling = "slack: stop (the run ends where a segment first goes slack)"
+    return SlackRecord.from_events(ex.get("events", []), n1, float(t[-1]), ex.get("initially_slack", np.zeros(n1, bool)),
+                                   peak, when, ex.get("chatter_holds", 0), handling)
+
+
+def _bad_instants(eom, S, T, residual, zc, ze, split: bool):
+    """``(split, bad)``: whether the configurational/elastic split is kept, and the instants
+    holding a non-finite value (nothing non-finite leaves silently: the record is cut at the
+    first)."""
+    bad = ~(np.isfinite(S).all(axis=1) & np.isfinite(T).all(axis=1) & np.isfinite(residual))
+    if split and not (np.isfinite(zc[0]).all() and np.isfinite(ze[0]).all()):
+        split = False  # no inextensible split even at the start (a displaced start far from it): none
+    if split and not eom.continues_slack:
+        # Through slack episodes z_c, z_e are NaN wherever the inextensible state x(P) under the
+        # current internal forces does not exist (a segment of it slack): that ends nothing.
+        bad |= ~(np.isfinite(zc).all(axis=1) & np.isfinite(ze).all(axis=1))
+    return split, bad
 
 
 def simulate(
@@ -192,19 +248,16 @@ def simulate(
     residual = np.empty(m)
     slack = np.empty(m, dtype=np.int64)
     _observe_all(prm, t, S, np.array(eom.F1, dtype=float), zc, ze, T, residual, slack, approximate_workspace(eom.cable.n_nodes), split)
-    # Nothing non-finite leaves silently: cut the record at the first bad instant.
-    bad = ~(np.isfinite(S).all(axis=1) & np.isfinite(T).all(axis=1) & np.isfinite(residual))
-    if split and not (np.isfinite(zc[0]).all() and np.isfinite(ze[0]).all()):
-        split = False  # no inextensible split even at the start (a displaced start far from it): none
-    if split:
-        bad |= ~(np.isfinite(zc).all(axis=1) & np.isfinite(ze).all(axis=1))
+    split, bad = _bad_instants(eom, S, T, residual, zc, ze, split)
     if bad.any():
         first = int(np.argmax(bad))
         m = max(first, 1)
         if status is Status.COMPLETED or first < written:
             status, t_stop = Status.OUTPUT_NONFINITE, float(t[first])
             message = f"stopped at t = {t[first]:.6g} s: {Status.OUTPUT_NONFINITE.text}"
+    record = _slack_record(eom, state, T[:m], t[:m]) if eom.exact else None
     return HistoryResult(
+        slack=record,
         t=t[:m],
         z=S[:m, :nd].copy(),
         v=S[:m, nd : 2 * nd].copy(),
@@ -227,5 +280,6 @@ def simulate(
             "output_step": float(output_step),
             "a0": eom.a0,
             "a1": eom.a1,
+            "slack": eom.slack if eom.exact else "stop",
         },
     )

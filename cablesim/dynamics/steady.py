@@ -23,7 +23,7 @@ the same quantities come from the last ``window`` seconds and the point is flagg
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable
 
 import numpy as np
@@ -32,6 +32,7 @@ from . import kernels as kn
 from .equations import EquationsOfMotion
 from .integrators import DOPRI5, Integrator
 from .simulate import advance_in_chunks, failure_text
+from .result import SlackRecord
 from .status import Status
 
 #: Most forcing periods between two calls of a ``decide`` hook of :func:`steady_response`.
@@ -105,6 +106,10 @@ class PointResult:
         (no steady state before the cap) or ``"failed"``.
     multipliers : ndarray (complex) or None
         Floquet multipliers of the orbit, by decreasing modulus, where computed.
+    peak_tension, slack_fraction : ndarray or None
+        Per segment, the largest tension (N) and the fraction of the time slack over the whole
+        integration of the point (transient included), when the exact analysis continues through
+        slack segments (None otherwise).
     """
 
     omega: float
@@ -120,6 +125,8 @@ class PointResult:
     message: str
     decided: str = "integrated"
     multipliers: np.ndarray | None = None
+    peak_tension: np.ndarray | None = None
+    slack_fraction: np.ndarray | None = None
 
     @property
     def failed(self) -> bool:
@@ -243,6 +250,25 @@ def steady_response(
     -------
     PointResult
     """
+    track: dict = {}
+    r = _steady(eom, integrator, channels, criterion, s0, decide, track)
+    return _with_slack_stats(r, eom, track.get("state"), track.get("t0", 0.0))
+
+
+def _with_slack_stats(r: PointResult, eom: EquationsOfMotion, state, t0: float) -> PointResult:
+    """``r`` with the per-segment peak tension and slack fraction of the integration from ``t0``."""
+    ex = {} if state is None else state.extra
+    if not ex.get("track"):
+        return r
+    span = state.t - t0
+    if span <= 0:
+        return r
+    rec = SlackRecord.from_events([(t - t0, k, kind) for t, k, kind in ex["events"]], eom.cable.n_segments, span,
+                                  ex["initially_slack"], ex["evw"][3], ex["evw"][4])
+    return replace(r, peak_tension=rec.peak_tension.copy(), slack_fraction=rec.fraction_of(span))
+
+
+def _steady(eom, integrator, channels, criterion, s0, decide, track) -> PointResult:
     nd = eom.n_dof
     w = eom.omega
     T = 2.0 * np.pi / w
@@ -251,6 +277,7 @@ def steady_response(
     prm = eom.params()
     s0 = eom.initial_state() if s0 is None else np.array(s0, dtype=float)
     state = integrator.start(eom, s0)
+    track.update(state=state, t0=state.t)
     n_cap = max(int(np.floor(crit.cap / T + 1e-9)), 1)
     k_window = max(0, n_cap - int(np.ceil(crit.window / T)))
     strobes = np.empty((n_cap + 1, 2 * nd))

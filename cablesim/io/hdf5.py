@@ -9,7 +9,9 @@ Layout (every dataset has a ``units`` attribute; every file has the root attribu
 - ``cablesim history`` / ``free-vibration``: ``/history/{t, z, v, zc, ze, T, residual, dof, y0,
   T0}`` (time along the first axis, DOF along the second) with attributes ``omega``,
   ``analysis``, ``integrator``, ``status`` (the outcome in words), ``status_code``, ``t_stop``
-  and the integrator's settings; ``/modal/omega``;
+  and the integrator's settings; ``/modal/omega``; exact analysis: ``/history/events/{t, segment,
+  kind}`` (slack onsets and re-tightenings) and ``/history/segments/{peak_tension, peak_time,
+  slack_time, slack_episodes}``;
 - ``cablesim sweep``: see :func:`cablesim.io.sweeps.write_sweep`;
 - ``cablesim continue``: see :func:`cablesim.io.continuation.write_continuation`.
 
@@ -34,7 +36,7 @@ from types import SimpleNamespace
 import h5py
 import numpy as np
 
-from ..dynamics.result import HistoryResult
+from ..dynamics.result import HistoryResult, SlackRecord
 from ..dynamics.status import Status
 from ..errors import CablesimError
 from ..version import __version__
@@ -196,9 +198,13 @@ def write_history(path: str | Path, hist, case_text: str, command: str, extra_at
         put(g, "z", hist.z, "m", "displacement from the static equilibrium, z = y - y(0) (DOF order)")
         put(g, "v", hist.v, "m/s", "velocity y'")
         if hist.zc is not None:
-            put(g, "zc", hist.zc, "m", "configurational part x(P(t)) - x(P(0)) (eq. 22)")
-            put(g, "ze", hist.ze, "m", "elastic part of z (eq. 22)")
-        put(g, "T", hist.T, "N", "segment tensions")
+            put(g, "zc", hist.zc, "m", "configurational part x(P(t)) - x(P(0)) (eq. 22); NaN where the "
+                "inextensible state under the current internal forces does not exist (a segment of it slack)",
+                allow_nan=True)
+            put(g, "ze", hist.ze, "m", "elastic part of z (eq. 22); NaN with zc", allow_nan=True)
+        put(g, "T", hist.T, "N", "segment tensions EA max(l - S, 0) / S (zero while slack)")
+        if hist.slack is not None:
+            _write_slack(g, hist.slack)
         put(g, "residual", hist.residual, "1", "drift of eq. 15 relative to |F0|")
         put(g, "dof", np.array(hist.dof_numbers), "1", "1-based DOF number of each column of z, v, zc, ze")
         put(g, "y0", hist.y0, "m", "static equilibrium the displacements are measured from")
@@ -219,6 +225,37 @@ def write_history(path: str | Path, hist, case_text: str, command: str, extra_at
         m = f.create_group("modal")
         put(m, "omega", hist.modal_omega, "rad/s", "linear modal frequencies about the equilibrium")
     return Path(path)
+
+
+def _write_slack(g: h5py.Group, rec: SlackRecord) -> None:
+    """``/history/events/{t, segment, kind}`` and ``/history/segments/{peak_tension, peak_time,
+    slack_time, slack_episodes}`` (one entry per segment)."""
+    e = g.create_group("events")
+    put(e, "t", rec.t, "s", "instant a segment changed mode (located to 1e-10 s on the step's interpolant)")
+    put(e, "segment", rec.segment, "1", "1-based segment")
+    ds = e.create_dataset("kind", data=np.array([k.encode() for k in rec.kind], dtype="S5"))
+    ds.attrs["units"] = "1"
+    ds.attrs["description"] = "slack (onset: length fell to the natural length) or taut (re-tightening)"
+    e.attrs["handling"] = rec.handling
+    e.attrs["chatter_holds"] = rec.chatter_holds
+    s = g.create_group("segments")
+    put(s, "peak_tension", rec.peak_tension, "N", "largest tension over the run (tracked at every step: snap loads)")
+    put(s, "peak_time", rec.peak_time, "s", "when it occurred")
+    put(s, "slack_time", rec.slack_time, "s", "time spent slack")
+    put(s, "slack_episodes", rec.episodes, "1", "number of slack episodes")
+
+
+def _read_slack(g: h5py.Group) -> SlackRecord | None:
+    if "events" not in g or "segments" not in g:
+        return None
+    e, s = g["events"], g["segments"]
+    kind = np.array([k.decode() if isinstance(k, bytes) else str(k) for k in e["kind"][()]], dtype=str)
+    return SlackRecord(
+        t=np.asarray(e["t"][()], dtype=float), segment=np.asarray(e["segment"][()], dtype=np.int64), kind=kind,
+        peak_tension=np.asarray(s["peak_tension"][()], dtype=float), peak_time=np.asarray(s["peak_time"][()], dtype=float),
+        slack_time=np.asarray(s["slack_time"][()], dtype=float), episodes=np.asarray(s["slack_episodes"][()], dtype=np.int64),
+        chatter_holds=int(e.attrs.get("chatter_holds", 0)), handling=attr_text(e.attrs.get("handling", "")),
+    )
 
 
 # --------------------------------------------------------------------------------------------
@@ -367,6 +404,7 @@ def read_history(path):
             dof = tuple(int(d) for d in np.asarray(g["dof"][()]).ravel()) if "dof" in g else None
             attrs = {k: _plain(v) for k, v in g.attrs.items()}
             modal = np.asarray(f["modal/omega"][()], dtype=float) if "modal/omega" in f else np.empty(0)
+            slack = _read_slack(g)
         except (TypeError, ValueError, KeyError, AttributeError):
             raise CablesimError(f"The history file {path} is malformed: a dataset under /history is not an "
                                 "array of numbers. Rerun the history.") from None
@@ -391,7 +429,7 @@ def read_history(path):
     return HistoryResult(
         t=data["t"], z=data["z"], v=data["v"], zc=zc, ze=ze, T=data["T"], residual=data["residual"],
         y0=data["y0"], T0=data["T0"], omega=omega, analysis=analysis, integrator=integrator,
-        status=status, message=message, t_stop=t_stop, modal_omega=modal, settings=attrs, dof=dof,
+        status=status, message=message, t_stop=t_stop, modal_omega=modal, settings=attrs, dof=dof, slack=slack,
     )
 
 

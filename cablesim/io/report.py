@@ -121,7 +121,22 @@ def history_summary(case, hist, integ, wall: float) -> str:
         f"(static {', '.join(f'{t / 1e3:.5g}' for t in hist.T0[:6])} kN)"
     )
     lines.append(f"largest drift of eq. 15 (relative to |F0|): {np.max(hist.residual):.2e}")
+    if hist.slack is not None:
+        lines += ["", *slack_lines(hist.slack, float(hist.t[-1]))]
     return "\n".join(lines)
+
+
+def slack_lines(rec, duration: float) -> list[str]:
+    """Per segment: peak tension (the snap load) and when, time slack, episodes."""
+    rows = [
+        [f"{k + 1}", _g(rec.peak_tension[k] / 1e3, 6), f"{rec.peak_time[k]:.6g}", f"{rec.slack_time[k]:.4g}",
+         f"{100.0 * rec.slack_time[k] / duration:.3g}" if duration > 0 else "-", f"{rec.episodes[k]}"]
+        for k in range(rec.peak_tension.size)
+    ]
+    out = [_table(["segment", "peak tension (kN)", "at t (s)", "slack (s)", "slack (%)", "slack episodes"], rows)]
+    if rec.t.size:
+        out.append(f"{rec.t.size} slack/taut transitions located; {rec.chatter_holds} chatter holds ({rec.handling})")
+    return out
 
 
 def sweep_summary(case, res, wall: float) -> str:
@@ -157,6 +172,15 @@ def sweep_summary(case, res, wall: float) -> str:
             + (f", {capped.sum()} reached the cap" if capped.any() else "")
             + (f", {failed.sum()} FAILED (stopped early; listed below, left out of the peaks)" if failed.any() else "")
         )
+        frac = d.get("slack_fraction")
+        if frac is not None and np.any(frac[done] > 0):
+            slack = np.any(frac > 0, axis=1) & done
+            worst = np.nanmax(frac[done], axis=0)
+            lines.append(
+                f"    {slack.sum()} point(s) with slack episodes; largest slack fraction per segment "
+                + ", ".join(f"{100.0 * x:.3g} %" for x in worst)
+                + "; largest peak tension " + ", ".join(f"{x / 1e3:.4g}" for x in np.nanmax(d["peak_tension"][done], axis=0)) + " kN"
+            )
     lines.append(_table(["curve", "channel", "peak at (rad/s)", "peak amplitude (m)"], rows))
     failures = res.failures()
     if failures:

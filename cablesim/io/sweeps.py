@@ -20,7 +20,7 @@ def write_sweep(path: str | Path, res, fingerprint: str | None = None) -> Path:
 
     Layout: ``/sweep/omega``, optional ``/sweep/gamma`` (then every result dataset has a
     leading gamma axis); for ``independent`` sweeps ``/sweep/{amplitude, halfrange, period,
-    steady, response_frequency, t_end, floquet, done}``, for up/down sweeps the same under
+    steady, response_frequency, t_end, floquet, done, peak_tension, slack_fraction}``, for up/down sweeps the same under
     ``/sweep/up/`` and ``/sweep/down/``; ``/modal/omega``. Points not yet computed have
     ``done = False`` and NaN in the float datasets; a point that stopped early (``failed``) may
     have NaN response frequencies. These marked gaps are the only NaN cablesim writes. ``status``
@@ -40,6 +40,10 @@ def write_sweep(path: str | Path, res, fingerprint: str | None = None) -> Path:
         "done": ("1", "whether the point has been computed"),
         "wall": ("s", "wall-clock time of the point"),
         "multipliers": ("1", "Floquet multipliers of the orbit where computed by shooting (NaN elsewhere)"),
+        "peak_tension": ("N", "per segment, the largest tension over the point's integration, transient included "
+                         "(exact analysis with slack: continue; NaN elsewhere)"),
+        "slack_fraction": ("1", "per segment, the fraction of the point's integration spent slack "
+                           "(exact analysis with slack: continue; NaN elsewhere)"),
     }
     with atomic_h5(path) as f:
         stamp(f, res.case_text, "sweep", analysis=res.analysis)

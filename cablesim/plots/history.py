@@ -139,12 +139,42 @@ def _plot_tensions(result, title, path, notes):
         color = f"C{c % 10}"
         ax.plot(t[::s], T[::s, r] / 1e3, "-", color=color, lw=1.0, label=f"T{r + 1}(t)")
         ax.axhline(T0[r] / 1e3, ls="--", color=color, lw=1.0, alpha=0.8, label=f"static T{r + 1} = {T0[r] / 1e3:.4g} kN")
+    rec = getattr(result, "slack", None)
+    if rec is not None:
+        _mark_slack(ax, rec, segs, float(t[-1]))
     ax.set_xlabel("time t (s)")
     ax.set_ylabel("segment tension T (kN)")
     ax.grid(True, alpha=0.3)
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, framealpha=0.9)
     which = "all segments" if nseg <= 6 else f"segments {', '.join(str(r + 1) for r in segs)} of {nseg}"
     return _finish(fig, result, title, f"segment tensions ({which})", path, notes)
+
+
+def slack_intervals(rec, segment: int, t_end: float) -> list[tuple[float, float]]:
+    """``(start, end)`` of each slack episode of a segment (1-based), from its events."""
+    mine = [(t, k) for t, s, k in zip(rec.t, rec.segment, rec.kind) if s == segment]
+    out, start = [], (0.0 if rec.episodes[segment - 1] > sum(k == "slack" for _, k in mine) else None)
+    for t, k in mine:
+        if k == "slack":
+            start = t
+        elif start is not None:
+            out.append((start, t))
+            start = None
+    if start is not None:
+        out.append((start, t_end))
+    return out
+
+
+def _mark_slack(ax, rec, segs, t_end):
+    """Shade each shown segment's slack episodes and mark its peak tension (the snap load)."""
+    for c, r in enumerate(segs):
+        color = f"C{c % 10}"
+        spans = slack_intervals(rec, r + 1, t_end)
+        for i, (a, b) in enumerate(spans):
+            ax.axvspan(a, b, color=color, alpha=0.15, lw=0, label=f"segment {r + 1} slack" if i == 0 else None)
+        if spans:
+            ax.plot(rec.peak_time[r], rec.peak_tension[r] / 1e3, "v", color=color, ms=7,
+                    label=f"snap load T{r + 1} = {rec.peak_tension[r] / 1e3:.4g} kN at {rec.peak_time[r]:.4g} s")
 
 
 def _plot_fft(result, chans, title, path, notes):

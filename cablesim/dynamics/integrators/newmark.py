@@ -24,10 +24,10 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ...statics import resisting_force
 from .. import kernels as kn
 from ..equations import approximate_stiffness
 from .base import Integrator, IntegratorState, hermite
+from .events import locate_event, start_events, transition
 
 
 @njit(cache=True)
@@ -44,7 +44,7 @@ def _internal(prm, z, P_n, z_n, warm, P1, K, first, wk, awk, check_slack):
     if awk is None:
         for i in range(nd):
             y[i] = prm[10][i] + z[i]
-        if kn.exact_force_and_stiffness(y, S, EA, L, H, P1, K) >= 0 and check_slack:
+        if kn.exact_force_and_stiffness(y, S, EA, L, H, P1, K, wk[4]) >= 0 and check_slack and prm[15] == 0:
             return kn.SLACK
         return kn.OK
     # Implicit midpoint for the rate law P' = K(P) y': a few fixed-point sweeps on P_{n+1}.
@@ -106,86 +106,104 @@ def _write_outputs(ta, tb, h, z, v, a, z1, v1, a1, sa, sb, da, db, t_out, out, j
 
 
 @njit(cache=True)
-def _galpha_advance(prm, s, P_n, warm, wk, awk, t0, h, i0, nsteps, am, af, beta, gamma, t_out, out, ztol, maxit):
+def _galpha_step(prm, z, v, a, P_n, warm, wk, awk, tb, h, coef, ztol, maxit, z1, v1, a1, P1, scratch):
+    """One step of size h ending at ``tb`` from ``(z, v, a, P_n)`` into ``(z1, v1, a1, P1)``."""
     m, C, F0, FL, w = prm[5], prm[6], prm[7], prm[8], prm[9]
+    am, af, beta, gamma = coef[0], coef[1], coef[2], coef[3]
+    R, dz, K, J, LU = scratch
     nd = m.size
-    z = s[:nd].copy()
-    v = s[nd : 2 * nd].copy()
-    a = s[2 * nd :].copy()
-    z1 = np.empty(nd)
-    v1 = np.empty(nd)
-    a1 = np.empty(nd)
-    P1 = np.empty(nd)
-    R = np.empty(nd)
-    dz = np.empty(nd)
-    K = np.empty((nd, nd))
-    J = np.empty((nd, nd))
-    LU = np.empty((nd, nd))
-    sa = np.empty(3 * nd)
-    sb = np.empty(3 * nd)
-    da = np.empty(3 * nd)
-    db = np.empty(3 * nd)
     c_m = (1.0 - am) / (beta * h * h)
     c_c = (1.0 - af) * gamma / (beta * h)
-    j = 0
-    for i in range(i0, i0 + nsteps):
-        ta = t0 + i * h
-        tb = t0 + (i + 1) * h
-        sf = np.sin(w * (tb - af * h))
-        for q in range(nd):
-            z1[q] = z[q] + h * v[q] + 0.5 * h * h * a[q]  # predictor: constant acceleration
-            P1[q] = P_n[q]
-        converged = False
-        for it in range(maxit):
-            for q in range(nd):
-                a1[q] = (z1[q] - z[q] - h * v[q]) / (beta * h * h) - (0.5 / beta - 1.0) * a[q]
-                v1[q] = v[q] + h * ((1.0 - gamma) * a[q] + gamma * a1[q])
-            st = _internal(prm, z1, P_n, z, warm, P1, K, it == 0, wk, awk, False)
-            if st != kn.OK:
-                _store(s, z, v, a)
-                return i, j, st
-            big = 0.0
-            for q in range(nd):
-                acc = m[q] * ((1.0 - am) * a1[q] + am * a[q]) + (1.0 - af) * P1[q] + af * P_n[q]
-                acc -= F0[q] + FL[q] * sf
-                for r in range(nd):
-                    acc += C[q, r] * ((1.0 - af) * v1[r] + af * v[r])
-                    J[q, r] = (1.0 - af) * K[q, r] + c_c * C[q, r]
-                J[q, q] += c_m * m[q]
-                R[q] = -acc
-            if not kn.solve_small(J, R, dz, LU):
-                break
-            step = 0.0
-            for q in range(nd):
-                z1[q] += dz[q]
-                big = max(big, abs(dz[q]))
-                step = max(step, abs(z1[q] - z[q]))
-            if not np.isfinite(big):
-                break
-            if big <= ztol + 1e-10 * step:
-                converged = True
-                break
-        if not converged:
-            _store(s, z, v, a)
-            for q in range(nd):
-                if not np.isfinite(z1[q]):
-                    return i, j, kn.NONFINITE
-            return i, j, kn.INNER_SOLVE
+    sf = np.sin(w * (tb - af * h))
+    for q in range(nd):
+        z1[q] = z[q] + h * v[q] + 0.5 * h * h * a[q]  # predictor: constant acceleration
+        P1[q] = P_n[q]
+    converged = False
+    for it in range(maxit):
         for q in range(nd):
             a1[q] = (z1[q] - z[q] - h * v[q]) / (beta * h * h) - (0.5 / beta - 1.0) * a[q]
             v1[q] = v[q] + h * ((1.0 - gamma) * a[q] + gamma * a1[q])
-        st = _internal(prm, z1, P_n, z, warm, P1, K, False, wk, awk, True)
+        st = _internal(prm, z1, P_n, z, warm, P1, K, it == 0, wk, awk, False)
         if st != kn.OK:
-            return i, j, st
-        if j < t_out.size and t_out[j] <= tb + 1e-9 * h:
-            j = _write_outputs(ta, tb, h, z, v, a, z1, v1, a1, sa, sb, da, db, t_out, out, j)
+            return st
+        big = 0.0
         for q in range(nd):
-            z[q] = z1[q]
-            v[q] = v1[q]
-            a[q] = a1[q]
-            P_n[q] = P1[q]
+            acc = m[q] * ((1.0 - am) * a1[q] + am * a[q]) + (1.0 - af) * P1[q] + af * P_n[q]
+            acc -= F0[q] + FL[q] * sf
+            for r in range(nd):
+                acc += C[q, r] * ((1.0 - af) * v1[r] + af * v[r])
+                J[q, r] = (1.0 - af) * K[q, r] + c_c * C[q, r]
+            J[q, q] += c_m * m[q]
+            R[q] = -acc
+        if not kn.solve_small(J, R, dz, LU):
+            break
+        step = 0.0
+        for q in range(nd):
+            z1[q] += dz[q]
+            big = max(big, abs(dz[q]))
+            step = max(step, abs(z1[q] - z[q]))
+        if not np.isfinite(big):
+            break
+        if big <= ztol + 1e-10 * step:
+            converged = True
+            break
+    if not converged:
+        for q in range(nd):
+            if not np.isfinite(z1[q]):
+                return kn.NONFINITE
+        return kn.INNER_SOLVE
+    for q in range(nd):
+        a1[q] = (z1[q] - z[q] - h * v[q]) / (beta * h * h) - (0.5 / beta - 1.0) * a[q]
+        v1[q] = v[q] + h * ((1.0 - gamma) * a[q] + gamma * a1[q])
+    return _internal(prm, z1, P_n, z, warm, P1, K, False, wk, awk, True)
+
+
+@njit(cache=True)
+def _galpha_advance(prm, s, P_n, warm, wk, awk, evw, track, t0, h, i, i_end, t, coef, t_out, out, ztol, maxit):
+    """Steps on the grid ``t0 + i h`` up to step ``i_end`` from ``t``, split where a segment
+    changes mode; returns ``(i, t, written, status, segment)`` as the explicit schemes do."""
+    nd = prm[5].size
+    z, v, a = s[:nd].copy(), s[nd : 2 * nd].copy(), s[2 * nd :].copy()
+    z1, v1, a1, P1 = np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd)
+    scratch = (np.empty(nd), np.empty(nd), np.empty((nd, nd)), np.empty((nd, nd)), np.empty((nd, nd)))
+    sa, sb, da, db = np.empty(3 * nd), np.empty(3 * nd), np.empty(3 * nd), np.empty(3 * nd)
+    j = 0
+    while i < i_end:
+        tb = t0 + (i + 1) * h
+        if tb - t <= 1e-9 * h:  # an event ended at the grid point
+            while j < t_out.size and t_out[j] <= tb + 1e-9 * h:
+                _store(out[j], z, v, a)
+                j += 1
+            t, i = tb, i + 1
+            continue
+        st = _galpha_step(prm, z, v, a, P_n, warm, wk, awk, tb, tb - t, coef, ztol, maxit, z1, v1, a1, P1, scratch)
+        if st != kn.OK:
+            _store(s, z, v, a)
+            return i, t, j, st, -1
+        k = -1
+        if track:
+            _store(sa, z, v, a)
+            _store(sb, z1, v1, a1)
+            te, k = locate_event(prm, t, tb, sa, sb, wk[4], evw)
+            if k >= 0 and te <= t:  # across already at the start (end of a chatter hold)
+                _store(s, z, v, a)
+                return i, t, j, kn.OK, k
+            if k >= 0:  # redo the step up to the event, in the modes valid there
+                st = _galpha_step(prm, z, v, a, P_n, warm, wk, awk, te, te - t, coef, ztol, maxit, z1, v1, a1, P1, scratch)
+                if st != kn.OK:
+                    _store(s, z, v, a)
+                    return i, t, j, st, -1
+            tb = te
+        if j < t_out.size and t_out[j] <= tb + (1e-9 * h if k < 0 else 0.0):
+            j = _write_outputs(t, tb, tb - t, z, v, a, z1, v1, a1, sa, sb, da, db, t_out, out, j)
+        z[:], v[:], a[:], P_n[:] = z1, v1, a1, P1
+        t = tb
+        if k >= 0:
+            _store(s, z, v, a)
+            return i, t, j, kn.OK, k
+        i += 1
     _store(s, z, v, a)
-    return i0 + nsteps, j, kn.OK
+    return i, t, j, kn.OK, -1
 
 
 @dataclass(frozen=True)
@@ -210,28 +228,39 @@ class GeneralizedAlpha(Integrator):
 
     def start(self, eom, s0, t0=0.0):
         st = IntegratorState(t=t0, s=np.array(s0, dtype=float), warm=np.array(eom.F1, dtype=float))
-        nd = eom.n_dof
-        if eom.exact:
-            P = resisting_force(eom.cable, eom.y0 + st.s[:nd])
-        else:
-            # eq. 15 at t0
-            P = eom.F0 + eom.FL * np.sin(eom.omega * t0) - eom.C @ st.s[nd : 2 * nd] - eom.mass * st.s[2 * nd :]
-        c = eom.cable
-        st.extra.update(P=np.array(P, dtype=float), t0=t0, i=0, ztol=1e-12 * max(c.chord_length, 1.0))
         st.wk = eom.workspaces()
+        start_events(eom, st)
+        c = eom.cable
+        st.extra.update(P=self._force(eom, st), t0=t0, i=0, ztol=1e-12 * max(c.chord_length, 1.0), eom=eom)
         return st
 
+    @staticmethod
+    def _force(eom, st):
+        """The internal force at the state: ``P(y)`` of the current segment modes (exact) or eq. 15."""
+        nd = eom.n_dof
+        if eom.exact:
+            c = eom.cable
+            P, K = np.empty(nd), np.empty((nd, nd))
+            kn.exact_force_and_stiffness(eom.y0 + st.s[:nd], c.S, c.EA, c.L, c.H, P, K, st.wk[0][4])
+            return P
+        return eom.F0 + eom.FL * np.sin(eom.omega * st.t) - eom.C @ st.s[nd : 2 * nd] - eom.mass * st.s[2 * nd :]
+
     def advance(self, prm, state, t_end, t_out, out):
-        am, af, beta, gamma = self._coefficients()
-        t0, i = state.extra["t0"], state.extra["i"]
-        nsteps = max(int(np.ceil((t_end - t0) / self.dt - 1e-9)) - i, 0)
-        i_new, j, code = _galpha_advance(
-            prm, state.s, state.extra["P"], state.warm, *state.wk, t0, self.dt, i, nsteps,
-            am, af, beta, gamma, t_out, out, state.extra["ztol"], 25,
-        )
-        state.extra["i"] = i_new
-        state.t = t0 + i_new * self.dt
-        return j, code
+        ex = state.extra
+        coef = np.array(self._coefficients())
+        i_end = max(int(np.ceil((t_end - ex["t0"]) / self.dt - 1e-9)), ex["i"])
+        written = 0
+        while True:
+            i, t, j, code, k = _galpha_advance(
+                prm, state.s, ex["P"], state.warm, *state.wk, ex["evw"], ex["track"], ex["t0"], self.dt, ex["i"], i_end,
+                state.t, coef, t_out[written:], out[written:], ex["ztol"], 25,
+            )
+            written += j
+            ex["i"], state.t = i, t
+            if code != kn.OK or k < 0:
+                return written, code
+            transition(state, k, t)
+            ex["P"][:] = self._force(ex["eom"], state)
 
 
 @dataclass(frozen=True)

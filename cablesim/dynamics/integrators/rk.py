@@ -16,64 +16,105 @@ import numpy as np
 from numba import njit
 
 from .. import kernels as kn
-from ..equations import rate
+from ..equations import consistent_acceleration, rate
 from .base import Integrator, IntegratorState, hermite
+from .events import locate_event, start_events, transition
 
 
 def _start(eom, s0, t0) -> IntegratorState:
     """State of an explicit scheme at ``t0``, with the rate there (``extra['fa']``, ``['code']``)."""
     st = IntegratorState(t=t0, s=np.array(s0, dtype=float), warm=np.array(eom.F1, dtype=float))
     st.wk = eom.workspaces()
+    start_events(eom, st)
     fa = np.empty_like(st.s)
     code = rate(eom.params(), t0, st.s, st.warm, fa, *st.wk)
     st.extra.update(fa=fa, code=code)
     return st
 
 
+def _after_event(prm, state, k, t):
+    """Change segment k's mode at t and restart there: ``y''`` from eq. 15 (so that the
+    interpolation error of the cut step does not persist as a load, docs/theory.md section 6)
+    and the rate of the new modes."""
+    transition(state, k, t)
+    consistent_acceleration(prm, t, state.s, state.wk[0])
+    return rate(prm, t, state.s, state.warm, state.extra["fa"], *state.wk)
+
+
 @njit(cache=True)
-def _rk4_advance(prm, s, fa, warm, wk, awk, t0, h, i0, nsteps, t_out, out):
+def _rk4_step(prm, s, fa, warm, wk, awk, t, h, k2, k3, k4, tmp, snew):
+    """One classical Runge-Kutta step of size h from ``(t, s)`` (rate ``fa``) into ``snew``."""
     n = s.size
-    k2 = np.empty(n)
-    k3 = np.empty(n)
-    k4 = np.empty(n)
-    fb = np.empty(n)
-    tmp = np.empty(n)
-    snew = np.empty(n)
+    for q in range(n):
+        tmp[q] = s[q] + 0.5 * h * fa[q]
+    st = rate(prm, t + 0.5 * h, tmp, warm, k2, wk, awk)
+    if st != kn.OK:
+        return st
+    for q in range(n):
+        tmp[q] = s[q] + 0.5 * h * k2[q]
+    st = rate(prm, t + 0.5 * h, tmp, warm, k3, wk, awk)
+    if st != kn.OK:
+        return st
+    for q in range(n):
+        tmp[q] = s[q] + h * k3[q]
+    st = rate(prm, t + h, tmp, warm, k4, wk, awk)
+    if st != kn.OK:
+        return st
+    for q in range(n):
+        snew[q] = s[q] + h / 6.0 * (fa[q] + 2.0 * k2[q] + 2.0 * k3[q] + k4[q])
+    return kn.OK
+
+
+@njit(cache=True)
+def _rk4_advance(prm, s, fa, warm, wk, awk, evw, track, t0, h, i, i_end, t, t_out, out):
+    """Steps on the grid ``t0 + i h`` up to step ``i_end``, from ``t`` (inside step i after an
+    event). Returns ``(i, t, written, status, segment)``; ``segment >= 0``: it changes mode at t
+    (the state is there, the step split)."""
+    n = s.size
+    k2, k3, k4, fb, tmp, snew = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     j = 0
-    for i in range(i0, i0 + nsteps):
-        ta = t0 + i * h
+    while i < i_end:
         tb = t0 + (i + 1) * h
-        for q in range(n):
-            tmp[q] = s[q] + 0.5 * h * fa[q]
-        st = rate(prm, ta + 0.5 * h, tmp, warm, k2, wk, awk)
+        if tb - t <= 1e-9 * h:  # an event ended at the grid point
+            while j < t_out.size and t_out[j] <= tb + 1e-9 * h:
+                out[j] = s
+                j += 1
+            t = tb
+            i += 1
+            continue
+        st = _rk4_step(prm, s, fa, warm, wk, awk, t, tb - t, k2, k3, k4, tmp, snew)
+        if st == kn.OK:
+            st = rate(prm, tb, snew, warm, fb, wk, awk)
         if st != kn.OK:
-            return i, j, st
-        for q in range(n):
-            tmp[q] = s[q] + 0.5 * h * k2[q]
-        st = rate(prm, ta + 0.5 * h, tmp, warm, k3, wk, awk)
-        if st != kn.OK:
-            return i, j, st
-        for q in range(n):
-            tmp[q] = s[q] + h * k3[q]
-        st = rate(prm, tb, tmp, warm, k4, wk, awk)
-        if st != kn.OK:
-            return i, j, st
-        for q in range(n):
-            snew[q] = s[q] + h / 6.0 * (fa[q] + 2.0 * k2[q] + 2.0 * k3[q] + k4[q])
-        st = rate(prm, tb, snew, warm, fb, wk, awk)
-        if st != kn.OK:
-            return i, j, st
+            return i, t, j, st, -1
+        if track:
+            te, k = locate_event(prm, t, tb, s, snew, wk[4], evw)
+            if k >= 0:
+                if te > t:  # redo the step up to the event, in the modes valid there
+                    st = _rk4_step(prm, s, fa, warm, wk, awk, t, te - t, k2, k3, k4, tmp, snew)
+                    if st == kn.OK:
+                        st = rate(prm, te, snew, warm, fb, wk, awk)
+                    if st != kn.OK:
+                        return i, t, j, st, -1
+                    while j < t_out.size and t_out[j] <= te:
+                        hermite(t, te, s, snew, fa, fb, t_out[j], out[j])
+                        j += 1
+                    s[:] = snew
+                return i, te, j, kn.OK, k
         while j < t_out.size and t_out[j] <= tb + 1e-9 * h:
-            hermite(ta, tb, s, snew, fa, fb, t_out[j], out[j])
+            hermite(t, tb, s, snew, fa, fb, t_out[j], out[j])
             j += 1
         s[:] = snew
         fa[:] = fb
-    return i0 + nsteps, j, kn.OK
+        t = tb
+        i += 1
+    return i, t, j, kn.OK, -1
 
 
 @dataclass(frozen=True)
 class RK4(Integrator):
-    """Classical fourth-order Runge-Kutta with a fixed step ``dt`` (s)."""
+    """Classical fourth-order Runge-Kutta with a fixed step ``dt`` (s); a step in which a segment
+    changes mode is split at the event."""
 
     dt: float
 
@@ -88,14 +129,21 @@ class RK4(Integrator):
         return st
 
     def advance(self, prm, state, t_end, t_out, out):
-        if state.extra["code"] != kn.OK:
-            return 0, state.extra["code"]
-        t0, i = state.extra["t0"], state.extra["i"]
-        nsteps = max(int(np.ceil((t_end - t0) / self.dt - 1e-9)) - i, 0)
-        i_new, j, code = _rk4_advance(prm, state.s, state.extra["fa"], state.warm, *state.wk, t0, self.dt, i, nsteps, t_out, out)
-        state.extra["i"] = i_new
-        state.t = t0 + i_new * self.dt
-        return j, code
+        ex = state.extra
+        if ex["code"] != kn.OK:
+            return 0, ex["code"]
+        i_end = max(int(np.ceil((t_end - ex["t0"]) / self.dt - 1e-9)), ex["i"])
+        written, code = 0, kn.OK
+        while True:
+            i, t, j, code, k = _rk4_advance(prm, state.s, ex["fa"], state.warm, *state.wk, ex["evw"], ex["track"],
+                                            ex["t0"], self.dt, ex["i"], i_end, state.t, t_out[written:], out[written:])
+            written += j
+            ex["i"], state.t = i, t
+            if code != kn.OK or k < 0:
+                return written, code
+            code = _after_event(prm, state, k, t)
+            if code != kn.OK:
+                return written, code
 
 
 # Dormand-Prince 5(4) coefficients.
@@ -111,7 +159,7 @@ _E = np.array([71 / 57600, 0.0, -71 / 16695, 71 / 1920, -17253 / 339200, 22 / 52
 
 
 @njit(cache=True)
-def _dopri_advance(prm, s, fa, warm, wk, awk, t, h, t_end, rtol, atol, h_max, t_out, out, A, Cc, E):
+def _dopri_advance(prm, s, fa, warm, wk, awk, evw, track, t, h, t_end, rtol, atol, h_max, t_out, out, A, Cc, E):
     n = s.size
     K = np.empty((7, n))
     tmp = np.empty(n)
@@ -140,7 +188,7 @@ def _dopri_advance(prm, s, fa, warm, wk, awk, t, h, t_end, rtol, atol, h_max, t_
             last_bad = failed
             h *= 0.25
             if h < h_min:
-                return t, h, j, failed
+                return t, h, j, failed, -1
             continue
         snew[:] = tmp  # stage 7 is evaluated at the 5th-order solution (FSAL)
         err = 0.0
@@ -153,6 +201,16 @@ def _dopri_advance(prm, s, fa, warm, wk, awk, t, h, t_end, rtol, atol, h_max, t_
         err = np.sqrt(err / n)
         if err <= 1.0:
             tb = t + h
+            if track:
+                te, k = locate_event(prm, t, tb, s, snew, wk[4], evw)
+                if k >= 0:  # cut the step at the event: the state there from the interpolant
+                    while j < t_out.size and t_out[j] <= te:
+                        hermite(t, tb, s, snew, fa, K[6], t_out[j], out[j])
+                        j += 1
+                    hermite(t, tb, s, snew, fa, K[6], te, tmp)
+                    s[:] = tmp
+                    warm[:] = warm_try
+                    return te, h, j, kn.OK, k
             while j < t_out.size and t_out[j] <= tb:
                 hermite(t, tb, s, snew, fa, K[6], t_out[j], out[j])
                 j += 1
@@ -166,8 +224,8 @@ def _dopri_advance(prm, s, fa, warm, wk, awk, t, h, t_end, rtol, atol, h_max, t_
         else:
             h *= max(0.2, 0.9 * err ** (-0.2))
             if h < h_min:
-                return t, h, j, kn.STEP_UNDERFLOW
-    return t, h, j, kn.OK
+                return t, h, j, kn.STEP_UNDERFLOW, -1
+    return t, h, j, kn.OK, -1
 
 
 @dataclass(frozen=True)
@@ -206,12 +264,19 @@ class DOPRI5(Integrator):
         return st
 
     def advance(self, prm, state, t_end, t_out, out):
-        if state.extra["code"] != kn.OK:
-            return 0, state.extra["code"]
-        t, h, j, code = _dopri_advance(
-            prm, state.s, state.extra["fa"], state.warm, *state.wk, state.t, state.extra["h"], t_end,
-            self.rtol, state.extra["atol"], self.dt_max, t_out, out, _A, _C, _E,
-        )
-        state.t = t
-        state.extra["h"] = h
-        return j, code
+        ex = state.extra
+        if ex["code"] != kn.OK:
+            return 0, ex["code"]
+        written = 0
+        while True:
+            t, h, j, code, k = _dopri_advance(
+                prm, state.s, ex["fa"], state.warm, *state.wk, ex["evw"], ex["track"], state.t, ex["h"], t_end,
+                self.rtol, ex["atol"], self.dt_max, t_out[written:], out[written:], _A, _C, _E,
+            )
+            written += j
+            state.t, ex["h"] = t, h
+            if code != kn.OK or k < 0:
+                return written, code
+            code = _after_event(prm, state, k, t)
+            if code != kn.OK:
+                return written, code

@@ -1,0 +1,162 @@
+"""Slack onsets and re-tightenings of the exact analysis, located inside the integrators.
+
+A segment is taut or slack (its *mode*, ``wk[4]`` of :func:`cablesim.dynamics.equations.workspace`):
+within a step the vector field of the current modes is smooth, a taut segment acting as a linear
+spring and a slack one contributing nothing. After every step the gap ``g = l - S`` of each
+segment is sampled on the step's cubic Hermite interpolant of ``z`` (``NSAMP`` points). Where a
+taut segment's gap turns negative or a slack one's positive, the crossing is located by the
+Illinois method on the interpolant to :data:`T_TOL` s, the step is cut there and the integration
+restarts in the new modes, so no step straddles the kink of ``T = EA max(l - S, 0) / S``.
+
+Chatter: a segment that changes mode again within :data:`CHATTER_WINDOW` of its previous
+transition keeps its new mode for that window (its transitions there are not located; the
+first transition found after the window is taken at the window's end). Such holds are counted.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .. import kernels as kn
+
+#: Samples of the gaps per step.
+NSAMP = 4
+#: Width of the bracket at which a located event is accepted, s.
+T_TOL = 1e-10
+#: A segment changing mode again within this time (s) of its last transition keeps its mode for it.
+CHATTER_WINDOW = 1e-6
+#: How chattering segments are handled, in words (stored with every result).
+CHATTER_TEXT = (
+    f"chatter: a segment changing mode within {CHATTER_WINDOW:g} s of its previous transition keeps its new mode "
+    f"for {CHATTER_WINDOW:g} s (transitions in that window are not located; one found after it is taken "
+    "at the window's end)"
+)
+
+
+@njit(cache=True)
+def _config_at(prm, t, ta, tb, sa, sb, y):
+    """``y = y0 + z(t)`` from the cubic Hermite interpolant of z (values and velocities)."""
+    nd = y.size
+    h = tb - ta
+    th = (t - ta) / h
+    th2 = th * th
+    th3 = th2 * th
+    h00 = 2.0 * th3 - 3.0 * th2 + 1.0
+    h10 = th3 - 2.0 * th2 + th
+    h01 = -2.0 * th3 + 3.0 * th2
+    h11 = th3 - th2
+    y0 = prm[10]
+    for i in range(nd):
+        y[i] = y0[i] + h00 * sa[i] + h10 * h * sa[nd + i] + h01 * sb[i] + h11 * h * sb[nd + i]
+
+
+@njit(cache=True)
+def _signed_gap(prm, t, ta, tb, sa, sb, k, y, sign):
+    _config_at(prm, t, ta, tb, sa, sb, y)
+    return sign * kn.segment_gap(y, k, prm[1], prm[3], prm[4])
+
+
+@njit(cache=True)
+def _root(prm, ta, tb, sa, sb, k, lo, hi, y, sign):
+    """Illinois on ``sign * g_k`` (>= 0 at lo, < 0 at hi); returns the bracket's end past the root."""
+    flo = _signed_gap(prm, lo, ta, tb, sa, sb, k, y, sign)
+    if flo < 0.0:
+        return lo  # already across at the start of the bracket (end of a chatter hold)
+    fhi = _signed_gap(prm, hi, ta, tb, sa, sb, k, y, sign)
+    side = 0
+    for _ in range(200):
+        if hi - lo <= T_TOL:
+            break
+        c = (lo * fhi - hi * flo) / (fhi - flo)
+        if not (lo < c < hi):
+            c = 0.5 * (lo + hi)
+        fc = _signed_gap(prm, c, ta, tb, sa, sb, k, y, sign)
+        if fc < 0.0:
+            hi, fhi = c, fc
+            if side == -1:
+                flo *= 0.5
+            side = -1
+        else:
+            lo, flo = c, fc
+            if side == 1:
+                fhi *= 0.5
+            side = 1
+    return hi
+
+
+@njit(cache=True)
+def _update_peaks(prm, t, g, peak, peak_t):
+    S, EA = prm[1], prm[2]
+    for k in range(S.size):
+        T = EA * max(g[k], 0.0) / S[k]
+        if T > peak[k]:
+            peak[k] = T
+            peak_t[k] = t
+
+
+@njit(cache=True)
+def locate_event(prm, ta, tb, sa, sb, taut, evw):
+    """The first mode change in ``(ta, tb]`` on the step's interpolant: ``(t_event, segment)``,
+    or ``(tb, -1)``. ``sa``, ``sb`` start with ``(z, y')``; ``evw`` is :func:`event_workspace`.
+    Peak tensions ``EA max(g, 0) / S`` are tracked at the samples."""
+    hold, y, g, peak, peak_t = evw
+    S, L, H = prm[1], prm[3], prm[4]
+    t_prev = ta
+    for i in range(1, NSAMP + 1):
+        ts = tb if i == NSAMP else ta + (tb - ta) * i / NSAMP
+        _config_at(prm, ts, ta, tb, sa, sb, y)
+        kn.segment_gaps(y, S, L, H, g)
+        best_t = np.inf
+        best_k = -1
+        for k in range(S.size):
+            sign = 1.0 if taut[k] > 0.5 else -1.0
+            if hold[k] < ts and sign * g[k] < -1e-14 * S[k]:
+                te = _root(prm, ta, tb, sa, sb, k, max(t_prev, hold[k]), ts, y, sign)
+                if te < best_t:
+                    best_t, best_k = te, k
+        if best_k >= 0:
+            _config_at(prm, best_t, ta, tb, sa, sb, y)
+            kn.segment_gaps(y, S, L, H, g)
+            _update_peaks(prm, best_t, g, peak, peak_t)
+            return best_t, best_k
+        _update_peaks(prm, ts, g, peak, peak_t)
+        t_prev = ts
+    return tb, -1
+
+
+def event_workspace(n_segments: int, n_dof: int):
+    """``(hold, y, g, peak, peak_t)``: chatter holds (s), scratch configuration and gaps, and the
+    peak tension of each segment (N) with its time (s)."""
+    return (np.full(n_segments, -np.inf), np.empty(n_dof), np.empty(n_segments),
+            np.zeros(n_segments), np.zeros(n_segments))
+
+
+def start_events(eom, state) -> bool:
+    """Set up slack tracking in ``state`` (modes from the initial gaps); whether it is on."""
+    c = eom.cable
+    taut = state.wk[0][4]
+    taut[:] = 1.0
+    evw = event_workspace(c.n_segments, eom.n_dof)
+    on = eom.continues_slack
+    if on:
+        kn.tension_only_mask(eom.y0 + state.s[: eom.n_dof], c.S, c.L, c.H, taut)
+        g = np.empty(c.n_segments)
+        kn.segment_gaps(eom.y0 + state.s[: eom.n_dof], c.S, c.L, c.H, g)
+        evw[3][:] = c.EA * np.maximum(g, 0.0) / c.S
+        evw[4][:] = state.t
+    state.extra.update(track=on, evw=evw, events=[], last_event=np.full(c.n_segments, -np.inf),
+                       chatter_holds=0, initially_slack=taut < 0.5)
+    return on
+
+
+def transition(state, k: int, t: float) -> None:
+    """Segment ``k`` (0-based) changes mode at ``t``: flip it, record the event, hold a chatterer."""
+    ex = state.extra
+    taut = state.wk[0][4]
+    taut[k] = 0.0 if taut[k] > 0.5 else 1.0
+    ex["events"].append((float(t), int(k), "taut" if taut[k] > 0.5 else "slack"))
+    if t - ex["last_event"][k] < CHATTER_WINDOW:
+        ex["evw"][0][k] = t + CHATTER_WINDOW
+        ex["chatter_holds"] += 1
+    ex["last_event"][k] = t

@@ -141,3 +141,26 @@ def test_bad_sections_are_refused_cleanly(invoke_cli, setting, words):
     res = invoke_cli(*args)
     assert res.returncode == 2 and words in res.stderr and "Traceback" not in res.stderr
     assert not Path("x.h5").exists()
+
+
+def test_branch_ends_at_a_grazing_orbit_where_a_segment_goes_slack():
+    """Forced ten times harder near the primary resonance the harmonic branch folds and then
+    reaches orbits on which a segment's tension falls to zero: the branch stops there and records
+    a grazing point. Independently, the last orbit integrated over one period by the time
+    integrator (slack: stop) comes within a few per cent of zero tension."""
+    from cablesim.dynamics.simulate import simulate
+    from cablesim.analyses.setup import make_integrator
+
+    case = cablesim.load_case(CONFIG, overrides=[
+        "continuation={omega: {start: 2.0, stop: 3.0}, gamma: 10.0, channels: [z2, z4]}", "slack=stop"])
+    run = cablesim.continuation(case)
+    graze = [b for b in run.result.bifurcations if b.kind == "grazing"]
+    assert len(graze) == 1 and "slack" in run.result.branches[graze[0].branch].end
+    b = run.result.branches[graze[0].branch]
+    j = int(np.argmin(np.abs(b.parameter - graze[0].parameter)))
+    static = run_static(case)
+    eom = build_equations(case, static, omega=float(b.omega[j]), load_scale=10.0)
+    s0 = eom.initial_state(z0=b.state[j, :4], v0=b.state[j, 4:])
+    T = 2.0 * np.pi / float(b.omega[j])
+    hist = simulate(eom, make_integrator(case.integrator, eom, float(b.omega[j])), T, T / 400, s0=s0)
+    assert hist.T.min() < 0.05 * static.T0.min()

@@ -72,7 +72,7 @@ class BranchResult:
 @dataclass(frozen=True)
 class BifurcationResult:
     """A located bifurcation: ``kind`` (``fold``, ``period-doubling``, ``neimark-sacker``,
-    ``branch-point``), where (``parameter``, ``omega``), on which ``branch`` (index), the orbit's
+    ``branch-point``, or ``grazing``: the last orbit before a segment goes slack), where (``parameter``, ``omega``), on which ``branch`` (index), the orbit's
     ``period`` and ``amplitude`` per channel (m), the critical ``multiplier``, and whether the
     location converged (``located``) and its multipliers passed the accuracy checks (``trusted``)."""
 
@@ -129,6 +129,23 @@ def _end_text(br) -> str:
     if failure is not None and failure.name in _FAILURE_TEXT:
         text += f" ({_FAILURE_TEXT[failure.name]})"
     return text
+
+
+def _grazing_points(diagram, parameter: str, fixed: float, idx: np.ndarray) -> list:
+    """A branch that ended because a segment went slack ends at a *grazing* orbit: its last
+    orbit, whose smallest tension is about to reach zero (orbits with slack intervals are not
+    followed). One record per such branch, at its last orbit."""
+    out = []
+    for k, br in enumerate(diagram.branches):
+        failure = getattr(br, "failure", None)
+        if not br.points or failure is None or failure.name != "SLACK":
+            continue
+        p = br.points[-1]
+        out.append(BifurcationResult(
+            kind="grazing", parameter=float(p.parameter), omega=float(p.omega),
+            branch=k, period=int(br.period), amplitude=np.asarray(p.amplitude)[idx],
+            multiplier=complex(p.multipliers[0]), located=False, trusted=bool(p.trusted)))
+    return out
 
 
 def _branch(k: int, br, parameter: str, fixed: float, idx: np.ndarray) -> BranchResult:
@@ -229,6 +246,7 @@ def run_continuation(
         )
         for b in diagram.bifurcations
     ]
+    bifs += _grazing_points(diagram, spec.parameter, fixed, idx)
     stats = dict(diagram.stats)
     stats["wall"] = time.perf_counter() - t0
     return ContinuationResult(

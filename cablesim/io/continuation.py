@@ -23,7 +23,7 @@ from ..errors import CablesimError
 from .hdf5 import atomic_h5, attr_text, put, stamp
 
 #: Bifurcation kinds, in the order the files store their names.
-KINDS = ("fold", "period-doubling", "neimark-sacker", "branch-point")
+KINDS = ("fold", "period-doubling", "neimark-sacker", "branch-point", "grazing")
 
 
 def write_continuation(path: str | Path, res) -> Path:

@@ -25,6 +25,7 @@ BIFURCATION_STYLE = {
     "period-doubling": ("s", "PD", "period doubling (multiplier -1)"),
     "neimark-sacker": ("D", "NS", "Neimark-Sacker (complex pair)"),
     "branch-point": ("o", "BP", "branch point"),
+    "grazing": ("v", "G", "grazing (a segment's tension reaches zero)"),
 }
 
 

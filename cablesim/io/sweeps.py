@@ -155,13 +155,15 @@ def _read_group(where, name: str, P: int, G: int | None, order, bad):
         raise bad(f"{name}/amplitude is missing")
     raw = {}
     C = None
-    for key in ("amplitude", "halfrange", "response_frequency", "period", "steady", "done", "failed"):
+    for key in ("amplitude", "halfrange", "response_frequency", "period", "steady", "done", "failed", "slack_fraction"):
         if key not in where:
             continue
         arr = np.asarray(where[key][()])
         if key == "amplitude":
             C = arr.shape[-1] if arr.ndim >= 2 else 0
         tail = (P, C) if key in ("amplitude", "halfrange", "response_frequency") else (P,)
+        if key == "slack_fraction":  # per segment: its own second axis
+            tail = (P, arr.shape[-1]) if arr.ndim >= 2 else (P,)
         if G is not None and arr.ndim == len(tail):  # gamma axis left out for G = 1
             if G != 1:
                 raise bad(f"{name}/{key} has no gamma axis but /sweep/gamma has {G} values")
@@ -182,9 +184,17 @@ def _curve_data(data: dict, P: int) -> dict:
     data["period"] = data["period"].astype(int) if "period" in data else np.ones(P, dtype=int)
     data["steady"] = data["steady"].astype(bool) if "steady" in data else np.ones(P, dtype=bool)
     data["failed"] = data["failed"].astype(bool) if "failed" in data else np.zeros(P, dtype=bool)
+    # a point on which some segment went slack (at any time of its integration)
+    slack = data.get("slack_fraction")
+    data["went_slack"] = (np.nan_to_num(slack.astype(float)) > 0).any(axis=1) if slack is not None and slack.ndim == 2 \
+        else np.zeros(P, dtype=bool)
     finite = np.all(np.isfinite(amp), axis=1)
     data["done"] = (data["done"].astype(bool) & finite) if "done" in data else finite
     data["failed"] = data["failed"].astype(bool) if "failed" in data else np.zeros(P, dtype=bool)
+    # a point on which some segment went slack (at any time of its integration)
+    slack = data.get("slack_fraction")
+    data["went_slack"] = (np.nan_to_num(slack.astype(float)) > 0).any(axis=1) if slack is not None and slack.ndim == 2 \
+        else np.zeros(P, dtype=bool)
     return data
 
 

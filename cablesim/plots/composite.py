@@ -458,7 +458,7 @@ def _draw_fdr(fig_spec, infos, png: Path, title: str) -> Path:
     n = len(chans)
     fig = plt.figure(figsize=(10.5, 1.3 + 2.8 * n), layout="constrained")
     axes = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
-    markers = np.zeros(3, dtype=bool)  # not steady, subharmonic, stopped early
+    markers = np.zeros(4, dtype=bool)  # not steady, subharmonic, stopped early, went slack
     for ax, name in zip(axes, chans):
         for k, sw in enumerate(sweeps):
             if name not in sw.channels:

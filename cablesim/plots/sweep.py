@@ -94,6 +94,10 @@ def draw_curve(ax, omega, curve, c: int, quantity: str, color, markevery: int, l
     failed = curve.failed & np.isfinite(values)
     if failed.any():
         ax.plot(omega[failed], values[failed], ls="none", marker="x", ms=6, color="0.4", mew=1.2, zorder=4)
+    went_slack = valid & curve.data["went_slack"] & np.isfinite(values)
+    if went_slack.any():
+        ax.plot(omega[went_slack], values[went_slack], ls="none", marker="s", ms=7, mfc="none", mec="C1", mew=1.0,
+                zorder=4)
     sub = steady & (period >= 2) & np.isfinite(y)
     if sub.any():
         ax.plot(omega[sub], y[sub], ls="none", marker="D", ms=3.5, color="k", zorder=5)
@@ -101,7 +105,7 @@ def draw_curve(ax, omega, curve, c: int, quantity: str, color, markevery: int, l
             ax.annotate(f"1/{period[k]}", (omega[k], y[k]), textcoords="offset points",
                         xytext=(0, 7), ha="center", va="bottom", fontsize=7, color="0.15", zorder=6,
                         bbox=dict(boxstyle="round,pad=0.1", fc="white", ec="none", alpha=0.7))
-    return bool(unsteady.any()), bool(sub.any()), bool(failed.any())
+    return bool(unsteady.any()), bool(sub.any()), bool(failed.any()), bool(went_slack.any())
 
 
 def channel_label(name: str, quantity: str = "amplitude") -> str:
@@ -112,7 +116,7 @@ def channel_label(name: str, quantity: str = "amplitude") -> str:
 
 def _draw_channel(ax, sweep: StoredSweep, c: int, quantity: str, color_of, markevery: int):
     """Every curve of channel ``c``; which markers were drawn (see :func:`draw_curve`)."""
-    drawn = np.zeros(3, dtype=bool)
+    drawn = np.zeros(4, dtype=bool)
     for curve in sweep.curves:
         drawn |= draw_curve(ax, sweep.omega, curve, c, quantity, color_of(curve), markevery)
     ax.set_ylim(bottom=0.0)
@@ -212,7 +216,7 @@ def plot_sweep(h5_path, png_path=None, channels=None, quantity: str = "amplitude
 
     n = len(chans)
     fig, axes = figure_grid(n, 1, 8.6, 2.6, sharex=True, top=0.8 if modal_k else 0.65, hspace=0.3, left=1.4)
-    markers = np.zeros(3, dtype=bool)  # not steady, subharmonic, stopped early
+    markers = np.zeros(4, dtype=bool)  # not steady, subharmonic, stopped early, went slack
     for ax, c in zip(axes[:, 0], chans):
         markers |= _draw_channel(ax, sweep, c, quantity, color_of, markevery)
         for _, w in modal_k:
@@ -258,7 +262,7 @@ def plot_sweep(h5_path, png_path=None, channels=None, quantity: str = "amplitude
     return save_atomic(fig, png_path)
 
 
-def marker_handles(any_unsteady: bool, any_sub: bool, any_failed: bool = False) -> list:
+def marker_handles(any_unsteady: bool, any_sub: bool, any_failed: bool = False, any_slack: bool = False) -> list:
     """Legend entries for the point markers of a frequency-response plot (those present)."""
     from matplotlib.lines import Line2D
 
@@ -272,4 +276,7 @@ def marker_handles(any_unsteady: bool, any_sub: bool, any_failed: bool = False) 
     if any_failed:
         handles.append(Line2D([], [], ls="none", marker="x", ms=6, color="0.4", mew=1.2,
                               label="stopped early (a segment went slack):\npartial value, not a peak"))
+    if any_slack:
+        handles.append(Line2D([], [], ls="none", marker="s", ms=7, mfc="none", mec="C1", mew=1.0,
+                              label="a segment went slack during the run\n(slack_fraction, peak_tension in the file)"))
     return handles

@@ -7,6 +7,7 @@ from typing import Any, Literal
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic_core import PydanticCustomError
 
 from ..names import CONTINUATION_PARAMETERS, DIRECTIONS, INTEGRATORS
 
@@ -25,6 +26,24 @@ class StrictModel(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
+#: Stands for a list that is required unless its shorthand is given (see :func:`_require`).
+_ABSENT = "\x00absent"
+
+
+def _require(data, key: str, alternatives: tuple[str, ...]):
+    """Mark ``key`` absent when neither it nor its shorthand is given, so that the field itself
+    reports "is required" beside any other problem of the section."""
+    if isinstance(data, dict) and key not in data and not any(k in data for k in alternatives):
+        return {**data, key: _ABSENT}
+    return data
+
+
+def _absent_is_missing(v):
+    if isinstance(v, str) and v == _ABSENT:
+        raise PydanticCustomError("missing", "Field required")
+    return v
+
+
 def _finite(v: float, what: str) -> float:
     if not math.isfinite(v):
         raise ValueError(f"{what} must be a finite number")
@@ -32,20 +51,40 @@ def _finite(v: float, what: str) -> float:
 
 
 class CableSpec(StrictModel):
-    """Geometry, axial rigidity and masses (section ``cable:``)."""
+    """Geometry, axial rigidity and masses (section ``cable:``).
+
+    The segments are given as ``S`` (n+1 natural lengths) or as the shorthand ``length`` (total
+    natural length) with ``nodes`` (n, equal segments); the masses as ``masses`` (n values) or
+    as ``mass_per_length`` (kg per metre of natural length, each node carrying half of each
+    adjacent segment). The case expands the shorthand into ``S`` and ``masses``.
+    """
 
     L: float = Field(gt=0, description="horizontal distance A->B, m")
     H: float = Field(description="vertical distance A->B, m, positive = B below A")
-    S: tuple[float, ...] = Field(min_length=2, description="natural segment lengths, m (n+1)")
+    S: tuple[float, ...] | None = Field(default=None, min_length=2, description="natural segment lengths, m (n+1)")
+    length: float | None = Field(default=None, gt=0, description="total natural length, m (with nodes)")
+    nodes: int | None = Field(default=None, ge=1, le=1_000_000, description="interior nodes n (with length)")
     EA: float | None = Field(default=None, gt=0, description="axial rigidity, N")
     E: float | None = Field(default=None, gt=0, description="Young's modulus, N/m^2")
     A: float | None = Field(default=None, gt=0, description="cross-section area, m^2")
-    masses: tuple[float, ...] = Field(min_length=1, description="lumped nodal masses, kg (n)")
+    masses: tuple[float, ...] | None = Field(default=None, min_length=1, description="lumped nodal masses, kg (n)")
+    mass_per_length: float | None = Field(default=None, gt=0, description="kg per m of natural length")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _required(cls, data):
+        data = _require(data, "S", ("length", "nodes"))
+        return _require(data, "masses", ("mass_per_length",))
+
+    @field_validator("S", "masses", mode="before")
+    @classmethod
+    def _given(cls, v):
+        return _absent_is_missing(v)
 
     @field_validator("S", "masses")
     @classmethod
     def _positive(cls, v, info):
-        for i, x in enumerate(v):
+        for i, x in enumerate(v or ()):
             if not math.isfinite(x) or x <= 0:
                 raise ValueError(f"every value must be a positive finite number; item {i + 1} is {x}")
         return v
@@ -62,12 +101,45 @@ class CableSpec(StrictModel):
                 f"the axial rigidity E*A = {ea:g} N is out of range; give EA (N) or E and A whose "
                 "product is a positive finite number"
             )
+        self._expand_segments()
+        self._expand_masses()
         if len(self.masses) != len(self.S) - 1:
             raise ValueError(
                 f"cable.masses has {len(self.masses)} values but cable.S has {len(self.S)} "
                 f"segments: n+1 segments need n = {len(self.S) - 1} masses, one per interior node"
             )
         return self
+
+    def _expand_segments(self) -> None:
+        short = (self.length is not None, self.nodes is not None)
+        if self.S is not None and any(short):
+            raise ValueError("`cable.S` and `cable.length`/`cable.nodes` both give the segments; give one or the other")
+        if self.S is None and not any(short):
+            raise ValueError("`cable.S` is required; add it (n+1 natural segment lengths, m), or give the "
+                             "total natural length as cable.length with the number of interior nodes as cable.nodes")
+        if self.S is None and not all(short):
+            missing = "cable.nodes" if short[0] else "cable.length"
+            raise ValueError(f"`{missing}` is required with the shorthand cable.length and cable.nodes; add it")
+        if self.S is None:
+            seg = float(self.length) / (self.nodes + 1)
+            object.__setattr__(self, "S", (seg,) * (self.nodes + 1))
+
+    def _expand_masses(self) -> None:
+        if self.masses is not None and self.mass_per_length is not None:
+            raise ValueError("`cable.masses` and `cable.mass_per_length` both give the masses; give one "
+                             "(extra point masses go in loads.point)")
+        if self.masses is None and self.mass_per_length is None:
+            raise ValueError("`cable.masses` is required; add it (n lumped masses, kg), or give "
+                             "cable.mass_per_length (kg/m of natural length)")
+        if self.masses is None:
+            S = np.asarray(self.S, dtype=float)
+            m = 0.5 * self.mass_per_length * (S[:-1] + S[1:])
+            object.__setattr__(self, "masses", tuple(float(x) for x in m))
+
+    @property
+    def shorthand(self) -> bool:
+        """True if the segments or the masses were given by the shorthand."""
+        return self.length is not None or self.mass_per_length is not None
 
     @property
     def axial_rigidity(self) -> float:
@@ -80,11 +152,42 @@ class CableSpec(StrictModel):
         return len(self.S) - 1
 
 
-class LoadsSpec(StrictModel):
-    """Sustained and harmonic nodal loads (section ``loads:``), N, 2n values each."""
+class PointLoad(StrictModel):
+    """Loads and an extra mass at one interior node (an item of ``loads.point``)."""
 
-    F0: tuple[float, ...] = Field(description="sustained nodal loads, N")
+    node: int = Field(ge=1, description="interior node, counted from 1 at support A")
+    F: tuple[float, float] | None = Field(default=None, description="sustained load (horizontal, vertical), N")
+    FL: tuple[float, float] | None = Field(default=None, description="peak harmonic load (horizontal, vertical), N")
+    mass: float | None = Field(default=None, ge=0, description="extra lumped mass, kg")
+
+
+class LoadsSpec(StrictModel):
+    """Sustained and harmonic nodal loads (section ``loads:``), N, 2n values each.
+
+    ``F0`` may be left out or completed by the shorthand: ``gravity`` (m/s^2: every node's
+    weight, vertical, down) and ``point`` (loads and extra masses at chosen nodes); the case
+    expands them into ``F0`` and ``FL``.
+    """
+
+    F0: tuple[float, ...] | None = Field(default=None, description="sustained nodal loads, N")
     FL: tuple[float, ...] | None = Field(default=None, description="peak harmonic loads, N")
+    gravity: float | None = Field(default=None, ge=0, description="acceleration of gravity, m/s^2")
+    point: tuple[PointLoad, ...] | None = Field(default=None, description="loads and masses by node")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _required(cls, data):
+        return _require(data, "F0", ("gravity", "point"))
+
+    @field_validator("F0", mode="before")
+    @classmethod
+    def _given(cls, v):
+        return _absent_is_missing(v)
+
+    @property
+    def shorthand(self) -> bool:
+        """True if gravity or point loads were given."""
+        return self.gravity is not None or self.point is not None
 
 
 class DampingSpec(StrictModel):

@@ -94,16 +94,19 @@ def static(
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file [default: runs/<name>/static.h5]"),
     analysis: Optional[Analysis] = typer.Option(None, "--analysis", help="Override the case file's analysis."),
     plot: bool = typer.Option(True, "--plot/--no-plot", help="Also draw the cable as a PNG beside the HDF5 file."),
+    full: bool = typer.Option(False, "--full", help="Print every node, segment and mode (large cables show the first and last)."),
+    matrices: Optional[bool] = typer.Option(None, "--matrices/--no-matrices", help="Store the dense 2n x 2n matrices [default: up to n = 200 nodes]."),
+    all_models: Optional[bool] = typer.Option(None, "--all-models/--chosen-model", help="Compute the inextensible and approximate models too [default: up to n = 300 nodes]."),
 ):
     """Static equilibrium under F0 (inextensible, approximate and exact), modes and damping."""
     from . import api
     from .io.report import static_summary
 
     case = api.load_case(case_file, overrides)
-    run = api.static(case, analysis.value if analysis else None)
-    typer.echo(static_summary(case, run.result))
+    run = api.static(case, analysis.value if analysis else None, all_models=all_models)
+    typer.echo(static_summary(case, run.result, full=full))
     out = _output(case, output, "static")
-    run.to_hdf5(out)
+    run.to_hdf5(out, matrices=matrices)
     msg = f"\nWrote {out}"
     if plot:
         msg += f" and {run.plot(out.with_suffix('.png'))}"

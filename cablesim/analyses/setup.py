@@ -11,6 +11,7 @@ import numpy as np
 
 from ..case import Case, IntegratorSpec
 from ..dynamics.equations import EquationsOfMotion
+from ..dynamics.kernels import band_storage
 from ..dynamics.integrators import INTEGRATORS, DOPRI5, GeneralizedAlpha, Integrator, Newmark, RK4
 from ..errors import CablesimError
 from ..modal import fastest_rate, rayleigh_coefficients
@@ -67,6 +68,11 @@ def build_equations(
         w = static.modes.omega
         a0, a1 = rayleigh_coefficients(w[i - 1], w[j - 1], damping_ratio)
     C = a0 * np.diag(M) + a1 * static.K0
+    C_band = None
+    if static.K0_band is not None:  # exact analysis: K0 is block-tridiagonal, so is C
+        lower = a1 * static.K0_band
+        lower[0] += a0 * M
+        C_band = band_storage(lower)
     inext = static.inextensible
     x0 = inext.x
     return EquationsOfMotion(
@@ -86,6 +92,7 @@ def build_equations(
         a0=float(a0),
         a1=float(a1),
         modal_omega=static.modes.omega.copy(),
+        C_band=C_band,
     )
 
 

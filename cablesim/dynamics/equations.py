@@ -11,7 +11,8 @@ The state integrated is ``s = (z, y', y'')`` with ``z = y - y(0)`` measured from
 equilibrium (so tolerances act on the displacement, not on absolute coordinates).
 
 Numba functions take the model as a tuple ``prm`` built by :meth:`EquationsOfMotion.params`:
-``(model, S, EA, L, H, m, C, F0, FL, w, y0, x0, u0, K0, tol)``.
+``(model, S, EA, L, H, m, C, F0, FL, w, y0, x0, u0, K0, tol)``; ``C`` is dense or, for heavy
+cables, banded (:func:`cablesim.dynamics.kernels.damping_row` multiplies by either).
 """
 
 from __future__ import annotations
@@ -79,10 +80,7 @@ def resisting_from_eq15(prm, t, v, a, P):
     m, C, F0, FL, w = prm[5], prm[6], prm[7], prm[8], prm[9]
     sw = np.sin(w * t)
     for i in range(m.size):
-        acc = F0[i] + FL[i] * sw - m[i] * a[i]
-        for j in range(m.size):
-            acc -= C[i, j] * v[j]
-        P[i] = acc
+        P[i] = F0[i] + FL[i] * sw - m[i] * a[i] - kn.damping_row(C, v, 0, i)
 
 
 @njit(cache=True)
@@ -112,10 +110,7 @@ def rate(prm, t, s, warm, ds, wk, awk):
             return st
     wc = w * np.cos(w * t)
     for i in range(nd):
-        acc = FL[i] * wc - Kv[i]
-        for j in range(nd):
-            acc -= C[i, j] * s[2 * nd + j]
-        acc /= m[i]
+        acc = (FL[i] * wc - Kv[i] - kn.damping_row(C, s, 2 * nd, i)) / m[i]
         if not np.isfinite(acc):
             return kn.NONFINITE
         ds[2 * nd + i] = acc
@@ -156,8 +151,8 @@ def observe(prm, t, s, warm, zc, ze, T, segment_state, awk, split):
     if model == EXACT:
         y = prm[10] + z
         P = np.empty(nd)
-        K = np.empty((nd, nd))
-        segment_state[0] = kn.exact_force_and_stiffness(y, S, EA, L, H, P, K)
+        Kv = np.empty(nd)
+        segment_state[0] = kn.exact_force_and_Kv(y, v, S, EA, L, H, P, Kv)
         kn.exact_tensions(y, S, EA, L, H, T)
         if not split:
             zc[:] = 0.0
@@ -168,7 +163,9 @@ def observe(prm, t, s, warm, zc, ze, T, segment_state, awk, split):
         else:
             zc[:] = x - prm[11]
             ze[:] = z - zc
-        r = m * a + C @ v + P - F
+        r = m * a + P - F
+        for i in range(nd):
+            r[i] += kn.damping_row(C, v, 0, i)
         return np.sqrt(np.sum(r * r)) / f0norm
     P = np.empty(nd)
     resisting_from_eq15(prm, t, v, a, P)
@@ -217,6 +214,9 @@ class EquationsOfMotion:
     modal_omega : ndarray, optional
         Linear modal frequencies about the equilibrium, rad/s, ascending (computed from ``K0``
         and ``mass`` when not given).
+    C_band : ndarray, shape (7, 2n), optional
+        ``C`` in banded storage (:func:`cablesim.dynamics.kernels.band_storage`); when given the
+        compiled kernels multiply by it in O(n) instead of by the dense ``C``.
     """
 
     cable: Cable
@@ -235,6 +235,7 @@ class EquationsOfMotion:
     a0: float = 0.0
     a1: float = 0.0
     modal_omega: np.ndarray | None = None
+    C_band: np.ndarray | None = None
 
     @cached_property
     def frequencies(self) -> np.ndarray:
@@ -270,7 +271,7 @@ class EquationsOfMotion:
             float(c.L),
             float(c.H),
             np.ascontiguousarray(self.mass),
-            np.ascontiguousarray(self.C),
+            np.ascontiguousarray(self.C if self.C_band is None else self.C_band),
             np.ascontiguousarray(self.F0),
             np.ascontiguousarray(self.FL),
             float(self.omega),

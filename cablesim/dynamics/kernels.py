@@ -96,6 +96,39 @@ def exact_force_and_Kv(y, v, S, EA, L, H, P, Kv):
     return slack
 
 
+#: Rows of a damping matrix in banded storage (bandwidth 3: block-tridiagonal 2x2 blocks):
+#: ``C_band[3 + i - j, j] = C[i, j]`` (LAPACK's general band layout). The DOF count is even, so a
+#: (7, 2n) band is never mistaken for a square dense matrix.
+BAND_ROWS = 7
+BAND_HALF = 3
+
+
+@njit(cache=True)
+def damping_row(C, s, off, i):
+    """Row ``i`` of ``C`` times ``s[off:off + nd]``: C dense (nd, nd), O(n), or banded
+    (:data:`BAND_ROWS`, nd), O(1)."""
+    nd = C.shape[1]
+    acc = 0.0
+    if C.shape[0] == BAND_ROWS and nd != BAND_ROWS:
+        for j in range(max(0, i - BAND_HALF), min(nd, i + BAND_HALF + 1)):
+            acc += C[BAND_HALF + i - j, j] * s[off + j]
+    else:
+        for j in range(nd):
+            acc += C[i, j] * s[off + j]
+    return acc
+
+
+def band_storage(lower: np.ndarray) -> np.ndarray:
+    """The (:data:`BAND_ROWS`, nd) banded storage of a symmetric matrix given in lower band form
+    (``lower[d, j] = A[j + d, j]``, d = 0..3)."""
+    nd = lower.shape[1]
+    C = np.zeros((BAND_ROWS, nd))
+    for d in range(min(lower.shape[0], nd)):
+        C[BAND_HALF + d, : nd - d] = lower[d, : nd - d]  # below the diagonal: A[j + d, j]
+        C[BAND_HALF - d, d:] = lower[d, : nd - d]  # above: A[j, j + d]
+    return C
+
+
 @njit(cache=True)
 def exact_force_and_stiffness(y, S, EA, L, H, P, K):
     """Resisting force ``P(y)`` and the assembled tangent stiffness ``K(y)``; slack or -1."""

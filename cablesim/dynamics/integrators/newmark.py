@@ -217,12 +217,15 @@ class GeneralizedAlpha(Integrator):
             # eq. 15 at t0
             P = eom.F0 + eom.FL * np.sin(eom.omega * t0) - eom.C @ st.s[nd : 2 * nd] - eom.mass * st.s[2 * nd :]
         c = eom.cable
-        st.extra.update(P=np.array(P, dtype=float), t0=t0, i=0, ztol=1e-12 * max(c.chord_length, 1.0))
+        st.extra.update(P=np.array(P, dtype=float), t0=t0, i=0, ztol=1e-12 * max(c.chord_length, 1.0),
+                        C=np.ascontiguousarray(eom.C))
         st.wk = eom.workspaces()
         return st
 
     def advance(self, prm, state, t_end, t_out, out):
         am, af, beta, gamma = self._coefficients()
+        if prm[6].shape != state.extra["C"].shape:  # banded damping: this scheme assembles dense
+            prm = prm[:6] + (state.extra["C"],) + prm[7:]
         t0, i = state.extra["t0"], state.extra["i"]
         nsteps = max(int(np.ceil((t_end - t0) / self.dt - 1e-9)) - i, 0)
         i_new, j, code = _galpha_advance(

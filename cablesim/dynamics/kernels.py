@@ -509,3 +509,83 @@ def solve_small(A, b, out, LU):
             acc -= LU[i, j] * out[j]
         out[i] = acc / LU[i, i]
     return True
+
+
+# ----------------------------------------------------------------------------------------------
+# Banded stiffness and solves (heavy cables: O(n) per Newton iteration)
+# ----------------------------------------------------------------------------------------------
+@njit(cache=True)
+def exact_force_and_stiffness_band(y, S, EA, L, H, P, Kb):
+    """:func:`exact_force_and_stiffness` with ``K`` in banded storage
+    (``Kb[BAND_HALF + i - j, j] = K[i, j]``, shape (BAND_ROWS, 2n)); slack segment or -1."""
+    n = S.size - 1
+    P[:] = 0.0
+    Kb[:, :] = 0.0
+    slack = -1
+    for k in range(n + 1):
+        dx, dy = _segment(y, k, n, L, H)
+        l = np.sqrt(dx * dx + dy * dy)
+        e0, e1 = dx / l, dy / l
+        T = EA * (l - S[k]) / S[k]
+        if T <= 0.0 and slack < 0:
+            slack = k
+        ka = EA / S[k]
+        kg = T / l
+        blk = np.empty((2, 2))
+        blk[0, 0] = kg + (ka - kg) * e0 * e0
+        blk[0, 1] = (ka - kg) * e0 * e1
+        blk[1, 0] = blk[0, 1]
+        blk[1, 1] = kg + (ka - kg) * e1 * e1
+        for b, sign in ((k - 1, -1.0), (k, 1.0)):  # start block (force -T e), end block (+T e)
+            if 0 <= b < n:
+                P[2 * b] += sign * T * e0
+                P[2 * b + 1] += sign * T * e1
+                for r in range(2):
+                    for c in range(2):
+                        Kb[BAND_HALF + r - c, 2 * b + c] += blk[r, c]
+        if k >= 1 and k < n:  # coupling of blocks k-1 and k
+            for r in range(2):
+                for c in range(2):
+                    Kb[BAND_HALF + 2 + r - c, 2 * (k - 1) + c] -= blk[r, c]  # row block k, column block k-1
+                    Kb[BAND_HALF - 2 + r - c, 2 * k + c] -= blk[r, c]  # row block k-1, column block k
+    return slack
+
+
+@njit(cache=True)
+def band_row(A, x, i):
+    """Row ``i`` of the banded ``A`` (storage as :func:`damping_row`) times ``x``."""
+    nd = A.shape[1]
+    acc = 0.0
+    for j in range(max(0, i - BAND_HALF), min(nd, i + BAND_HALF + 1)):
+        acc += A[BAND_HALF + i - j, j] * x[j]
+    return acc
+
+
+@njit(cache=True)
+def solve_band(A, b, out, LU):
+    """Solve ``A out = b`` for a banded ``A`` (bandwidth BAND_HALF, storage as
+    :func:`damping_row`) by Gaussian elimination without pivoting, O(n) (scratch ``LU``).
+
+    For the symmetric positive definite Newton matrices of the implicit schemes
+    (``c_m M + c_c C + K`` of a taut cable). Returns False on a zero or non-finite pivot.
+    """
+    nd = b.size
+    hb = BAND_HALF
+    LU[:, :] = A
+    out[:] = b
+    for k in range(nd):
+        piv = LU[hb, k]
+        if piv == 0.0 or not np.isfinite(piv):
+            return False
+        for i in range(k + 1, min(nd, k + hb + 1)):
+            f = LU[hb + i - k, k] / piv
+            if f != 0.0:
+                for j in range(k + 1, min(nd, k + hb + 1)):
+                    LU[hb + i - j, j] -= f * LU[hb + k - j, j]
+                out[i] -= f * out[k]
+    for i in range(nd - 1, -1, -1):
+        acc = out[i]
+        for j in range(i + 1, min(nd, i + hb + 1)):
+            acc -= LU[hb + i - j, j] * out[j]
+        out[i] = acc / LU[hb, i]
+    return True

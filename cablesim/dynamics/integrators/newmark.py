@@ -188,6 +188,88 @@ def _galpha_advance(prm, s, P_n, warm, wk, awk, t0, h, i0, nsteps, am, af, beta,
     return i0 + nsteps, j, kn.OK
 
 
+@njit(cache=True)
+def _band_newton(prm, z, v, a, z1, v1, a1, P_n, P1, Kb, J, R, y, am, af, c_m, c_c, sf, check_slack):
+    """Residual ``R`` (minus the generalized-alpha equilibrium) and Newton matrix ``J`` in banded
+    storage, exact analysis; a status code."""
+    S, EA, L, H, m, C, F0, FL = prm[1], prm[2], prm[3], prm[4], prm[5], prm[6], prm[7], prm[8]
+    nd = m.size
+    for q in range(nd):
+        y[q] = prm[10][q] + z1[q]
+        R[q] = (1.0 - af) * v1[q] + af * v[q]  # the velocity C multiplies, for now
+    if kn.exact_force_and_stiffness_band(y, S, EA, L, H, P1, Kb) >= 0 and check_slack:
+        return kn.SLACK
+    for q in range(nd):
+        y[q] = kn.band_row(C, R, q)
+    for q in range(nd):
+        acc = m[q] * ((1.0 - am) * a1[q] + am * a[q]) + (1.0 - af) * P1[q] + af * P_n[q] + y[q]
+        R[q] = F0[q] + FL[q] * sf - acc
+    for d in range(kn.BAND_ROWS):
+        for q in range(nd):
+            J[d, q] = (1.0 - af) * Kb[d, q] + c_c * C[d, q]
+    for q in range(nd):
+        J[kn.BAND_HALF, q] += c_m * m[q]
+    return kn.OK
+
+
+@njit(cache=True)
+def _galpha_advance_band(prm, s, P_n, warm, wk, awk, t0, h, i0, nsteps, am, af, beta, gamma, t_out, out, ztol, maxit):
+    """:func:`_galpha_advance` for the exact analysis with banded damping: every Newton
+    iteration assembles and solves a banded system, O(n)."""
+    nd = prm[5].size
+    z, v, a = s[:nd].copy(), s[nd : 2 * nd].copy(), s[2 * nd :].copy()
+    z1, v1, a1, P1, R, dz = np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd)
+    Kb, J, LU = np.empty((kn.BAND_ROWS, nd)), np.empty((kn.BAND_ROWS, nd)), np.empty((kn.BAND_ROWS, nd))
+    sa, sb, da, db = np.empty(3 * nd), np.empty(3 * nd), np.empty(3 * nd), np.empty(3 * nd)
+    c_m = (1.0 - am) / (beta * h * h)
+    c_c = (1.0 - af) * gamma / (beta * h)
+    j = 0
+    for i in range(i0, i0 + nsteps):
+        ta, tb = t0 + i * h, t0 + (i + 1) * h
+        sf = np.sin(prm[9] * (tb - af * h))
+        for q in range(nd):
+            z1[q] = z[q] + h * v[q] + 0.5 * h * h * a[q]  # predictor: constant acceleration
+        converged = False
+        for it in range(maxit):
+            _newmark_update(z, v, a, z1, v1, a1, h, beta, gamma)
+            _band_newton(prm, z, v, a, z1, v1, a1, P_n, P1, Kb, J, R, wk[0], am, af, c_m, c_c, sf, False)
+            if not kn.solve_band(J, R, dz, LU):
+                break
+            big, step = 0.0, 0.0
+            for q in range(nd):
+                z1[q] += dz[q]
+                big = max(big, abs(dz[q]))
+                step = max(step, abs(z1[q] - z[q]))
+            if not np.isfinite(big):
+                break
+            if big <= ztol + 1e-10 * step:
+                converged = True
+                break
+        if not converged:
+            _store(s, z, v, a)
+            for q in range(nd):
+                if not np.isfinite(z1[q]):
+                    return i, j, kn.NONFINITE
+            return i, j, kn.INNER_SOLVE
+        _newmark_update(z, v, a, z1, v1, a1, h, beta, gamma)
+        st = _band_newton(prm, z, v, a, z1, v1, a1, P_n, P1, Kb, J, R, wk[0], am, af, c_m, c_c, sf, True)
+        if st != kn.OK:
+            return i, j, st
+        if j < t_out.size and t_out[j] <= tb + 1e-9 * h:
+            j = _write_outputs(ta, tb, h, z, v, a, z1, v1, a1, sa, sb, da, db, t_out, out, j)
+        z[:], v[:], a[:], P_n[:] = z1, v1, a1, P1
+    _store(s, z, v, a)
+    return i0 + nsteps, j, kn.OK
+
+
+@njit(cache=True)
+def _newmark_update(z, v, a, z1, v1, a1, h, beta, gamma):
+    """Acceleration and velocity at the step end from the displacement ``z1`` (Newmark)."""
+    for q in range(z.size):
+        a1[q] = (z1[q] - z[q] - h * v[q]) / (beta * h * h) - (0.5 / beta - 1.0) * a[q]
+        v1[q] = v[q] + h * ((1.0 - gamma) * a[q] + gamma * a1[q])
+
+
 @dataclass(frozen=True)
 class GeneralizedAlpha(Integrator):
     """Chung-Hulbert generalized-alpha with a fixed step ``dt`` (s) and spectral radius ``rho_inf``."""
@@ -224,11 +306,13 @@ class GeneralizedAlpha(Integrator):
 
     def advance(self, prm, state, t_end, t_out, out):
         am, af, beta, gamma = self._coefficients()
-        if prm[6].shape != state.extra["C"].shape:  # banded damping: this scheme assembles dense
-            prm = prm[:6] + (state.extra["C"],) + prm[7:]
+        advance = _galpha_advance
+        if prm[6].shape != state.extra["C"].shape:  # banded damping (exact analysis): O(n) steps
+            advance = _galpha_advance_band if state.wk[1] is None else advance
+            prm = prm if state.wk[1] is None else prm[:6] + (state.extra["C"],) + prm[7:]
         t0, i = state.extra["t0"], state.extra["i"]
         nsteps = max(int(np.ceil((t_end - t0) / self.dt - 1e-9)) - i, 0)
-        i_new, j, code = _galpha_advance(
+        i_new, j, code = advance(
             prm, state.s, state.extra["P"], state.warm, *state.wk, t0, self.dt, i, nsteps,
             am, af, beta, gamma, t_out, out, state.extra["ztol"], 25,
         )

@@ -24,7 +24,10 @@ STEPS_PER_PERIOD = 100
 #: The same for the default scheme of stiff cables (generalized-alpha): its error falls as dt^2,
 #: and 1600 steps per period give about 3e-5 (100 steps: 7e-3), see benchmarks/README.md.
 STIFF_STEPS_PER_PERIOD = 1600
-#: A cable is stiff when its highest mode exceeds the frequency of interest this many times.
+#: A cable is stiff when its fastest damped root (the highest mode, or for stiffness-proportional
+#: damping of a finely divided cable the overdamped root ~ a1 w_max^2, which grows as n^2) exceeds
+#: the frequency of interest this many times: an explicit step would then be set by modes that
+#: do not matter to the response, so cablesim integrates implicitly.
 STIFF_RATIO = 200.0
 #: Default tolerances of dopri5: relative, and absolute per metre of chord.
 DEFAULT_RTOL = 1e-8
@@ -126,8 +129,10 @@ def dividing_step(dt: float, omega: float) -> float:
 
 
 def is_stiff(eom: EquationsOfMotion, omega_interest: float) -> bool:
-    """Whether the highest mode is more than :data:`STIFF_RATIO` times the frequency of interest."""
-    return float(eom.frequencies[-1]) / omega_interest > STIFF_RATIO
+    """Whether the fastest damped root of the linearised system (at least the highest mode, see
+    :func:`cablesim.modal.fastest_rate`) is more than :data:`STIFF_RATIO` times the frequency
+    of interest."""
+    return fastest_rate(eom.frequencies, eom.a0, eom.a1) / omega_interest > STIFF_RATIO
 
 
 def default_dopri5(eom: EquationsOfMotion, rtol: float | None = None, atol: float | None = None) -> DOPRI5:
@@ -138,9 +143,12 @@ def default_dopri5(eom: EquationsOfMotion, rtol: float | None = None, atol: floa
 def default_integrator(eom: EquationsOfMotion, omega_interest: float) -> Integrator:
     """The scheme cablesim uses when the case names none.
 
-    Non-stiff cables: the adaptive ``dopri5`` (rtol 1e-8). Stiff cables (highest mode more than
-    :data:`STIFF_RATIO` times the frequency of interest): ``generalized-alpha``, which damps the
-    spurious high axial modes, with :data:`STIFF_STEPS_PER_PERIOD` steps per period.
+    Non-stiff cables: the adaptive ``dopri5`` (rtol 1e-8). Stiff cables (fastest damped root more
+    than :data:`STIFF_RATIO` times the frequency of interest, see :func:`is_stiff`): the implicit
+    ``generalized-alpha``, which damps the spurious high modes, with
+    :data:`STIFF_STEPS_PER_PERIOD` steps per period. Heavy cables with many nodes are stiff in
+    this sense (their highest mode grows as n, its damped root as n^2); in the exact analysis
+    each step then costs O(n) (banded Newton solves), so a simulated second costs O(n).
     """
     w_int = max(omega_interest, float(eom.frequencies[0]))
     if is_stiff(eom, w_int):

@@ -154,7 +154,7 @@ def _channels(spec: Optional[str], fallback) -> Optional[list[str]]:
     return list(fallback) if fallback else None
 
 
-def _finish_history(run, out: Path, plot: bool, channels, wall: float):
+def _finish_history(run, out: Path, plot: bool, channels, wall: float, full: bool = False):
     from dataclasses import replace
 
     from .channels import channel_index
@@ -168,7 +168,7 @@ def _finish_history(run, out: Path, plot: bool, channels, wall: float):
         hist = run.history
     run.to_hdf5(out)
     pngs = run.plot(out.with_suffix(""), channels=channels) if plot and hist.t.size > 1 else []
-    typer.echo(history_summary(case, hist, run.integrator, wall))
+    typer.echo(history_summary(case, hist, run.integrator, wall, full=full))
     typer.echo(f"\nWrote {out}" + (" and " + ", ".join(str(p) for p in pngs) if pngs else ""))
     if not hist.completed:
         _say_error(f"the run did not complete: {hist.message}. Results up to that instant were written.")
@@ -188,6 +188,7 @@ def history(
     channels: Optional[str] = typer.Option(None, "--channels", help="DOF to plot, e.g. z2,z4."),
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file [default: runs/<name>/history-w<omega>.h5]"),
     plot: bool = typer.Option(True, "--plot/--no-plot", help="Draw waveforms, phase, Lissajous, tension and FFT plots."),
+    full: bool = typer.Option(False, "--full", help="Print every channel (large cables show the first and last)."),
 ):
     """Forced response F(t) = F0 + FL sin(w t) at one frequency, from the equilibrium at rest."""
     import time
@@ -205,7 +206,7 @@ def history(
     with bar:
         run = api.history(case, omega, dur, output_step, analysis.value if analysis else None,
                           integrator.value if integrator else None, progress=update)
-    _finish_history(run, out, plot, _channels(channels, case.history.channels), time.perf_counter() - t0)
+    _finish_history(run, out, plot, _channels(channels, case.history.channels), time.perf_counter() - t0, full)
 
 
 @app.command("free-vibration")

@@ -77,3 +77,16 @@ def test_matrices_on_request_and_below_the_size(tmp_path):
     with h5py.File(big.to_hdf5(tmp_path / "big.h5", matrices=True), "r") as f:
         assert f["static/exact/K"].shape == (500, 500) and f["static/approximate/N"].shape == (500, 500)
         assert f["static/exact/K"].compression == "gzip"
+
+
+def test_heavy_span_example_parses_and_expands():
+    from pathlib import Path
+
+    from cablesim.case import load_case
+
+    case, text = load_case(Path(__file__).resolve().parents[1] / "configs" / "heavy-span.yaml")
+    assert case.cable.n_nodes == 100 and len(case.cable.S) == 101
+    carried = 1.628 * 300.7 * 100 / 101 + 15.0  # the end half-segments hang on the supports
+    assert sum(case.cable.masses) == pytest.approx(carried, rel=1e-12)
+    assert sum(case.F0[1::2]) == pytest.approx(9.81 * carried, rel=1e-12)
+    assert case.FL[2 * 19 + 1] == 200.0 and "length: 300.7" in text and "\nloads:\n  F0:" in text

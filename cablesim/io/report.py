@@ -114,8 +114,11 @@ def static_summary(case, result, full: bool = False) -> str:
     return "\n".join(out)
 
 
-def history_summary(case, hist, integ, wall: float) -> str:
-    """Summary of a time history: status, peak displacements, response frequencies, drift."""
+def history_summary(case, hist, integ, wall: float, full: bool = False) -> str:
+    """Summary of a time history: status, peak displacements, response frequencies, drift.
+
+    More than 2 SUMMARY_NODES channels are shown as the first and last few unless ``full``.
+    """
     forced = f"forcing w = {hist.omega:g} rad/s" if hist.omega is not None else "free vibration"
     lines = [
         f"cablesim {__version__}: '{case.name}', {forced}, {hist.analysis} analysis, "
@@ -124,19 +127,20 @@ def history_summary(case, hist, integ, wall: float) -> str:
         f"linear modes: {', '.join(f'{w:.5g}' for w in hist.modal_omega[:6])} rad/s",
         "",
     ]
-    rows = []
     half = hist.t.size // 2
-    for i, dof in enumerate(hist.dof_numbers):
+
+    def row(i):
         z = hist.z[:, i]
         peaks = spectrum_peaks(hist.t, z, 0.5, max_peaks=2) if hist.t.size > 16 else []
-        rows.append(
-            [
-                f"z{dof}",
-                _g(np.abs(z).max(), 5),
-                _g(0.5 * np.ptp(z[half:]), 5) if half > 0 else "-",
-                ", ".join(f"{p:.4g}" for p in peaks) or "-",
-            ]
-        )
+        return [
+            f"z{hist.dof_numbers[i]}",
+            _g(np.abs(z).max(), 5),
+            _g(0.5 * np.ptp(z[half:]), 5) if half > 0 else "-",
+            ", ".join(f"{p:.4g}" for p in peaks) or "-",
+        ]
+
+    channels = len(hist.dof_numbers)
+    rows = _rows(_shown(channels, full or channels <= 2 * SUMMARY_NODES, 2 * SUMMARY_ENDS), row, 4)
     lines.append(_table(["DOF", "max |z| (m)", "half range, 2nd half (m)", "response peaks (rad/s)"], rows))
     dT = hist.T - hist.T0
     lines.append(

@@ -21,11 +21,9 @@ L, G, MPL, LENGTH = 100.0, 9.81, 1.0, 100.004
 
 def irvine_symmetric(lam2: float) -> float:
     """First root beta in (pi, 3 pi) of the symmetric frequency equation."""
+    # tan(beta/2) runs continuously from -inf to +inf over (pi, 3 pi): one sign change there.
     f = lambda b: np.tan(b / 2) - b / 2 + 4.0 / lam2 * (b / 2) ** 3  # noqa: E731
-    xs = np.linspace(np.pi * 1.0001, 3 * np.pi * 0.9999, 4001)
-    v = f(xs)
-    k = next(i for i in range(xs.size - 1) if np.sign(v[i]) != np.sign(v[i + 1]) and abs(v[i]) < 1e3)
-    return brentq(f, xs[k], xs[k + 1], xtol=1e-14)
+    return brentq(f, np.pi * (1 + 1e-12), 3 * np.pi * (1 - 1e-12), xtol=1e-14)
 
 
 def discrete(n: int, EA: float) -> tuple[float, float, float]:

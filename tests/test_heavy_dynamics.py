@@ -81,3 +81,23 @@ def test_default_for_a_fine_heavy_cable_is_implicit_and_accurate():
     got = simulate(eom, default, 6.0, 0.05, split=False)
     assert got.completed and ref.completed
     assert np.abs(got.z - ref.z).max() < 1e-4 * np.abs(ref.z).max()
+
+
+def test_banded_stiffness_kernel_and_solve(equations):
+    eom, _ = equations
+    cab = eom.cable
+    y = eom.y0 + 1e-6 * np.random.default_rng(5).standard_normal(2 * N)
+    P, K, Pb, Kb = np.empty(2 * N), np.empty((2 * N, 2 * N)), np.empty(2 * N), np.empty((kn.BAND_ROWS, 2 * N))
+    kn.exact_force_and_stiffness(y, cab.S, cab.EA, cab.L, cab.H, P, K)
+    kn.exact_force_and_stiffness_band(y, cab.S, cab.EA, cab.L, cab.H, Pb, Kb)
+    dense = np.zeros_like(K)
+    for i in range(2 * N):
+        for j in range(max(0, i - 3), min(2 * N, i + 4)):
+            dense[i, j] = Kb[kn.BAND_HALF + i - j, j]
+    np.testing.assert_allclose(Pb, P, rtol=0, atol=1e-12 * abs(P).max())
+    np.testing.assert_allclose(dense, K, rtol=0, atol=1e-12 * abs(K).max())
+    J, Jb = K + 1e4 * np.diag(eom.mass), Kb.copy()
+    Jb[kn.BAND_HALF] += 1e4 * eom.mass
+    b, x = np.arange(2.0 * N), np.empty(2 * N)
+    assert kn.solve_band(Jb, b, x, np.empty_like(Jb))
+    np.testing.assert_allclose(x, np.linalg.solve(J, b), rtol=1e-10, atol=0)

@@ -531,23 +531,29 @@ def exact_force_and_stiffness_band(y, S, EA, L, H, P, Kb):
             slack = k
         ka = EA / S[k]
         kg = T / l
-        blk = np.empty((2, 2))
-        blk[0, 0] = kg + (ka - kg) * e0 * e0
-        blk[0, 1] = (ka - kg) * e0 * e1
-        blk[1, 0] = blk[0, 1]
-        blk[1, 1] = kg + (ka - kg) * e1 * e1
+        k00 = kg + (ka - kg) * e0 * e0
+        k01 = (ka - kg) * e0 * e1
+        k11 = kg + (ka - kg) * e1 * e1
+        hb = BAND_HALF
         for b, sign in ((k - 1, -1.0), (k, 1.0)):  # start block (force -T e), end block (+T e)
             if 0 <= b < n:
                 P[2 * b] += sign * T * e0
                 P[2 * b + 1] += sign * T * e1
-                for r in range(2):
-                    for c in range(2):
-                        Kb[BAND_HALF + r - c, 2 * b + c] += blk[r, c]
-        if k >= 1 and k < n:  # coupling of blocks k-1 and k
-            for r in range(2):
-                for c in range(2):
-                    Kb[BAND_HALF + 2 + r - c, 2 * (k - 1) + c] -= blk[r, c]  # row block k, column block k-1
-                    Kb[BAND_HALF - 2 + r - c, 2 * k + c] -= blk[r, c]  # row block k-1, column block k
+                Kb[hb, 2 * b] += k00  # diagonal block: K[2b + r, 2b + c] at Kb[hb + r - c, 2b + c]
+                Kb[hb + 1, 2 * b] += k01
+                Kb[hb - 1, 2 * b + 1] += k01
+                Kb[hb, 2 * b + 1] += k11
+        if k >= 1 and k < n:  # coupling of block k (rows) and block k-1 (columns), and its mirror
+            c0 = 2 * (k - 1)
+            Kb[hb + 2, c0] -= k00
+            Kb[hb + 3, c0] -= k01
+            Kb[hb + 1, c0 + 1] -= k01
+            Kb[hb + 2, c0 + 1] -= k11
+            c1 = 2 * k
+            Kb[hb - 2, c1] -= k00
+            Kb[hb - 1, c1] -= k01
+            Kb[hb - 3, c1 + 1] -= k01
+            Kb[hb - 2, c1 + 1] -= k11
     return slack
 
 

@@ -90,3 +90,17 @@ def test_heavy_span_example_parses_and_expands():
     assert sum(case.cable.masses) == pytest.approx(carried, rel=1e-12)
     assert sum(case.F0[1::2]) == pytest.approx(9.81 * carried, rel=1e-12)
     assert case.FL[2 * 19 + 1] == 200.0 and "length: 300.7" in text and "\nloads:\n  F0:" in text
+
+
+def test_free_vibration_along_a_mode_beyond_the_kept_shapes(monkeypatch):
+    from cablesim.analyses.setup import mode_velocity
+    from cablesim.analyses.static import run_static
+
+    case = heavy(30)
+    full = run_static(case, all_models=False)
+    monkeypatch.setattr(cablesim.modal, "ALL_SHAPES_DOF", 0)  # as for a large cable
+    monkeypatch.setattr(cablesim.analyses.static, "ALL_SHAPES_DOF", 0)
+    kept = run_static(case, all_models=False)
+    assert kept.modes.shapes.shape[1] == 20
+    v = mode_velocity(kept, 25, 1.0)
+    np.testing.assert_allclose(v, mode_velocity(full, 25, 1.0), atol=1e-7)

@@ -14,7 +14,7 @@ from ..dynamics.equations import EquationsOfMotion
 from ..dynamics.kernels import band_storage
 from ..dynamics.integrators import INTEGRATORS, DOPRI5, GeneralizedAlpha, Integrator, Newmark, RK4
 from ..errors import CablesimError
-from ..modal import fastest_rate, rayleigh_coefficients
+from ..modal import fastest_rate, modal_analysis_banded, rayleigh_coefficients
 from .static import StaticResult
 
 #: Saved instants per period of the highest frequency of interest, by default.
@@ -226,6 +226,9 @@ def output_interval(step: float | None, omega_interest: float, duration: float) 
 
 def mode_velocity(static: StaticResult, mode: int, peak_velocity: float) -> np.ndarray:
     """Initial velocities along linear mode ``mode`` (1-based), largest component = V > 0."""
-    phi = static.modes.shapes[:, mode - 1]
+    shapes = static.modes.shapes
+    if mode > shapes.shape[1]:  # a heavy cable keeps the lowest shapes only: compute up to this one
+        shapes = modal_analysis_banded(static.K0_band, static.cable.mass_diagonal, n_modes=mode, n_shapes=mode).shapes
+    phi = shapes[:, mode - 1]
     k = int(np.argmax(np.abs(phi)))
     return phi * (peak_velocity / phi[k])

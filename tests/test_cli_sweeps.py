@@ -22,7 +22,9 @@ ARGS = ["-o", "out.h5", "--jobs", "1", "--no-plot"]
 
 
 def test_a_failed_point_is_named_exit_3_and_never_a_peak(invoke_cli, tmp_path):
-    res = invoke_cli("sweep", "--omega", "2.5,6.0", "--duration", "200", "--set", "sweep.window=50", "--set", FL10, *ARGS)
+    # slack: stop, so that a point fails (the default, continue, runs through slack segments)
+    res = invoke_cli("sweep", "--omega", "2.5,6.0", "--duration", "200", "--set", "sweep.window=50", "--set", FL10,
+                     "--slack", "stop", *ARGS)
     assert res.returncode == 3, res.stderr
     out = flat(res.stdout)
     assert "1 point(s) failed" in out and "w = 2.5 rad/s: stopped at t =" in out and "went slack" in out
@@ -39,7 +41,8 @@ def test_a_failed_point_is_named_exit_3_and_never_a_peak(invoke_cli, tmp_path):
 
 def test_a_sweep_whose_every_point_failed_exits_3_without_a_peak(invoke_cli, tmp_path):
     fl50 = "loads.FL=[-300000.0, 1100000.0, -900000.0, 6000000.0]"
-    res = invoke_cli("sweep", "--omega", "2.4,0.8", "--duration", "200", "--set", "sweep.window=50", "--set", fl50, *ARGS)
+    res = invoke_cli("sweep", "--omega", "2.4,0.8", "--duration", "200", "--set", "sweep.window=50", "--set", fl50,
+                     "--slack", "stop", *ARGS)
     assert res.returncode == 3, res.stderr
     assert "no point ran to its end" in res.stdout and "2 point(s) failed" in res.stdout
     assert all(np.isnan(r["value"]) for r in sweep_summary_rows(tmp_path / "out.h5"))

@@ -28,6 +28,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_sweep.py
 	$(PY) benchmarks/bench_continuation.py
 	$(PY) benchmarks/bench_accelerate.py
+	$(PY) benchmarks/bench_heavy.py --error
 
 paper-numbers: $(STAMP)
 	$(PY) benchmarks/paper_numbers.py $(OUTD)

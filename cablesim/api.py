@@ -66,9 +66,10 @@ class StaticRun:
     case: Case
     result: StaticResult
 
-    def to_hdf5(self, path: str | Path) -> Path:
-        """Write the file ``cablesim static`` writes."""
-        return write_static(path, self.result, self.case.text)
+    def to_hdf5(self, path: str | Path, matrices: bool | None = None) -> Path:
+        """Write the file ``cablesim static`` writes (``matrices``: see
+        :func:`~cablesim.io.hdf5.write_static`)."""
+        return write_static(path, self.result, self.case.text, matrices=matrices)
 
     def plot(self, path: str | Path) -> Path:
         """Draw the cable under F0 as a PNG."""
@@ -131,12 +132,14 @@ class Planned:
         return HistoryRun(self.case, self.command, st, hist, integ)
 
 
-def static(case: Case, analysis: str | None = None) -> StaticRun:
+def static(case: Case, analysis: str | None = None, all_models: bool | None = None) -> StaticRun:
     """Static equilibrium under F0 (inextensible, approximate, exact), modes and damping.
 
-    ``analysis`` (``"exact"`` or ``"approximate"``) overrides the case's.
+    ``analysis`` (``"exact"`` or ``"approximate"``) overrides the case's. ``all_models``: every
+    model (True), the chosen one (False), or every model up to
+    :data:`~cablesim.analyses.static.ALL_MODELS_NODES` nodes (None).
     """
-    return StaticRun(case, run_static(case, analysis))
+    return StaticRun(case, run_static(case, analysis, all_models=all_models))
 
 
 def history(

@@ -23,8 +23,9 @@ from typing import Optional
 import typer
 
 from .errors import CablesimError
-from .io.terminal import CommandGroup, LazyBar, StatusLine, compiling, say_error, say_warnings
-from .names import ANALYSES, INTEGRATORS, SLACK_POLICIES
+from .io.terminal import (ANALYSIS_OPT, CASE_ARG, FORCE_OPT, INTEGRATOR_OPT, SET_OPT, SLACK_OPTION, Analysis,
+                           CommandGroup, IntegratorName, LazyBar, SlackPolicy, StatusLine, compiling, say_error,
+                           say_warnings)
 from .version import __version__
 
 app = typer.Typer(
@@ -38,11 +39,6 @@ app = typer.Typer(
     "SI units throughout (m, N, kg, s, rad/s). Exit status: 0 done, 2 refused input (nothing "
     "written), 3 stopped early or a sweep point failed, 130 Ctrl-C, 143 SIGTERM.",
 )
-
-Analysis = Enum("Analysis", {a.replace("-", "_"): a for a in ANALYSES}, type=str)
-IntegratorName = Enum("IntegratorName", {a.replace("-", "_"): a for a in INTEGRATORS}, type=str)
-SlackPolicy = Enum("SlackPolicy", {a: a for a in SLACK_POLICIES}, type=str)
-SLACK_OPTION = typer.Option(None, "--slack", help="Exact analysis: continue through slack segments or stop where one goes slack [default: the case's slack].")
 
 
 def _with_slack(overrides, slack):
@@ -137,19 +133,8 @@ def _effective(ctx, **values) -> None:
 
 
 # ----------------------------------------------------------------------------------------------
-# Shared options and steps
+# Shared steps (the shared options are in cablesim.io.terminal)
 # ----------------------------------------------------------------------------------------------
-CASE_ARG = typer.Argument(None, help="YAML case file; omit it to run the paper's example.", show_default=False)
-SET_OPT = typer.Option(None, "--set", metavar="KEY=VALUE", help="Override a case-file value, with a dotted key "
-                       "(e.g. sweep.duration=1000); repeatable. Values are read as YAML.")
-ANALYSIS_OPT = typer.Option(None, "--analysis", help="Override the case file's analysis (default: analysis: in "
-                            "the case file, else exact).")
-INTEGRATOR_OPT = typer.Option(None, "--integrator", help="Time-integration scheme (default: integrator.name in "
-                              "the case file, else dopri5, or generalized-alpha for a stiff cable).")
-FORCE_OPT = typer.Option(False, "--force", help="Run even when the cost estimate is above the limits (1e8 time "
-                         "steps, a sweep 1e9, or 4 GB of memory).")
-
-
 def _check_jobs(jobs: int) -> None:
     import os
 
@@ -197,7 +182,7 @@ def _history_pngs(out: Path) -> list[Path]:
     return [Path(f"{prefix}-{kind}.png") for kind in ("waveforms", "phase", "lissajous", "tensions", "fft")]
 
 
-def _finish_history(run, out: Path, plot: bool, channels, wall: float):
+def _finish_history(run, out: Path, plot: bool, channels, wall: float, full: bool = False):
     """Write the history (beside a complete result if this run is not complete), plot, report."""
     from dataclasses import replace
 
@@ -218,7 +203,7 @@ def _finish_history(run, out: Path, plot: bool, channels, wall: float):
         target = beside(out)  # never replace a complete result with an incomplete one
     run.to_hdf5(target)
     pngs = run.plot(target.with_suffix(""), channels=channels) if plot and hist.t.size > 1 else []
-    _echo(history_summary(case, hist, run.integrator, wall))
+    _echo(history_summary(case, hist, run.integrator, wall, full=full))
     _echo(f"\nWrote {target}" + (" and " + ", ".join(str(p) for p in pngs) if pngs else ""))
     if not hist.completed:
         kept = f" The complete result {out} was kept; this run's results are in {target}." if target != out else ""
@@ -274,6 +259,9 @@ def static(
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file (default: runs/<name>/static.h5); the plot goes beside it as .png."),
     analysis: Optional[Analysis] = ANALYSIS_OPT,
     plot: bool = typer.Option(True, "--plot/--no-plot", help="Also draw the cable as a PNG beside the HDF5 file."),
+    full: bool = typer.Option(False, "--full", help="Print every node, segment and mode (default: a cable of over 20 nodes shows the first and last)."),
+    matrices: Optional[bool] = typer.Option(None, "--matrices/--no-matrices", help="Store the dense 2n x 2n matrices (default: up to n = 200 nodes)."),
+    all_models: Optional[bool] = typer.Option(None, "--all-models/--chosen-model", help="Compute the inextensible and approximate models too (default: up to n = 300 nodes)."),
 ):
     """Static equilibrium under F0 (inextensible, approximate and exact), modes and damping."""
     from . import api
@@ -285,10 +273,10 @@ def static(
     _check_outputs(out, case_file, (lambda o: [o.with_suffix(".png")]) if plot else [])
     _effective(ctx, output=out)
     with compiling(_note, "kernels.closure_solve-*.nbi"):
-        run = api.static(case, analysis.value if analysis else None)
+        run = api.static(case, analysis.value if analysis else None, all_models=all_models)
     say_warnings(run.result.warnings)
-    _echo(static_summary(case, run.result))
-    run.to_hdf5(out)
+    _echo(static_summary(case, run.result, full=full))
+    run.to_hdf5(out, matrices=matrices)
     msg = f"\nWrote {out}"
     if plot:
         msg += f" and {run.plot(out.with_suffix('.png'))}"
@@ -311,6 +299,7 @@ def history(
     slack: Optional[SlackPolicy] = SLACK_OPTION,
     plot: bool = typer.Option(True, "--plot/--no-plot", help="Draw waveforms, phase, Lissajous, tension and FFT plots."),
     force: bool = FORCE_OPT,
+    full: bool = typer.Option(False, "--full", help="Print every channel (default: over 40 channels show the first and last)."),
 ):
     """Forced response F(t) = F0 + FL sin(w t) at one frequency, from the equilibrium at rest."""
     from . import api
@@ -342,7 +331,7 @@ def history(
         _effective(ctx, output=out, omega=w, duration=dur, output_step=planned.plan.output_step,
                    integrator={"name": planned.plan.integrator.name, **planned.plan.integrator.settings()})
         run, wall = _simulate(planned, dur)
-    _finish_history(run, out, plot, chans, wall)
+    _finish_history(run, out, plot, chans, wall, full)
 
 
 @app.command("free-vibration")

@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import eigh
+from scipy.linalg import eig_banded, eigh, solve_banded
 
 from .errors import CablesimError
 
@@ -63,15 +63,98 @@ def modal_analysis(K: np.ndarray, mass_diagonal: np.ndarray) -> Modes:
     """
     lam, phi = eigh(0.5 * (K + K.T), np.diag(mass_diagonal))
     if lam[0] <= 0.0:
-        raise CablesimError(
-            "The tangent stiffness is not positive definite (lowest eigenvalue "
-            f"{lam[0]:.3g} N/m per kg): the static equilibrium has no stable vibration modes. "
-            "Check that every segment is in tension under the sustained loads F0."
-        )
+        raise _not_positive(lam[0])
     # Fix the sign of each shape: its largest component is positive, for reproducible output.
+    return Modes(omega=np.sqrt(lam), shapes=_fix_signs(phi))
+
+
+def _fix_signs(phi: np.ndarray) -> np.ndarray:
     idx = np.argmax(np.abs(phi), axis=0)
-    phi = phi * np.sign(phi[idx, np.arange(phi.shape[1])])
+    return phi * np.sign(phi[idx, np.arange(phi.shape[1])])
+
+
+def _not_positive(lam0: float) -> CablesimError:
+    return CablesimError(
+        "The tangent stiffness is not positive definite (lowest eigenvalue "
+        f"{lam0:.3g} N/m per kg): the static equilibrium has no stable vibration modes. "
+        "Check that every segment is in tension under the sustained loads F0."
+    )
+
+
+#: Up to this many DOF the banded eigensolver returns every mode shape (O(n^3), quick there).
+ALL_SHAPES_DOF = 600
+
+
+def modal_analysis_banded(K_band: np.ndarray, mass_diagonal: np.ndarray, n_modes: int | None = None,
+                          n_shapes: int | None = None) -> Modes:
+    """:func:`modal_analysis` for a banded stiffness (``scipy.linalg.eig_banded``), O(n^2) or less.
+
+    Parameters
+    ----------
+    K_band : ndarray, shape (b + 1, 2n)
+        Symmetric stiffness in lower band form, ``K_band[d, j] = K[j + d, j]``, N/m.
+    mass_diagonal : ndarray, shape (2n,)
+        kg.
+    n_modes : int, optional
+        Only the lowest ``n_modes`` frequencies (default: all).
+    n_shapes : int, optional
+        Mode shapes of the lowest ``n_shapes`` modes only (default: every computed mode when
+        2n <= ALL_SHAPES_DOF, else 0). Beyond ALL_SHAPES_DOF the shapes come from inverse
+        iteration on the banded matrix, O(n) each.
+
+    Returns
+    -------
+    Modes
+        ``omega`` of the computed modes; ``shapes`` with ``n_shapes`` columns.
+    """
+    r = 1.0 / np.sqrt(mass_diagonal)
+    N = r.size
+    A = np.array(K_band[:N], dtype=float)  # a band wider than the matrix holds only zeros beyond it
+    for d in range(A.shape[0]):
+        A[d, : N - d] *= r[d:] * r[: N - d]
+    m = N if n_modes is None else min(int(n_modes), N)
+    if n_shapes is None:
+        n_shapes = m if N <= ALL_SHAPES_DOF else 0
+    n_shapes = min(n_shapes, m)
+    select = {} if m == N else {"select": "i", "select_range": (0, m - 1)}
+    if N <= ALL_SHAPES_DOF and n_shapes > 0:
+        lam, x = eig_banded(A, lower=True, **select)
+        x = x[:, :n_shapes]
+    else:
+        lam = eig_banded(A, lower=True, eigvals_only=True, **select)
+        x = _inverse_iteration(A, lam[:n_shapes])
+    if lam[0] <= 0.0:
+        raise _not_positive(lam[0])
+    phi = _fix_signs(r[:, None] * x) if n_shapes else np.zeros((N, 0))
     return Modes(omega=np.sqrt(lam), shapes=phi)
+
+
+def _inverse_iteration(A: np.ndarray, lam: np.ndarray, sweeps: int = 3) -> np.ndarray:
+    """Unit eigenvectors of the banded symmetric ``A`` (lower form) for its eigenvalues ``lam``.
+
+    Each vector: a few solves of ``(A - lam I) x = b`` (banded LU, O(n b^2)); vectors of nearly
+    equal eigenvalues are orthogonalised against each other.
+    """
+    b, N = A.shape[0] - 1, A.shape[1]
+    full = np.zeros((2 * b + 1, N))
+    for d in range(b + 1):
+        full[b + d, : N - d] = A[d, : N - d]
+        full[b - d, d:] = A[d, : N - d]
+    X = np.zeros((N, lam.size))
+    rng = np.random.default_rng(1)
+    scale = max(abs(lam[-1]), 1e-300) if lam.size else 1.0
+    for i, mu in enumerate(lam):
+        shifted = full.copy()
+        shifted[b] -= mu * (1.0 + 1e-13) if mu != 0.0 else 1e-13 * scale
+        x = rng.standard_normal(N)
+        close = [k for k in range(i) if abs(lam[k] - mu) <= 1e-8 * scale]
+        for _ in range(sweeps):
+            x = solve_banded((b, b), shifted, x, check_finite=False)
+            for k in close:
+                x -= (X[:, k] @ x) * X[:, k]
+            x /= np.linalg.norm(x)
+        X[:, i] = x
+    return X
 
 
 def inextensible_frequencies(D: np.ndarray, mass_diagonal: np.ndarray) -> np.ndarray:

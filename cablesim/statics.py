@@ -15,6 +15,7 @@ differentiation of ``grad Phi = 0``; none uses finite differences.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -156,7 +157,8 @@ class ExactEquilibrium:
     K : ndarray, shape (2n, 2n)
         Tangent stiffness of the deformed configuration, N/m.
     dydP : ndarray, shape (2n, 2n)
-        Tangent flexibility ``dy/dP`` from implicit differentiation, m/N (equals ``K^-1``).
+        Tangent flexibility ``dy/dP`` from implicit differentiation, m/N (equals ``K^-1``);
+        computed on first use (a dense O(n^2) product that large cables seldom need).
     segments : SegmentForces
     """
 
@@ -165,8 +167,13 @@ class ExactEquilibrium:
     T: np.ndarray
     length: np.ndarray
     K: np.ndarray
-    dydP: np.ndarray
     segments: SegmentForces
+    cable: Cable
+
+    @functools.cached_property
+    def dydP(self) -> np.ndarray:
+        """Tangent flexibility ``dy/dP``, m/N."""
+        return _sym(_tangents(self.cable, self.segments, self.cable.compliance).dydP)
 
 
 def inextensible_equilibrium(
@@ -289,17 +296,8 @@ def exact_equilibrium(
         raise ValueError("the exact elastic analysis needs a finite EA")
     P = np.asarray(P, dtype=float)
     seg = solve_segment_forces(cable, P, elastic=True, F_start=F_start, check_slack=check_slack)
-    tg = _tangents(cable, seg, cable.compliance)
     y = _positions(seg, cable.n_nodes)
-    return ExactEquilibrium(
-        P=P,
-        y=y,
-        T=seg.T,
-        length=seg.length,
-        K=tangent_stiffness(cable, y),
-        dydP=_sym(tg.dydP),
-        segments=seg,
-    )
+    return ExactEquilibrium(P=P, y=y, T=seg.T, length=seg.length, K=tangent_stiffness(cable, y), segments=seg, cable=cable)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -385,3 +383,40 @@ def tangent_stiffness(cable: Cable, y: np.ndarray) -> np.ndarray:
             K[2 * i : 2 * i + 2, 2 * j : 2 * j + 2] -= ks[r]
             K[2 * j : 2 * j + 2, 2 * i : 2 * i + 2] -= ks[r]
     return K
+
+
+def tangent_stiffness_band(cable: Cable, y: np.ndarray) -> np.ndarray:
+    """The tangent stiffness of :func:`tangent_stiffness` in symmetric lower band form, N/m.
+
+    ``K`` is block-tridiagonal with 2x2 blocks, so its bandwidth is 3: ``band[d, j] = K[j + d, j]``
+    for ``d = 0..3`` (the layout of ``scipy.linalg.eig_banded(lower=True)``); O(n) storage.
+
+    Returns
+    -------
+    ndarray, shape (4, 2n)
+    """
+    n = cable.n_nodes
+    length, e, T = segment_geometry(cable, y)
+    ks = (cable.EA / cable.S)[:, None, None] * e[:, :, None] * e[:, None, :] + (T / length)[
+        :, None, None
+    ] * (np.eye(2) - e[:, :, None] * e[:, None, :])
+    diag = ks[:-1] + ks[1:]  # node j is the end of segment j and the start of segment j+1
+    off = -ks[1:-1]  # coupling of node j+1 (rows) to node j (columns)
+    band = np.zeros((4, 2 * n))
+    band[0, 0::2], band[0, 1::2] = diag[:, 0, 0], diag[:, 1, 1]
+    band[1, 0::2] = diag[:, 1, 0]
+    band[1, 1:-1:2] = off[:, 0, 1]  # K[2j+2, 2j+1]
+    band[2, 0:-2:2], band[2, 1:-2:2] = off[:, 0, 0], off[:, 1, 1]  # K[2j+2, 2j], K[2j+3, 2j+1]
+    band[3, 0:-3:2] = off[:, 1, 0]  # K[2j+3, 2j]
+    return band
+
+
+def band_to_dense(band: np.ndarray) -> np.ndarray:
+    """The full symmetric matrix of a lower band form (``band[d, j] = A[j + d, j]``)."""
+    m = band.shape[1]
+    A = np.zeros((m, m))
+    for d in range(band.shape[0]):
+        idx = np.arange(m - d)
+        A[idx + d, idx] = band[d, : m - d]
+        A[idx, idx + d] = band[d, : m - d]
+    return A

@@ -48,7 +48,7 @@ REFUSED = {
                        ["`cable.S`", "from 0.001 to 1e+06 m", "item 1"]),
     "dt-1e-300": (EXAMPLE + "integrator:\n  name: rk4\n  dt: 1.0e-300\n", ["`integrator.dt` must be from 1e-09 to 1000 s"]),
     "20000-nodes": (example_with(("S: [130.0, 100.0, 110.0]", "S: [" + ", ".join(["0.02"] * 20001) + "]")),
-                    ["`cable.S`", "at most 1000 interior nodes"]),
+                    ["`cable.S`", "at most 2000 interior nodes"]),
     "name-too-long": (example_with(("name: paper-example", "name: " + "a" * 300)), ["`name` is 300 characters long"]),
     # misleading
     "all-zero-loads": (example_with(("F0: [300.0e3, 1100.0e3, 450.0e3, 2000.0e3]", "F0: [0.0, 0.0, 0.0, 0.0]")),

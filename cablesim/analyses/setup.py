@@ -10,10 +10,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..case import Case, IntegratorSpec
+from ..dynamics.banded import band_storage
 from ..dynamics.equations import EquationsOfMotion
 from ..dynamics.integrators import INTEGRATORS, DOPRI5, GeneralizedAlpha, Integrator, Newmark, RK4
 from ..errors import CablesimError
-from ..modal import fastest_rate, rayleigh_coefficients
+from ..modal import fastest_rate, modal_analysis_banded, rayleigh_coefficients
 from .static import StaticResult
 
 #: Saved instants per period of the highest frequency of interest, by default.
@@ -23,7 +24,10 @@ STEPS_PER_PERIOD = 100
 #: The same for the default scheme of stiff cables (generalized-alpha): its error falls as dt^2,
 #: and 1600 steps per period give about 3e-5 (100 steps: 7e-3), see benchmarks/README.md.
 STIFF_STEPS_PER_PERIOD = 1600
-#: A cable is stiff when its highest mode exceeds the frequency of interest this many times.
+#: A cable is stiff when its fastest damped root (the highest mode, or for stiffness-proportional
+#: damping of a finely divided cable the overdamped root ~ a1 w_max^2, which grows as n^2) exceeds
+#: the frequency of interest this many times: an explicit step would then be set by modes that
+#: do not matter to the response, so cablesim integrates implicitly.
 STIFF_RATIO = 200.0
 #: Default tolerances of dopri5: relative, and absolute per metre of chord.
 DEFAULT_RTOL = 1e-8
@@ -70,6 +74,11 @@ def build_equations(
         w = static.modes.omega
         a0, a1 = rayleigh_coefficients(w[i - 1], w[j - 1], damping_ratio)
     C = a0 * np.diag(M) + a1 * static.K0
+    C_band = None
+    if static.K0_band is not None:  # exact analysis: K0 is block-tridiagonal, so is C
+        lower = a1 * static.K0_band
+        lower[0] += a0 * M
+        C_band = band_storage(lower)
     inext = static.inextensible
     x0 = inext.x
     return EquationsOfMotion(
@@ -90,6 +99,7 @@ def build_equations(
         a1=float(a1),
         modal_omega=static.modes.omega.copy(),
         slack=slack or case.slack,
+        C_band=C_band,
     )
 
 
@@ -123,8 +133,10 @@ def dividing_step(dt: float, omega: float) -> float:
 
 
 def is_stiff(eom: EquationsOfMotion, omega_interest: float) -> bool:
-    """Whether the highest mode is more than :data:`STIFF_RATIO` times the frequency of interest."""
-    return float(eom.frequencies[-1]) / omega_interest > STIFF_RATIO
+    """Whether the fastest damped root of the linearised system (at least the highest mode, see
+    :func:`cablesim.modal.fastest_rate`) is more than :data:`STIFF_RATIO` times the frequency
+    of interest."""
+    return fastest_rate(eom.frequencies, eom.a0, eom.a1) / omega_interest > STIFF_RATIO
 
 
 def default_dopri5(eom: EquationsOfMotion, rtol: float | None = None, atol: float | None = None) -> DOPRI5:
@@ -135,9 +147,12 @@ def default_dopri5(eom: EquationsOfMotion, rtol: float | None = None, atol: floa
 def default_integrator(eom: EquationsOfMotion, omega_interest: float) -> Integrator:
     """The scheme cablesim uses when the case names none.
 
-    Non-stiff cables: the adaptive ``dopri5`` (rtol 1e-8). Stiff cables (highest mode more than
-    :data:`STIFF_RATIO` times the frequency of interest): ``generalized-alpha``, which damps the
-    spurious high axial modes, with :data:`STIFF_STEPS_PER_PERIOD` steps per period.
+    Non-stiff cables: the adaptive ``dopri5`` (rtol 1e-8). Stiff cables (fastest damped root more
+    than :data:`STIFF_RATIO` times the frequency of interest, see :func:`is_stiff`): the implicit
+    ``generalized-alpha``, which damps the spurious high modes, with
+    :data:`STIFF_STEPS_PER_PERIOD` steps per period. Heavy cables with many nodes are stiff in
+    this sense (their highest mode grows as n, its damped root as n^2); in the exact analysis
+    each step then costs O(n) (banded Newton solves), so a simulated second costs O(n).
     """
     w_int = max(omega_interest, float(eom.frequencies[0]))
     if is_stiff(eom, w_int):
@@ -232,6 +247,9 @@ def output_interval(step: float | None, omega_interest: float, duration: float) 
 
 def mode_velocity(static: StaticResult, mode: int, peak_velocity: float) -> np.ndarray:
     """Initial velocities along linear mode ``mode`` (1-based), largest component = V > 0."""
-    phi = static.modes.shapes[:, mode - 1]
+    shapes = static.modes.shapes
+    if mode > shapes.shape[1]:  # a heavy cable keeps the lowest shapes only: compute up to this one
+        shapes = modal_analysis_banded(static.K0_band, static.cable.mass_diagonal, n_modes=mode, n_shapes=mode).shapes
+    phi = shapes[:, mode - 1]
     k = int(np.argmax(np.abs(phi)))
     return phi * (peak_velocity / phi[k])

@@ -10,9 +10,11 @@ from ..cable import Cable
 from ..case import Case
 from ..errors import CablesimError
 from ..modal import (
+    ALL_SHAPES_DOF,
     Modes,
     inextensible_frequencies,
     modal_analysis,
+    modal_analysis_banded,
     modal_damping_ratios,
     rayleigh_coefficients,
     sole_inextensible_frequency,
@@ -24,7 +26,15 @@ from ..statics import (
     approximate_equilibrium,
     exact_equilibrium,
     inextensible_equilibrium,
+    tangent_stiffness_band,
 )
+
+#: Above this many nodes `cablesim static` computes only the chosen analysis by default: the
+#: inextensible and approximate models work with dense 2n x 2n flexibilities (O(n^3)).
+ALL_MODELS_NODES = 300
+#: Above 2n = ALL_SHAPES_DOF (see cablesim.modal) the exact analysis keeps the shapes of the
+#: lowest SHAPES_KEPT modes (or up to the highest mode a free vibration or the damping asks for).
+SHAPES_KEPT = 20
 
 
 @dataclass(frozen=True)
@@ -57,6 +67,9 @@ class StaticResult:
         The paper's closed-form sole inextensible frequency (n = 2 only), rad/s.
     warnings : tuple of str
         Plausibility warnings (a strain of several per cent); they never stop a run.
+    K0_band : ndarray or None
+        ``K0`` in symmetric lower band form, shape (4, 2n) (exact analysis; see
+        :func:`cablesim.statics.tangent_stiffness_band`).
     """
 
     cable: Cable
@@ -73,6 +86,7 @@ class StaticResult:
     inextensible_omega: np.ndarray
     sole_inextensible_omega: float | None
     warnings: tuple[str, ...] = ()
+    K0_band: np.ndarray | None = None
 
     @property
     def y0(self) -> np.ndarray:
@@ -96,7 +110,15 @@ def damping_coefficients(case: Case, omega: np.ndarray) -> tuple[float, float]:
     return rayleigh_coefficients(omega[i - 1], omega[j - 1], d.ratio)
 
 
-def run_static(case: Case, analysis: str | None = None, all_models: bool = True) -> StaticResult:
+def _modes(case: Case, cable: Cable, K0: np.ndarray, K0_band: np.ndarray | None) -> Modes:
+    if K0_band is None:
+        return modal_analysis(K0, cable.mass_diagonal)
+    wanted = max(SHAPES_KEPT, case.free_vibration.mode or 0, *case.damping.modes)
+    n_shapes = None if 2 * cable.n_nodes <= ALL_SHAPES_DOF else wanted
+    return modal_analysis_banded(K0_band, cable.mass_diagonal, n_shapes=n_shapes)
+
+
+def run_static(case: Case, analysis: str | None = None, all_models: bool | None = True) -> StaticResult:
     """Solve the statics of a case under its sustained loads F0.
 
     Parameters
@@ -104,9 +126,9 @@ def run_static(case: Case, analysis: str | None = None, all_models: bool = True)
     case : Case
     analysis : {"exact", "approximate"}, optional
         Overrides ``case.analysis``.
-    all_models : bool
+    all_models : bool or None
         Compute every model (for the ``static`` command); ``False`` computes only what the
-        chosen analysis needs.
+        chosen analysis needs; None: every model up to ALL_MODELS_NODES nodes.
 
     Returns
     -------
@@ -115,6 +137,8 @@ def run_static(case: Case, analysis: str | None = None, all_models: bool = True)
     analysis = analysis or case.analysis
     cable = case.to_cable()
     P = case.F0
+    if all_models is None:
+        all_models = cable.n_nodes <= ALL_MODELS_NODES
     taut = cable.total_length <= cable.chord_length
     if taut and analysis == "approximate":
         raise CablesimError(
@@ -144,11 +168,12 @@ def run_static(case: Case, analysis: str | None = None, all_models: bool = True)
         if taut:
             check_resolvable(cable, exact.T)
     K0 = exact.K if analysis == "exact" else approx.K
-    modes = modal_analysis(K0, cable.mass_diagonal)
+    K0_band = tangent_stiffness_band(cable, exact.y) if analysis == "exact" else None
+    modes = _modes(case, cable, K0, K0_band)
     a0, a1 = damping_coefficients(case, modes.omega)
     inext_omega = np.array([])
     sole = None
-    if inext is not None:
+    if inext is not None and all_models:
         inext_omega = inextensible_frequencies(inext.D, cable.mass_diagonal)
         if cable.n_nodes == 2:
             sole = sole_inextensible_frequency(inext.x, P, inext.T[1], cable.S, cable.masses, cable.L, cable.H)
@@ -167,6 +192,7 @@ def run_static(case: Case, analysis: str | None = None, all_models: bool = True)
         inextensible_omega=inext_omega,
         sole_inextensible_omega=sole,
         warnings=strain_warnings(cable, exact.T if exact is not None else approx.T),
+        K0_band=K0_band,
     )
 
 

@@ -78,7 +78,8 @@ def format_validation_error(err: ValidationError, source: str) -> str:
             if "input" in e and e["type"] not in ("model_type",) and not isinstance(e["input"], dict):
                 got = repr(e["input"])
                 msg += f" (got {got if len(got) <= 80 else got[:72] + ' ...' + got[-4:]})"
-        items.append(f"`{field}` {msg}" if e["loc"] else msg)
+        # A message that names its own field (the shorthand's checks) goes as it is.
+        items.append(f"`{field}` {msg}" if e["loc"] and not msg.startswith("`") else msg)
     return f"Case file {source} is not valid: " + "; ".join(items) + "."
 
 
@@ -174,8 +175,30 @@ def parse_case(text: str, source: str = "<case>", default_name: str = "case", ov
         case = Case.model_validate(data)
     except ValidationError as err:
         raise CablesimError(format_validation_error(err, source)) from None
-    case.set_text(_with_overrides(text, overrides))
+    if _uses_shorthand(data):
+        case.set_text(_expanded_text(text, data, case, overrides))
+    else:
+        case.set_text(_with_overrides(text, overrides))
     return case
+
+
+SHORTHAND = {"cable": ("length", "nodes", "mass_per_length"), "loads": ("gravity", "point")}
+EXPANDED_MARK = "# cablesim expanded the shorthand of this case file:"
+
+
+def _uses_shorthand(data: dict) -> bool:
+    return any(isinstance(data.get(sec), dict) and any(k in data[sec] for k in keys) for sec, keys in SHORTHAND.items())
+
+
+def _expanded_text(text: str, data: dict, case: Case, overrides) -> str:
+    """The case text stored with results when the file used the shorthand: the original file as
+    comments, then the case with ``cable`` and ``loads`` as the explicit lists they stand for
+    (any ``--set`` overrides already applied), so that it re-parses to the same case."""
+    original = "".join(f"# | {line}\n" for line in text.rstrip("\n").splitlines())
+    applied = "".join(f"# (applied above) --set {o}\n" for o in overrides or ())
+    full = {"name": data.get("name"), **data, **case.expanded()}
+    body = yaml.safe_dump(full, sort_keys=False, default_flow_style=None, width=100)
+    return f"{EXPANDED_MARK}\n{original}{applied}{body}"
 
 
 def load_case(path: str | Path | None, overrides=None) -> tuple[Case, str]:

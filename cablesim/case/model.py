@@ -7,7 +7,7 @@ from typing import Literal
 
 import numpy as np
 import yaml
-from pydantic import Field, PrivateAttr, field_validator, model_validator
+from pydantic import Field, PrivateAttr, ValidationError, field_validator, model_validator
 
 from ..cable import Cable
 from ..channels import channel_index
@@ -71,6 +71,7 @@ class Case(StrictModel):
 
     @model_validator(mode="after")
     def _sizes(self):
+        self._expand()
         n = self.cable.n_nodes
         for key in ("F0", "FL"):
             v = getattr(self.loads, key)
@@ -107,6 +108,47 @@ class Case(StrictModel):
         if isinstance(self.sweep, SweepSpec) and isinstance(self.sweep.omega, tuple):
             data["sweep"]["omega"] = list(self.sweep.omega)
         return yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
+
+    def _expand(self) -> None:
+        """Replace the shorthand (cable.length/nodes/mass_per_length, loads.gravity/point) by the
+        explicit lists it stands for, so that the rest of cablesim sees S, masses, F0 and FL."""
+        c, ld = self.cable, self.loads
+        if not (c.shorthand or ld.shorthand):
+            return
+        n = c.n_nodes
+        masses = np.array(c.masses, dtype=float)
+        F0 = np.zeros(2 * n) if ld.F0 is None else np.array(ld.F0, dtype=float)
+        FL = None if ld.FL is None else np.array(ld.FL, dtype=float)
+        for key, v in (("F0", F0), ("FL", FL)):
+            if v is not None and len(v) != 2 * n:
+                raise ValueError(f"loads.{key} has {len(v)} values; this cable has n = {n} interior nodes, so it "
+                                 f"needs 2n = {2 * n} (horizontal, vertical for each node in turn)")
+        for k, p in enumerate(ld.point or ()):
+            if p.node > n:
+                raise ValueError(f"`loads.point[{k + 1}].node` is {p.node}, but this cable has n = {n} interior "
+                                 f"nodes; count them from 1 at support A")
+            i = p.node - 1
+            masses[i] += p.mass or 0.0
+            F0[2 * i:2 * i + 2] += p.F or (0.0, 0.0)
+            if p.FL is not None:
+                FL = np.zeros(2 * n) if FL is None else FL
+                FL[2 * i:2 * i + 2] += p.FL
+        F0[1::2] += (ld.gravity or 0.0) * masses
+        rigidity = {"EA": c.EA} if c.EA is not None else {"E": c.E, "A": c.A}
+        try:
+            cable = CableSpec(L=c.L, H=c.H, S=c.S, masses=tuple(masses.tolist()), **rigidity)
+            loads = LoadsSpec(F0=tuple(F0.tolist()), FL=None if FL is None else tuple(FL.tolist()))
+        except ValidationError as err:  # e.g. point masses or weights beyond the ranges of the lists
+            e = err.errors()[0]
+            field = ".".join(["cable" if err.title == "CableSpec" else "loads", *(str(x) for x in e["loc"][:1])])
+            msg = e["msg"].removeprefix("Value error, ")
+            raise ValueError(f"with the shorthand expanded, `{field}` {msg}") from None
+        object.__setattr__(self, "cable", cable)
+        object.__setattr__(self, "loads", loads)
+
+    def expanded(self) -> dict:
+        """The ``cable`` and ``loads`` sections as explicit lists (the shorthand expanded)."""
+        return {key: getattr(self, key).model_dump(mode="json", exclude_none=True) for key in ("cable", "loads")}
 
     # -- derived objects ---------------------------------------------------------------------
     def to_cable(self) -> Cable:

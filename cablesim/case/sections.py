@@ -7,6 +7,7 @@ from typing import Annotated, Any, Literal
 
 import numpy as np
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic_core import PydanticCustomError
 
 from ..names import CONTINUATION_PARAMETERS, DIRECTIONS, INTEGRATORS
 from .numbers import (
@@ -19,6 +20,7 @@ from .numbers import (
     in_range,
     integer,
     plain_number,
+    range_text,
     real,
 )
 
@@ -35,8 +37,9 @@ HINTS = {
     "int_from_float": "must be a whole number",
 }
 
-#: Most interior nodes a cable may have (its matrices grow as the square).
-MAX_NODES = 1000
+#: Most interior nodes a cable may have: the exact analysis is banded (O(n) per step), but a
+#: run still holds a few dense 2n x 2n matrices (the tangent stiffness: 128 MB at 2000 nodes).
+MAX_NODES = 2000
 #: Ranges of the values of lists (the message names the item).
 SEGMENT_RANGE = (1e-3, 1e6, "m")
 MASS_RANGE = (1e-6, 1e10, "kg")
@@ -53,6 +56,24 @@ class StrictModel(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
+#: Stands for a list that is required unless its shorthand is given (see :func:`_require`).
+_ABSENT = "\x00absent"
+
+
+def _require(data, key: str, alternatives: tuple[str, ...]):
+    """Mark ``key`` absent when neither it nor its shorthand is given, so that the field itself
+    reports "is required" beside any other problem of the section."""
+    if isinstance(data, dict) and key not in data and not any(k in data for k in alternatives):
+        return {**data, key: _ABSENT}
+    return data
+
+
+def _absent_is_missing(v):
+    if isinstance(v, str) and v == _ABSENT:
+        raise PydanticCustomError("missing", "Field required")
+    return v
+
+
 def _finite(v: float, what: str) -> float:
     if not math.isfinite(v):
         raise ValueError(f"{what} must be a finite number")
@@ -60,19 +81,43 @@ def _finite(v: float, what: str) -> float:
 
 
 class CableSpec(StrictModel):
-    """Geometry, axial rigidity and masses (section ``cable:``)."""
+    """Geometry, axial rigidity and masses (section ``cable:``).
+
+    The segments are given as ``S`` (n+1 natural lengths) or as the shorthand ``length`` (total
+    natural length) with ``nodes`` (n, equal segments); the masses as ``masses`` (n values) or
+    as ``mass_per_length`` (kg per metre of natural length, each node carrying half of each
+    adjacent segment). The case expands the shorthand into ``S`` and ``masses``.
+    """
 
     L: real(0.0, 1e5, "m", lo_open=True) = Field(description="horizontal distance A->B, m")
     H: real(-1e5, 1e5, "m") = Field(description="vertical distance A->B, m, positive = B below A")
-    S: tuple[Load, ...] = Field(description="natural segment lengths, m (n+1)")
+    S: tuple[Load, ...] | None = Field(default=None, description="natural segment lengths, m (n+1)")
+    length: real(0.0, 1e6, "m", lo_open=True) | None = Field(
+        default=None, description="total natural length, m (with nodes)")
+    nodes: integer(1, MAX_NODES) | None = Field(default=None, description="interior nodes n (with length)")
     EA: Positive | None = Field(default=None, description="axial rigidity, N")
     E: Positive | None = Field(default=None, description="Young's modulus, N/m^2")
     A: Positive | None = Field(default=None, description="cross-section area, m^2")
-    masses: tuple[Load, ...] = Field(description="lumped nodal masses, kg (n)")
+    masses: tuple[Load, ...] | None = Field(default=None, description="lumped nodal masses, kg (n)")
+    mass_per_length: real(0.0, 1e6, "kg/m", lo_open=True) | None = Field(
+        default=None, description="kg per m of natural length")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _required(cls, data):
+        data = _require(data, "S", ("length", "nodes"))
+        return _require(data, "masses", ("mass_per_length",))
+
+    @field_validator("S", "masses", mode="before")
+    @classmethod
+    def _given(cls, v):
+        return _absent_is_missing(v)
 
     @field_validator("S", "masses")
     @classmethod
     def _positive(cls, v, info):
+        if v is None:
+            return v
         least = 2 if info.field_name == "S" else 1
         if len(v) < least:
             raise ValueError(f"needs at least {least} value{'s' if least > 1 else ''}, one per "
@@ -100,12 +145,53 @@ class CableSpec(StrictModel):
                 f"the axial rigidity E*A = {ea:g} N is out of range; give EA (N) or E and A whose "
                 "product is a positive finite number"
             )
+        self._expand_segments()
+        self._expand_masses()
         if len(self.masses) != len(self.S) - 1:
             raise ValueError(
                 f"cable.masses has {len(self.masses)} values but cable.S has {len(self.S)} "
                 f"segments: n+1 segments need n = {len(self.S) - 1} masses, one per interior node"
             )
         return self
+
+    def _expand_segments(self) -> None:
+        short = (self.length is not None, self.nodes is not None)
+        if self.S is not None and any(short):
+            raise ValueError("`cable.S` and `cable.length`/`cable.nodes` both give the segments; give one or the other")
+        if self.S is None and not any(short):
+            raise ValueError("`cable.S` is required; add it (n+1 natural segment lengths, m), or give the "
+                             "total natural length as cable.length with the number of interior nodes as cable.nodes")
+        if self.S is None and not all(short):
+            missing = "cable.nodes" if short[0] else "cable.length"
+            raise ValueError(f"`{missing}` is required with the shorthand cable.length and cable.nodes; add it")
+        if self.S is None:
+            seg = float(self.length) / (self.nodes + 1)
+            lo, hi, unit = SEGMENT_RANGE
+            if not lo <= seg <= hi:
+                raise ValueError(f"`cable.length` / (cable.nodes + 1) gives segments of {seg:g} m; each must be "
+                                 f"{range_text(lo, hi, unit)}: give fewer nodes or check cable.length")
+            object.__setattr__(self, "S", (seg,) * (self.nodes + 1))
+
+    def _expand_masses(self) -> None:
+        if self.masses is not None and self.mass_per_length is not None:
+            raise ValueError("`cable.masses` and `cable.mass_per_length` both give the masses; give one "
+                             "(extra point masses go in loads.point)")
+        if self.masses is None and self.mass_per_length is None:
+            raise ValueError("`cable.masses` is required; add it (n lumped masses, kg), or give "
+                             "cable.mass_per_length (kg/m of natural length)")
+        if self.masses is None:
+            S = np.asarray(self.S, dtype=float)
+            m = 0.5 * self.mass_per_length * (S[:-1] + S[1:])
+            lo, hi, unit = MASS_RANGE
+            if not (lo <= m.min() and m.max() <= hi):
+                raise ValueError(f"`cable.mass_per_length` gives nodal masses from {m.min():g} to {m.max():g} kg; "
+                                 f"each must be {range_text(lo, hi, unit)}: check cable.mass_per_length")
+            object.__setattr__(self, "masses", tuple(float(x) for x in m))
+
+    @property
+    def shorthand(self) -> bool:
+        """True if the segments or the masses were given by the shorthand."""
+        return self.length is not None or self.mass_per_length is not None
 
     @property
     def axial_rigidity(self) -> float:
@@ -118,11 +204,44 @@ class CableSpec(StrictModel):
         return len(self.S) - 1
 
 
-class LoadsSpec(StrictModel):
-    """Sustained and harmonic nodal loads (section ``loads:``), N, 2n values each."""
+class PointLoad(StrictModel):
+    """Loads and an extra mass at one interior node (an item of ``loads.point``)."""
 
-    F0: tuple[Load, ...] = Field(description="sustained nodal loads, N")
+    node: integer(1, MAX_NODES) = Field(description="interior node, counted from 1 at support A")
+    F: tuple[Load, Load] | None = Field(default=None, description="sustained load (horizontal, vertical), N")
+    FL: tuple[Load, Load] | None = Field(default=None, description="peak harmonic load (horizontal, vertical), N")
+    mass: real(0.0, MASS_RANGE[1], "kg") | None = Field(default=None, description="extra lumped mass, kg")
+
+    @field_validator("F", "FL")
+    @classmethod
+    def _range(cls, v):
+        if v is not None:
+            in_range(v, *LOAD_RANGE, what="load")
+        return v
+
+
+class LoadsSpec(StrictModel):
+    """Sustained and harmonic nodal loads (section ``loads:``), N, 2n values each.
+
+    ``F0`` may be left out or completed by the shorthand: ``gravity`` (m/s^2: every node's
+    weight, vertical, down) and ``point`` (loads and extra masses at chosen nodes); the case
+    expands them into ``F0`` and ``FL``.
+    """
+
+    F0: tuple[Load, ...] | None = Field(default=None, description="sustained nodal loads, N")
     FL: tuple[Load, ...] | None = Field(default=None, description="peak harmonic loads, N")
+    gravity: real(0.0, 1e3, "m/s^2") | None = Field(default=None, description="acceleration of gravity, m/s^2")
+    point: tuple[PointLoad, ...] | None = Field(default=None, description="loads and masses by node")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _required(cls, data):
+        return _require(data, "F0", ("gravity", "point"))
+
+    @field_validator("F0", mode="before")
+    @classmethod
+    def _given(cls, v):
+        return _absent_is_missing(v)
 
     @field_validator("F0", "FL")
     @classmethod
@@ -130,6 +249,11 @@ class LoadsSpec(StrictModel):
         if v is not None:
             in_range(v, *LOAD_RANGE, what="load")
         return v
+
+    @property
+    def shorthand(self) -> bool:
+        """True if gravity or point loads were given."""
+        return self.gravity is not None or self.point is not None
 
 
 class DampingSpec(StrictModel):

@@ -12,7 +12,9 @@ equilibrium (so tolerances act on the displacement, not on absolute coordinates)
 
 Numba functions take the model as a tuple ``prm`` built by :meth:`EquationsOfMotion.params`:
 ``(model, S, EA, L, H, m, C, F0, FL, w, y0, x0, u0, K0, tol, slack)`` with ``slack`` 1 when the exact
-analysis continues through slack segments (:data:`CONTINUE`) and 0 when it stops there.
+analysis continues through slack segments (:data:`CONTINUE`) and 0 when it stops there; ``C`` is
+dense or, for heavy cables, banded (:func:`cablesim.dynamics.banded.damping_row` multiplies by
+either).
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from numba import njit
 from ..cable import Cable
 from ..modal import modal_analysis
 from ..statics import resisting_force
+from . import banded as bd
 from . import kernels as kn
 
 EXACT = 0
@@ -87,10 +90,7 @@ def resisting_from_eq15(prm, t, v, a, P):
     m, C, F0, FL, w = prm[5], prm[6], prm[7], prm[8], prm[9]
     sw = np.sin(w * t)
     for i in range(m.size):
-        acc = F0[i] + FL[i] * sw - m[i] * a[i]
-        for j in range(m.size):
-            acc -= C[i, j] * v[j]
-        P[i] = acc
+        P[i] = F0[i] + FL[i] * sw - m[i] * a[i] - bd.damping_row(C, v, 0, i)
 
 
 @njit(cache=True)
@@ -122,10 +122,7 @@ def rate(prm, t, s, warm, ds, wk, awk):
             return st
     wc = w * np.cos(w * t)
     for i in range(nd):
-        acc = FL[i] * wc - Kv[i]
-        for j in range(nd):
-            acc -= C[i, j] * s[2 * nd + j]
-        acc /= m[i]
+        acc = (FL[i] * wc - Kv[i] - bd.damping_row(C, s, 2 * nd, i)) / m[i]
         if not np.isfinite(acc):
             return kn.NONFINITE
         ds[2 * nd + i] = acc
@@ -146,10 +143,7 @@ def consistent_acceleration(prm, t, s, wk):
     kn.exact_force_and_Kv(y, v, S, EA, L, H, P, Kv, wk[4])
     sw = np.sin(w * t)
     for i in range(nd):
-        acc = F0[i] + FL[i] * sw - P[i]
-        for j in range(nd):
-            acc -= C[i, j] * v[j]
-        s[2 * nd + i] = acc / m[i]
+        s[2 * nd + i] = (F0[i] + FL[i] * sw - P[i] - bd.damping_row(C, v, 0, i)) / m[i]
 
 
 @njit(cache=True)
@@ -187,10 +181,10 @@ def observe(prm, t, s, warm, zc, ze, T, segment_state, awk, split):
     if model == EXACT:
         y = prm[10] + z
         P = np.empty(nd)
-        K = np.empty((nd, nd))
+        Kv = np.empty(nd)
         taut = np.empty(S.size)
         kn.tension_only_mask(y, S, L, H, taut)
-        segment_state[0] = kn.exact_force_and_stiffness(y, S, EA, L, H, P, K, taut)
+        segment_state[0] = kn.exact_force_and_Kv(y, v, S, EA, L, H, P, Kv, taut)
         kn.exact_tensions(y, S, EA, L, H, T)
         for k in range(S.size):
             T[k] *= taut[k]
@@ -203,7 +197,9 @@ def observe(prm, t, s, warm, zc, ze, T, segment_state, awk, split):
         else:
             zc[:] = x - prm[11]
             ze[:] = z - zc
-        r = m * a + C @ v + P - F
+        r = m * a + P - F
+        for i in range(nd):
+            r[i] += bd.damping_row(C, v, 0, i)
         return np.sqrt(np.sum(r * r)) / f0norm
     P = np.empty(nd)
     resisting_from_eq15(prm, t, v, a, P)
@@ -256,6 +252,9 @@ class EquationsOfMotion:
         ``"continue"`` (default): in the exact analysis segments are tension-only and the
         integrators locate every slack onset and re-tightening; ``"stop"``: a run stops where a
         segment first goes slack. The approximate analysis always stops.
+    C_band : ndarray, shape (7, 2n), optional
+        ``C`` in banded storage (:func:`cablesim.dynamics.banded.band_storage`); when given the
+        compiled kernels multiply by it in O(n) instead of by the dense ``C``.
     """
 
     cable: Cable
@@ -275,6 +274,7 @@ class EquationsOfMotion:
     a1: float = 0.0
     modal_omega: np.ndarray | None = None
     slack: str = "continue"
+    C_band: np.ndarray | None = None
 
     @cached_property
     def frequencies(self) -> np.ndarray:
@@ -315,7 +315,7 @@ class EquationsOfMotion:
             float(c.L),
             float(c.H),
             np.ascontiguousarray(self.mass),
-            np.ascontiguousarray(self.C),
+            np.ascontiguousarray(self.C if self.C_band is None else self.C_band),
             np.ascontiguousarray(self.F0),
             np.ascontiguousarray(self.FL),
             float(self.omega),

@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .banded import BAND_HALF
 from .status import Status
 
 # Status codes returned by the kernels: the values of :class:`cablesim.dynamics.status.Status`.
@@ -511,3 +512,51 @@ def solve_small(A, b, out, LU):
             acc -= LU[i, j] * out[j]
         out[i] = acc / LU[i, i]
     return True
+
+
+# ----------------------------------------------------------------------------------------------
+# Banded stiffness and solves (heavy cables: O(n) per Newton iteration)
+# ----------------------------------------------------------------------------------------------
+@njit(cache=True)
+def exact_force_and_stiffness_band(y, S, EA, L, H, P, Kb, taut):
+    """:func:`exact_force_and_stiffness` with ``K`` in banded storage
+    (``Kb[BAND_HALF + i - j, j] = K[i, j]``, shape (BAND_ROWS, 2n), see
+    :mod:`cablesim.dynamics.banded`); the first segment not longer than S, or -1."""
+    n = S.size - 1
+    P[:] = 0.0
+    Kb[:, :] = 0.0
+    slack = -1
+    for k in range(n + 1):
+        dx, dy = _segment(y, k, n, L, H)
+        l = np.sqrt(dx * dx + dy * dy)
+        e0, e1 = dx / l, dy / l
+        T = EA * (l - S[k]) / S[k]
+        if T <= 0.0 and slack < 0:
+            slack = k
+        T *= taut[k]
+        ka = taut[k] * EA / S[k]
+        kg = T / l
+        k00 = kg + (ka - kg) * e0 * e0
+        k01 = (ka - kg) * e0 * e1
+        k11 = kg + (ka - kg) * e1 * e1
+        hb = BAND_HALF
+        for b, sign in ((k - 1, -1.0), (k, 1.0)):  # start block (force -T e), end block (+T e)
+            if 0 <= b < n:
+                P[2 * b] += sign * T * e0
+                P[2 * b + 1] += sign * T * e1
+                Kb[hb, 2 * b] += k00  # diagonal block: K[2b + r, 2b + c] at Kb[hb + r - c, 2b + c]
+                Kb[hb + 1, 2 * b] += k01
+                Kb[hb - 1, 2 * b + 1] += k01
+                Kb[hb, 2 * b + 1] += k11
+        if k >= 1 and k < n:  # coupling of block k (rows) and block k-1 (columns), and its mirror
+            c0 = 2 * (k - 1)
+            Kb[hb + 2, c0] -= k00
+            Kb[hb + 3, c0] -= k01
+            Kb[hb + 1, c0 + 1] -= k01
+            Kb[hb + 2, c0 + 1] -= k11
+            c1 = 2 * k
+            Kb[hb - 2, c1] -= k00
+            Kb[hb - 1, c1] -= k01
+            Kb[hb - 3, c1 + 1] -= k01
+            Kb[hb - 2, c1 + 1] -= k11
+    return slack

@@ -44,6 +44,13 @@ from . import provenance
 from .paths import part_path, remove_stale_parts, write_error
 
 
+#: Arrays of at least this many values are written gzip-compressed.
+COMPRESS_SIZE = 4096
+#: Static files keep the dense 2n x 2n matrices up to this many DOF unless asked (n = 200 nodes:
+#: nine matrices of 400 x 400, about 11 MB).
+MATRIX_DOF = 400
+
+
 @contextmanager
 def atomic_h5(path: str | Path, mode: str = "w"):
     """Open ``path`` for writing via a temporary file renamed into place on success.
@@ -118,70 +125,94 @@ def put(group: h5py.Group, name: str, data, units: str, description: str = "", a
     arr = np.asarray(data)
     if arr.dtype.kind in "fc" and not allow_nan and not np.all(np.isfinite(arr)):
         raise ValueError(f"refusing to write non-finite values to {group.name}/{name}")
-    ds = group.create_dataset(name, data=arr)
+    # Large arrays are chunked and compressed (lossless; h5py reads them transparently).
+    packed = {"compression": "gzip", "compression_opts": 4, "shuffle": True} if arr.size >= COMPRESS_SIZE else {}
+    ds = group.create_dataset(name, data=arr, **packed)
     ds.attrs["units"] = units
     if description:
         ds.attrs["description"] = description
     return ds
 
 
-def write_static(path: str | Path, result, case_text: str) -> Path:
+def write_static(path: str | Path, result, case_text: str, matrices: bool | None = None) -> Path:
     """Write a :class:`~cablesim.analyses.static.StaticResult` to HDF5.
 
     Layout: ``/static/inextensible/{x,T,B,D}``, ``/static/approximate/{x,u,y,T,B,D,f,N,K}``,
     ``/static/exact/{y,T,K}``, ``/modal/{omega,shapes,damping_ratio}`` with attributes
     ``analysis``, ``a0``, ``a1``; the case YAML and the version as root attributes.
+
+    The dense 2n x 2n matrices (B, D, f, N, K) are written when ``matrices`` is True, or when it
+    is None and 2n <= MATRIX_DOF; otherwise they are left out (root attribute
+    ``matrices_stored`` False) and the banded exact stiffness ``/static/exact/K_band``
+    (``K_band[d, j] = K[j + d, j]``) is written instead. ``/modal/shapes`` holds the shapes the
+    analysis computed (all of them for small cables, the lowest modes for large ones).
     """
     path = Path(path)
     r = result
+    dense = r.P.size <= MATRIX_DOF if matrices is None else bool(matrices)
     with atomic_h5(path) as f:
         stamp(f, case_text, "static", analysis=r.analysis)
         st = f.create_group("static")
+        st.attrs["matrices_stored"] = dense
         put(st, "P", r.P, "N", "sustained loads F0 in DOF order")
-        if r.inextensible is not None:
-            g = st.create_group("inextensible")
-            put(g, "x", r.inextensible.x, "m", "node coordinates of the inextensible cable")
-            put(g, "T", r.inextensible.T, "N", "segment tensions")
+        _write_static_models(st, r, dense)
+        _write_static_modal(f, r)
+    return path
+
+
+def _write_static_models(st: h5py.Group, r, dense: bool) -> None:
+    if r.inextensible is not None:
+        g = st.create_group("inextensible")
+        put(g, "x", r.inextensible.x, "m", "node coordinates of the inextensible cable")
+        put(g, "T", r.inextensible.T, "N", "segment tensions")
+        if dense:
             put(g, "B", r.inextensible.B, "1", "tangent transformation dT/dP")
             put(g, "D", r.inextensible.D, "m/N", "configurational flexibility dx/dP")
-            g.attrs["omega_c"] = r.inextensible.omega_c
-            attribute_units(g)
-        if r.approximate is not None:
-            a = r.approximate
-            g = st.create_group("approximate")
-            for name, val, units, desc in [
-                ("x", a.x, "m", "natural-state coordinates x(P)"),
-                ("u", a.u, "m", "elastic displacements (eq. 7)"),
-                ("y", a.y, "m", "deformed coordinates y = x + u"),
-                ("T", a.T, "N", "segment tensions"),
-                ("B", a.B, "1", "tangent transformation dT/dP"),
-                ("D", a.D, "m/N", "configurational flexibility"),
-                ("f", a.f, "m/N", "elastic flexibility (eq. 8)"),
-                ("N", a.N, "m/N", "elasto-configurational flexibility D + f"),
-                ("K", a.K, "N/m", "tangent stiffness N^-1"),
-            ]:
+        g.attrs["omega_c"] = r.inextensible.omega_c
+        attribute_units(g)
+    if r.approximate is not None:
+        a = r.approximate
+        g = st.create_group("approximate")
+        for name, val, units, desc in [
+            ("x", a.x, "m", "natural-state coordinates x(P)"),
+            ("u", a.u, "m", "elastic displacements (eq. 7)"),
+            ("y", a.y, "m", "deformed coordinates y = x + u"),
+            ("T", a.T, "N", "segment tensions"),
+            ("B", a.B, "1", "tangent transformation dT/dP"),
+            ("D", a.D, "m/N", "configurational flexibility"),
+            ("f", a.f, "m/N", "elastic flexibility (eq. 8)"),
+            ("N", a.N, "m/N", "elasto-configurational flexibility D + f"),
+            ("K", a.K, "N/m", "tangent stiffness N^-1"),
+        ]:
+            if dense or np.ndim(val) < 2:
                 put(g, name, val, units, desc)
-            g.attrs["omega_c"] = a.omega_c
-            g.attrs["omega_e"] = a.omega_e
-            attribute_units(g)
-        if r.exact is not None:
-            g = st.create_group("exact")
-            put(g, "y", r.exact.y, "m", "deformed node coordinates")
-            put(g, "T", r.exact.T, "N", "segment tensions EA (l - S) / S")
-            put(g, "l", r.exact.length, "m", "stretched segment lengths")
+        g.attrs["omega_c"] = a.omega_c
+        g.attrs["omega_e"] = a.omega_e
+        attribute_units(g)
+    if r.exact is not None:
+        g = st.create_group("exact")
+        put(g, "y", r.exact.y, "m", "deformed node coordinates")
+        put(g, "T", r.exact.T, "N", "segment tensions EA (l - S) / S")
+        put(g, "l", r.exact.length, "m", "stretched segment lengths")
+        if dense:
             put(g, "K", r.exact.K, "N/m", "tangent stiffness of the deformed configuration")
-        m = f.create_group("modal")
-        put(m, "omega", r.modes.omega, "rad/s", "linear modal frequencies, ascending")
-        put(m, "shapes", r.modes.shapes, "1/sqrt(kg)", "mass-normalised mode shapes (columns)")
-        put(m, "damping_ratio", r.damping_ratios, "1", "Rayleigh damping ratio of each mode")
-        put(m, "inextensible_omega", r.inextensible_omega, "rad/s", "finite frequencies of the inextensible cable")
-        m.attrs["analysis"] = r.analysis
-        m.attrs["a0"] = r.a0
-        m.attrs["a1"] = r.a1
-        if r.sole_inextensible_omega is not None:
-            m.attrs["sole_inextensible_omega"] = r.sole_inextensible_omega
-        attribute_units(m)
-    return path
+        elif r.K0_band is not None:
+            put(g, "K_band", r.K0_band, "N/m", "tangent stiffness, lower band form: K_band[d, j] = K[j + d, j]")
+
+
+def _write_static_modal(f: h5py.File, r) -> None:
+    m = f.create_group("modal")
+    put(m, "omega", r.modes.omega, "rad/s", "linear modal frequencies, ascending")
+    put(m, "shapes", r.modes.shapes, "1/sqrt(kg)", "mass-normalised mode shapes (columns)")
+    put(m, "damping_ratio", r.damping_ratios, "1", "Rayleigh damping ratio of each mode")
+    put(m, "inextensible_omega", r.inextensible_omega, "rad/s", "finite frequencies of the inextensible cable")
+    m.attrs["analysis"] = r.analysis
+    m.attrs["a0"] = r.a0
+    m.attrs["a1"] = r.a1
+    m.attrs["shapes_stored"] = r.modes.shapes.shape[1]
+    if r.sole_inextensible_omega is not None:
+        m.attrs["sole_inextensible_omega"] = r.sole_inextensible_omega
+    attribute_units(m)
 
 
 def write_history(path: str | Path, hist, case_text: str, command: str, extra_attrs: dict | None = None) -> Path:

@@ -18,10 +18,32 @@ def _g(v: float, digits: int = 6) -> str:
     return f"{v:.{digits}g}"
 
 
-def static_summary(case, result) -> str:
-    """Readable summary of a static analysis: coordinates, tensions, frequencies, damping."""
+#: Above this many nodes the static summary shows the first and last few rows of each table.
+SUMMARY_NODES = 20
+#: Rows kept at each end of a shortened table.
+SUMMARY_ENDS = 5
+
+
+def _shown(count: int, full: bool, ends: int = SUMMARY_ENDS) -> list[int | None]:
+    """Row indices to print: all, or the first and last ``ends`` with None for the gap."""
+    if full or count <= 2 * ends + 1:
+        return list(range(count))
+    return [*range(ends), None, *range(count - ends, count)]
+
+
+def _rows(indices: list[int | None], make, width: int) -> list[list[str]]:
+    return [make(i) if i is not None else ["..."] + [""] * (width - 1) for i in indices]
+
+
+def static_summary(case, result, full: bool = False) -> str:
+    """Readable summary of a static analysis: coordinates, tensions, frequencies, damping.
+
+    For cables of more than SUMMARY_NODES nodes the tables show their first and last rows (and
+    the lowest modes) unless ``full``.
+    """
     c = result.cable
     n = c.n_nodes
+    full = full or n <= SUMMARY_NODES
     excess = 100.0 * (c.total_length / c.chord_length - 1.0)
     out = [
         f"cablesim {__version__}: static analysis of '{case.name}' ({result.analysis} analysis)",
@@ -41,10 +63,8 @@ def static_summary(case, result) -> str:
     if result.exact is not None:
         header.append("y exact")
         cols.append(result.exact.y)
-    rows = []
-    for i in range(2 * n):
-        name = f"{'xy'[i % 2]}{i // 2 + 1} ({i + 1})"
-        rows.append([name, _g(result.P[i] / 1e3, 6)] + [_g(col[i], 8) for col in cols])
+    rows = _rows(_shown(2 * n, full, 2 * SUMMARY_ENDS), lambda i: [f"{'xy'[i % 2]}{i // 2 + 1} ({i + 1})",
+                 _g(result.P[i] / 1e3, 6)] + [_g(col[i], 8) for col in cols], len(header))
     out.append(_table(header, rows))
 
     out += ["", "Segment tensions, kN:"]
@@ -56,23 +76,24 @@ def static_summary(case, result) -> str:
     if result.exact is not None:
         header += ["T exact", "strain exact"]
         cols += [result.exact.T, None]
-    rows = []
-    for r in range(c.n_segments):
+    def segment_row(r):
         row = [str(r + 1), _g(c.S[r])]
         for col in cols:
-            if col is None:
-                row.append(f"{result.exact.T[r] / c.EA:.3e}")
-            else:
-                row.append(_g(col[r] / 1e3, 7))
-        rows.append(row)
-    out.append(_table(header, rows))
+            row.append(f"{result.exact.T[r] / c.EA:.3e}" if col is None else _g(col[r] / 1e3, 7))
+        return row
+
+    out.append(_table(header, _rows(_shown(c.n_segments, full), segment_row, len(header))))
 
     m = result.modes
     out += ["", f"Linear modes about the equilibrium ({result.analysis} tangent stiffness):"]
+    modes = range(m.omega.size) if full else range(min(m.omega.size, 2 * SUMMARY_ENDS))
     rows = [
         [str(k + 1), _g(m.omega[k], 7), _g(m.frequency_hz[k], 6), _g(m.period[k], 6), f"{result.damping_ratios[k]:.4g}"]
-        for k in range(m.omega.size)
+        for k in modes
     ]
+    if len(modes) < m.omega.size:
+        rows.append([f"... {m.omega.size - len(modes)} more, up to", _g(m.omega[-1], 7), _g(m.frequency_hz[-1], 6),
+                     _g(m.period[-1], 6), f"{result.damping_ratios[-1]:.4g}"])
     out.append(_table(["mode", "omega (rad/s)", "f (Hz)", "period (s)", "damping ratio"], rows))
     out.append(f"Rayleigh damping C = a0 M + a1 K0: a0 = {result.a0:.6g} 1/s, a1 = {result.a1:.6g} s")
     if result.inextensible_omega.size:
@@ -88,11 +109,16 @@ def static_summary(case, result) -> str:
         )
     if result.exact is not None:
         out.append(f"Static solver residual (closure error): {result.exact.segments.closure_error:.2e} m")
+    if not full:
+        out.append(f"(tables shortened for n = {n} nodes; --full prints every row)")
     return "\n".join(out)
 
 
-def history_summary(case, hist, integ, wall: float) -> str:
-    """Summary of a time history: status, peak displacements, response frequencies, drift."""
+def history_summary(case, hist, integ, wall: float, full: bool = False) -> str:
+    """Summary of a time history: status, peak displacements, response frequencies, drift.
+
+    More than 2 SUMMARY_NODES channels are shown as the first and last few unless ``full``.
+    """
     forced = f"forcing w = {hist.omega:g} rad/s" if hist.omega is not None else "free vibration"
     lines = [
         f"cablesim {__version__}: '{case.name}', {forced}, {hist.analysis} analysis, "
@@ -101,19 +127,20 @@ def history_summary(case, hist, integ, wall: float) -> str:
         f"linear modes: {', '.join(f'{w:.5g}' for w in hist.modal_omega[:6])} rad/s",
         "",
     ]
-    rows = []
     half = hist.t.size // 2
-    for i, dof in enumerate(hist.dof_numbers):
+
+    def row(i):
         z = hist.z[:, i]
         peaks = spectrum_peaks(hist.t, z, 0.5, max_peaks=2) if hist.t.size > 16 else []
-        rows.append(
-            [
-                f"z{dof}",
-                _g(np.abs(z).max(), 5),
-                _g(0.5 * np.ptp(z[half:]), 5) if half > 0 else "-",
-                ", ".join(f"{p:.4g}" for p in peaks) or "-",
-            ]
-        )
+        return [
+            f"z{hist.dof_numbers[i]}",
+            _g(np.abs(z).max(), 5),
+            _g(0.5 * np.ptp(z[half:]), 5) if half > 0 else "-",
+            ", ".join(f"{p:.4g}" for p in peaks) or "-",
+        ]
+
+    channels = len(hist.dof_numbers)
+    rows = _rows(_shown(channels, full or channels <= 2 * SUMMARY_NODES, 2 * SUMMARY_ENDS), row, 4)
     lines.append(_table(["DOF", "max |z| (m)", "half range, 2nd half (m)", "response peaks (rad/s)"], rows))
     dT = hist.T - hist.T0
     lines.append(
@@ -122,18 +149,30 @@ def history_summary(case, hist, integ, wall: float) -> str:
     )
     lines.append(f"largest drift of eq. 15 (relative to |F0|): {np.max(hist.residual):.2e}")
     if hist.slack is not None:
-        lines += ["", *slack_lines(hist.slack, float(hist.t[-1]))]
+        lines += ["", *slack_lines(hist.slack, float(hist.t[-1]), full)]
     return "\n".join(lines)
 
 
-def slack_lines(rec, duration: float) -> list[str]:
-    """Per segment: peak tension (the snap load) and when, time slack, episodes."""
+def slack_lines(rec, duration: float, full: bool = True) -> list[str]:
+    """Per segment: peak tension (the snap load) and when, time slack, episodes.
+
+    A cable of more than 2 SUMMARY_NODES segments shows the 2 SUMMARY_ENDS segments slack
+    longest (then highest peak tension) unless ``full``.
+    """
+    count = rec.peak_tension.size
+    shown = list(range(count))
+    if not full and count > 2 * SUMMARY_NODES:
+        order = np.lexsort((-rec.peak_tension, -rec.slack_time))
+        shown = sorted(int(k) for k in order[: 2 * SUMMARY_ENDS])
     rows = [
         [f"{k + 1}", _g(rec.peak_tension[k] / 1e3, 6), f"{rec.peak_time[k]:.6g}", f"{rec.slack_time[k]:.4g}",
          f"{100.0 * rec.slack_time[k] / duration:.3g}" if duration > 0 else "-", f"{rec.episodes[k]}"]
-        for k in range(rec.peak_tension.size)
+        for k in shown
     ]
     out = [_table(["segment", "peak tension (kN)", "at t (s)", "slack (s)", "slack (%)", "slack episodes"], rows)]
+    if len(shown) < count:
+        out.append(f"({len(shown)} of {count} segments: those slack longest, then of highest peak tension; "
+                   "--full prints every segment)")
     if rec.t.size:
         out.append(f"{rec.t.size} slack/taut transitions located; {rec.chatter_holds} chatter holds ({rec.handling})")
     return out

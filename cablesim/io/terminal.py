@@ -1,5 +1,5 @@
-"""The terminal: error and warning paragraphs, progress bars, usage errors as paragraphs, and
-the notice while the kernels compile on first use.
+"""The terminal: error and warning paragraphs, progress bars, usage errors as paragraphs, the
+notice while the kernels compile on first use, and the options the commands share.
 
 Light on purpose (the command line imports it before anything heavy).
 """
@@ -12,10 +12,13 @@ import sys
 import textwrap
 import threading
 import time
+from enum import Enum
 from pathlib import Path
 
 import typer
 from typer.core import TyperGroup
+
+from ..names import ANALYSES, INTEGRATORS, SLACK_POLICIES
 
 
 #: Where numba caches the compiled kernels (their index files tell whether a run must compile).
@@ -157,3 +160,21 @@ def compiling(note, pattern: str = "equations.rate-*.nbi", delay: float = 1.5):
     finally:
         if timer is not None:
             timer.cancel()
+
+
+# ----------------------------------------------------------------------------------------------
+# Options the commands share
+# ----------------------------------------------------------------------------------------------
+Analysis = Enum("Analysis", {a.replace("-", "_"): a for a in ANALYSES}, type=str)
+IntegratorName = Enum("IntegratorName", {a.replace("-", "_"): a for a in INTEGRATORS}, type=str)
+SlackPolicy = Enum("SlackPolicy", {a: a for a in SLACK_POLICIES}, type=str)
+SLACK_OPTION = typer.Option(None, "--slack", help="Exact analysis: continue through slack segments or stop where one goes slack [default: the case's slack].")
+CASE_ARG = typer.Argument(None, help="YAML case file; omit it to run the paper's example.", show_default=False)
+SET_OPT = typer.Option(None, "--set", metavar="KEY=VALUE", help="Override a case-file value, with a dotted key "
+                       "(e.g. sweep.duration=1000); repeatable. Values are read as YAML.")
+ANALYSIS_OPT = typer.Option(None, "--analysis", help="Override the case file's analysis (default: analysis: in "
+                            "the case file, else exact).")
+INTEGRATOR_OPT = typer.Option(None, "--integrator", help="Time-integration scheme (default: integrator.name in "
+                              "the case file, else dopri5, or generalized-alpha for a stiff cable).")
+FORCE_OPT = typer.Option(False, "--force", help="Run even when the cost estimate is above the limits (1e8 time "
+                         "steps, a sweep 1e9, or 4 GB of memory).")

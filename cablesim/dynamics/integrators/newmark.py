@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from .. import banded as bd
 from .. import kernels as kn
 from ..equations import approximate_stiffness
 from .base import Integrator, IntegratorState, hermite
@@ -106,38 +107,91 @@ def _write_outputs(ta, tb, h, z, v, a, z1, v1, a1, sa, sb, da, db, t_out, out, j
 
 
 @njit(cache=True)
+def _dense_newton(prm, z, v, a, z1, v1, a1, P_n, P1, K, J, R, warm, wk, awk, coef, c_m, c_c, sf, first):
+    """Residual ``R`` (minus the generalized-alpha equilibrium) and dense Newton matrix ``J``;
+    a status code."""
+    m, C, F0, FL = prm[5], prm[6], prm[7], prm[8]
+    am, af = coef[0], coef[1]
+    nd = m.size
+    st = _internal(prm, z1, P_n, z, warm, P1, K, first, wk, awk, False)
+    if st != kn.OK:
+        return st
+    for q in range(nd):
+        acc = m[q] * ((1.0 - am) * a1[q] + am * a[q]) + (1.0 - af) * P1[q] + af * P_n[q]
+        acc -= F0[q] + FL[q] * sf
+        for r in range(nd):
+            acc += C[q, r] * ((1.0 - af) * v1[r] + af * v[r])
+            J[q, r] = (1.0 - af) * K[q, r] + c_c * C[q, r]
+        J[q, q] += c_m * m[q]
+        R[q] = -acc
+    return kn.OK
+
+
+@njit(cache=True)
+def _band_newton(prm, z, v, a, z1, v1, a1, P_n, P1, Kb, J, R, Cv, wk, coef, c_m, c_c, sf, check_slack):
+    """:func:`_dense_newton` in banded storage (exact analysis, banded damping), O(n): ``Kb``
+    receives the tangent stiffness of the segment modes ``wk[4]``, ``Cv`` is scratch."""
+    S, EA, L, H, m, C, F0, FL = prm[1], prm[2], prm[3], prm[4], prm[5], prm[6], prm[7], prm[8]
+    am, af = coef[0], coef[1]
+    nd = m.size
+    y = wk[0]
+    for q in range(nd):
+        y[q] = prm[10][q] + z1[q]
+        R[q] = (1.0 - af) * v1[q] + af * v[q]  # the velocity C multiplies, for now
+    if kn.exact_force_and_stiffness_band(y, S, EA, L, H, P1, Kb, wk[4]) >= 0 and check_slack and prm[15] == 0:
+        return kn.SLACK
+    for q in range(nd):
+        Cv[q] = bd.band_row(C, R, q)
+    for q in range(nd):
+        acc = m[q] * ((1.0 - am) * a1[q] + am * a[q]) + (1.0 - af) * P1[q] + af * P_n[q] + Cv[q]
+        R[q] = F0[q] + FL[q] * sf - acc
+    for d in range(bd.BAND_ROWS):
+        for q in range(nd):
+            J[d, q] = (1.0 - af) * Kb[d, q] + c_c * C[d, q]
+    for q in range(nd):
+        J[bd.BAND_HALF, q] += c_m * m[q]
+    return kn.OK
+
+
+@njit(cache=True)
+def _newmark_update(z, v, a, z1, v1, a1, h, beta, gamma):
+    """Acceleration and velocity at the step end from the displacement ``z1`` (Newmark)."""
+    for q in range(z.size):
+        a1[q] = (z1[q] - z[q] - h * v[q]) / (beta * h * h) - (0.5 / beta - 1.0) * a[q]
+        v1[q] = v[q] + h * ((1.0 - gamma) * a[q] + gamma * a1[q])
+
+
+@njit(cache=True)
 def _galpha_step(prm, z, v, a, P_n, warm, wk, awk, tb, h, coef, ztol, maxit, z1, v1, a1, P1, scratch):
-    """One step of size h ending at ``tb`` from ``(z, v, a, P_n)`` into ``(z1, v1, a1, P1)``."""
-    m, C, F0, FL, w = prm[5], prm[6], prm[7], prm[8], prm[9]
+    """One step of size h ending at ``tb`` from ``(z, v, a, P_n)`` into ``(z1, v1, a1, P1)``.
+
+    With banded damping (exact analysis of a heavy cable) every Newton iteration assembles and
+    solves a banded system, O(n); otherwise a dense one.
+    """
     am, af, beta, gamma = coef[0], coef[1], coef[2], coef[3]
     R, dz, K, J, LU = scratch
-    nd = m.size
+    nd = z.size
+    banded = awk is None and bd.is_band(prm[6])
     c_m = (1.0 - am) / (beta * h * h)
     c_c = (1.0 - af) * gamma / (beta * h)
-    sf = np.sin(w * (tb - af * h))
+    sf = np.sin(prm[9] * (tb - af * h))
     for q in range(nd):
         z1[q] = z[q] + h * v[q] + 0.5 * h * h * a[q]  # predictor: constant acceleration
         P1[q] = P_n[q]
     converged = False
     for it in range(maxit):
-        for q in range(nd):
-            a1[q] = (z1[q] - z[q] - h * v[q]) / (beta * h * h) - (0.5 / beta - 1.0) * a[q]
-            v1[q] = v[q] + h * ((1.0 - gamma) * a[q] + gamma * a1[q])
-        st = _internal(prm, z1, P_n, z, warm, P1, K, it == 0, wk, awk, False)
-        if st != kn.OK:
-            return st
-        big = 0.0
-        for q in range(nd):
-            acc = m[q] * ((1.0 - am) * a1[q] + am * a[q]) + (1.0 - af) * P1[q] + af * P_n[q]
-            acc -= F0[q] + FL[q] * sf
-            for r in range(nd):
-                acc += C[q, r] * ((1.0 - af) * v1[r] + af * v[r])
-                J[q, r] = (1.0 - af) * K[q, r] + c_c * C[q, r]
-            J[q, q] += c_m * m[q]
-            R[q] = -acc
-        if not kn.solve_small(J, R, dz, LU):
+        _newmark_update(z, v, a, z1, v1, a1, h, beta, gamma)
+        if banded:
+            _band_newton(prm, z, v, a, z1, v1, a1, P_n, P1, K, J, R, dz, wk, coef, c_m, c_c, sf, False)
+            solved = bd.solve_band(J, R, dz, LU)
+        else:
+            st = _dense_newton(prm, z, v, a, z1, v1, a1, P_n, P1, K, J, R, warm, wk, awk, coef, c_m, c_c, sf, it == 0)
+            if st != kn.OK:
+                return st
+            solved = kn.solve_small(J, R, dz, LU)
+        if not solved:
             break
-        step = 0.0
+        big, step = 0.0, 0.0
         for q in range(nd):
             z1[q] += dz[q]
             big = max(big, abs(dz[q]))
@@ -152,9 +206,9 @@ def _galpha_step(prm, z, v, a, P_n, warm, wk, awk, tb, h, coef, ztol, maxit, z1,
             if not np.isfinite(z1[q]):
                 return kn.NONFINITE
         return kn.INNER_SOLVE
-    for q in range(nd):
-        a1[q] = (z1[q] - z[q] - h * v[q]) / (beta * h * h) - (0.5 / beta - 1.0) * a[q]
-        v1[q] = v[q] + h * ((1.0 - gamma) * a[q] + gamma * a1[q])
+    _newmark_update(z, v, a, z1, v1, a1, h, beta, gamma)
+    if banded:
+        return _band_newton(prm, z, v, a, z1, v1, a1, P_n, P1, K, J, R, dz, wk, coef, c_m, c_c, sf, True)
     return _internal(prm, z1, P_n, z, warm, P1, K, False, wk, awk, True)
 
 
@@ -165,7 +219,8 @@ def _galpha_advance(prm, s, P_n, warm, wk, awk, evw, track, t0, h, i, i_end, t, 
     nd = prm[5].size
     z, v, a = s[:nd].copy(), s[nd : 2 * nd].copy(), s[2 * nd :].copy()
     z1, v1, a1, P1 = np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd)
-    scratch = (np.empty(nd), np.empty(nd), np.empty((nd, nd)), np.empty((nd, nd)), np.empty((nd, nd)))
+    rows = bd.BAND_ROWS if awk is None and bd.is_band(prm[6]) else nd  # banded Newton matrices: O(n)
+    scratch = (np.empty(nd), np.empty(nd), np.empty((rows, nd)), np.empty((rows, nd)), np.empty((rows, nd)))
     sa, sb, da, db = np.empty(3 * nd), np.empty(3 * nd), np.empty(3 * nd), np.empty(3 * nd)
     j = 0
     while i < i_end:
@@ -240,13 +295,15 @@ class GeneralizedAlpha(Integrator):
         nd = eom.n_dof
         if eom.exact:
             c = eom.cable
-            P, K = np.empty(nd), np.empty((nd, nd))
-            kn.exact_force_and_stiffness(eom.y0 + st.s[:nd], c.S, c.EA, c.L, c.H, P, K, st.wk[0][4])
+            P, Kv = np.empty(nd), np.empty(nd)  # no dense K: O(n) for heavy cables
+            kn.exact_force_and_Kv(eom.y0 + st.s[:nd], np.zeros(nd), c.S, c.EA, c.L, c.H, P, Kv, st.wk[0][4])
             return P
         return eom.F0 + eom.FL * np.sin(eom.omega * st.t) - eom.C @ st.s[nd : 2 * nd] - eom.mass * st.s[2 * nd :]
 
     def advance(self, prm, state, t_end, t_out, out):
         ex = state.extra
+        if bd.is_band(prm[6]) and not ex["eom"].exact:  # banded Newton matrices: exact analysis only
+            prm = prm[:6] + (np.ascontiguousarray(ex["eom"].C),) + prm[7:]
         coef = np.array(self._coefficients())
         i_end = max(int(np.ceil((t_end - ex["t0"]) / self.dt - 1e-9)), ex["i"])
         written = 0

@@ -1,0 +1,92 @@
+"""Banded storage for heavy cables: the damping and Newton matrices of a finely divided cable.
+
+The tangent stiffness of the exact analysis couples each node to its neighbours only, so it
+is block-tridiagonal with 2x2 blocks (bandwidth 3), and so are the Rayleigh damping
+``C = a0 M + a1 K0`` and the Newton matrices of the implicit schemes. Stored as LAPACK's general
+band layout, ``A_band[BAND_HALF + i - j, j] = A[i, j]`` (shape (:data:`BAND_ROWS`, 2n)), their
+products and solves cost O(n) instead of O(n^2) and O(n^3). The compiled kernels take either a
+dense or a banded damping matrix (:func:`damping_row`); :func:`is_band` tells them apart.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+#: Rows of a damping matrix in banded storage (bandwidth 3: block-tridiagonal 2x2 blocks):
+#: ``C_band[3 + i - j, j] = C[i, j]`` (LAPACK's general band layout). The DOF count is even, so a
+#: (7, 2n) band is never mistaken for a square dense matrix.
+BAND_ROWS = 7
+BAND_HALF = 3
+
+
+@njit(cache=True)
+def is_band(A):
+    """Whether ``A`` is in banded storage (shape (BAND_ROWS, nd)) rather than dense (nd, nd)."""
+    return A.shape[0] == BAND_ROWS and A.shape[1] != BAND_ROWS
+
+
+@njit(cache=True)
+def damping_row(C, s, off, i):
+    """Row ``i`` of ``C`` times ``s[off:off + nd]``: C dense (nd, nd), O(n), or banded
+    (:data:`BAND_ROWS`, nd), O(1)."""
+    nd = C.shape[1]
+    acc = 0.0
+    if is_band(C):
+        for j in range(max(0, i - BAND_HALF), min(nd, i + BAND_HALF + 1)):
+            acc += C[BAND_HALF + i - j, j] * s[off + j]
+    else:
+        for j in range(nd):
+            acc += C[i, j] * s[off + j]
+    return acc
+
+
+def band_storage(lower: np.ndarray) -> np.ndarray:
+    """The (:data:`BAND_ROWS`, nd) banded storage of a symmetric matrix given in lower band form
+    (``lower[d, j] = A[j + d, j]``, d = 0..3)."""
+    nd = lower.shape[1]
+    C = np.zeros((BAND_ROWS, nd))
+    for d in range(min(lower.shape[0], nd)):
+        C[BAND_HALF + d, : nd - d] = lower[d, : nd - d]  # below the diagonal: A[j + d, j]
+        C[BAND_HALF - d, d:] = lower[d, : nd - d]  # above: A[j, j + d]
+    return C
+
+
+@njit(cache=True)
+def band_row(A, x, i):
+    """Row ``i`` of the banded ``A`` (storage as :func:`damping_row`) times ``x``."""
+    nd = A.shape[1]
+    acc = 0.0
+    for j in range(max(0, i - BAND_HALF), min(nd, i + BAND_HALF + 1)):
+        acc += A[BAND_HALF + i - j, j] * x[j]
+    return acc
+
+
+@njit(cache=True)
+def solve_band(A, b, out, LU):
+    """Solve ``A out = b`` for a banded ``A`` (bandwidth BAND_HALF, storage as
+    :func:`damping_row`) by Gaussian elimination without pivoting, O(n) (scratch ``LU``).
+
+    For the symmetric positive definite Newton matrices of the implicit schemes
+    (``c_m M + c_c C + K`` of a taut cable). Returns False on a zero or non-finite pivot.
+    """
+    nd = b.size
+    hb = BAND_HALF
+    LU[:, :] = A
+    out[:] = b
+    for k in range(nd):
+        piv = LU[hb, k]
+        if piv == 0.0 or not np.isfinite(piv):
+            return False
+        for i in range(k + 1, min(nd, k + hb + 1)):
+            f = LU[hb + i - k, k] / piv
+            if f != 0.0:
+                for j in range(k + 1, min(nd, k + hb + 1)):
+                    LU[hb + i - j, j] -= f * LU[hb + k - j, j]
+                out[i] -= f * out[k]
+    for i in range(nd - 1, -1, -1):
+        acc = out[i]
+        for j in range(i + 1, min(nd, i + hb + 1)):
+            acc -= LU[hb + i - j, j] * out[j]
+        out[i] = acc / LU[hb, i]
+    return True

@@ -1,0 +1,106 @@
+"""Static analysis of heavy cables: banded stiffness and modes, and output that scales with n."""
+
+from __future__ import annotations
+
+import h5py
+import numpy as np
+import pytest
+
+import cablesim
+from cablesim.case import parse_case
+from cablesim.io.report import static_summary
+from cablesim.modal import modal_analysis, modal_analysis_banded
+from cablesim.statics import band_to_dense, exact_equilibrium, tangent_stiffness, tangent_stiffness_band
+
+
+def heavy(n: int, extra: str = "") -> cablesim.case.Case:
+    return parse_case(
+        f"cable: {{L: 300.0, H: 10.0, length: 306.0, nodes: {n}, EA: 2.0e8, mass_per_length: 2.0}}\n"
+        f"loads: {{gravity: 9.81, point: [{{node: {max(1, n // 3)}, F: [2.0e2, 1.0e2], mass: 5.0}}]}}\n{extra}"
+    )
+
+
+@pytest.mark.parametrize("n", [1, 2, 7, 60])
+def test_banded_stiffness_is_the_dense_one(n):
+    case = heavy(n)
+    cab = case.to_cable()
+    ex = exact_equilibrium(cab, case.F0)
+    K = tangent_stiffness(cab, ex.y)
+    np.testing.assert_allclose(band_to_dense(tangent_stiffness_band(cab, ex.y)), K, rtol=0, atol=1e-12 * abs(K).max())
+
+
+@pytest.mark.parametrize("n, n_shapes", [(7, None), (150, None), (150, 12)])
+def test_banded_modes_are_the_dense_ones(n, n_shapes, monkeypatch):
+    case = heavy(n)
+    cab = case.to_cable()
+    ex = exact_equilibrium(cab, case.F0)
+    m = cab.mass_diagonal
+    dense = modal_analysis(ex.K, m)
+    if n_shapes is not None:  # the inverse-iteration route of large cables
+        monkeypatch.setattr(cablesim.modal, "ALL_SHAPES_DOF", 0)
+    band = modal_analysis_banded(tangent_stiffness_band(cab, ex.y), m, n_shapes=n_shapes)
+    np.testing.assert_allclose(band.omega, dense.omega, rtol=1e-8)
+    k = band.shapes.shape[1]
+    assert k == (2 * n if n_shapes is None else n_shapes)
+    np.testing.assert_allclose(band.shapes, dense.shapes[:, :k], atol=1e-7 * abs(dense.shapes).max())
+    np.testing.assert_allclose(band.shapes.T @ (m[:, None] * band.shapes), np.eye(k), atol=1e-9)
+    low = modal_analysis_banded(tangent_stiffness_band(cab, ex.y), m, n_modes=5)
+    np.testing.assert_allclose(low.omega, dense.omega[:5], rtol=1e-8)
+
+
+def test_static_of_2000_nodes_writes_a_small_file_and_a_short_summary(tmp_path):
+    case = heavy(2000)
+    run = cablesim.static(case)
+    assert run.result.approximate is None  # the dense models are left out above 300 nodes
+    text = static_summary(case, run.result)
+    assert len(text.splitlines()) < 80 and "--full" in text
+    assert len(static_summary(case, run.result, full=True).splitlines()) > 10_000
+    path = run.to_hdf5(tmp_path / "heavy.h5")
+    assert path.stat().st_size < 50e6
+    with h5py.File(path, "r") as f:
+        assert not f["static"].attrs["matrices_stored"]
+        assert "K" not in f["static/exact"] and f["static/exact/K_band"].shape == (4, 4000)
+        assert f["modal/omega"].shape == (4000,)
+        assert 20 <= f["modal/shapes"].shape[1] < 100
+        np.testing.assert_allclose(f["modal/omega"][:], run.result.modes.omega)
+
+
+def test_matrices_on_request_and_below_the_size(tmp_path):
+    small = cablesim.static(heavy(5))
+    with h5py.File(small.to_hdf5(tmp_path / "small.h5"), "r") as f:
+        assert f["static"].attrs["matrices_stored"] and f["static/exact/K"].shape == (10, 10)
+        assert f["modal/shapes"].shape == (10, 10)
+    with h5py.File(small.to_hdf5(tmp_path / "none.h5", matrices=False), "r") as f:
+        assert "K" not in f["static/exact"] and "D" not in f["static/approximate"]
+        np.testing.assert_allclose(f["static/exact/K_band"][:], small.result.K0_band)
+    big = cablesim.static(heavy(250))
+    with h5py.File(big.to_hdf5(tmp_path / "big.h5", matrices=True), "r") as f:
+        assert f["static/exact/K"].shape == (500, 500) and f["static/approximate/N"].shape == (500, 500)
+        assert f["static/exact/K"].compression == "gzip"
+
+
+def test_heavy_span_example_parses_and_expands():
+    from pathlib import Path
+
+    from cablesim.case import load_case
+
+    case, text = load_case(Path(__file__).resolve().parents[1] / "configs" / "heavy-span.yaml")
+    assert case.cable.n_nodes == 100 and len(case.cable.S) == 101
+    carried = 1.628 * 300.7 * 100 / 101 + 15.0  # the end half-segments hang on the supports
+    assert sum(case.cable.masses) == pytest.approx(carried, rel=1e-12)
+    assert sum(case.F0[1::2]) == pytest.approx(9.81 * carried, rel=1e-12)
+    assert case.FL[2 * 19 + 1] == 200.0 and "length: 300.7" in text and "\nloads:\n  F0:" in text
+
+
+def test_free_vibration_along_a_mode_beyond_the_kept_shapes(monkeypatch):
+    from cablesim.analyses.setup import mode_velocity
+    from cablesim.analyses.static import run_static
+
+    case = heavy(30)
+    full = run_static(case, all_models=False)
+    monkeypatch.setattr(cablesim.modal, "ALL_SHAPES_DOF", 0)  # as for a large cable
+    monkeypatch.setattr(cablesim.analyses.static, "ALL_SHAPES_DOF", 0)
+    kept = run_static(case, all_models=False)
+    assert kept.modes.shapes.shape[1] == 20
+    v = mode_velocity(kept, 25, 1.0)
+    np.testing.assert_allclose(v, mode_velocity(full, 25, 1.0), atol=1e-7)

@@ -4,7 +4,7 @@ An integrator is an immutable object holding its settings (step size or toleranc
 advances an :class:`IntegratorState` through the :class:`~cablesim.dynamics.equations.EquationsOfMotion`
 up to a time, writing interpolated states at the requested output instants, and reports
 failures as status codes (:mod:`cablesim.dynamics.kernels`), never by raising. The driver
-(:func:`cablesim.dynamics.history.simulate`) calls it chunk by chunk, which keeps Ctrl-C and
+(:func:`cablesim.dynamics.simulate.simulate`) calls it chunk by chunk, which keeps Ctrl-C and
 progress reporting responsive while the compiled loop runs.
 """
 

@@ -14,6 +14,22 @@ from ..errors import CablesimError
 from .setup import build_equations, make_integrator, mode_velocity, need_inextensible, output_interval
 from .static import StaticResult, run_static
 
+#: Above this many nodes time histories skip the configurational/elastic split unless the case
+#: asks for it (``outputs.split: true``): it solves the dense inextensible problem at every
+#: saved instant, which costs more than the integration itself for heavy cables.
+SPLIT_NODES = 100
+
+
+def split_outputs(case: Case, split: bool | None = None) -> bool:
+    """Whether a time history computes the split: the argument, the case's ``outputs.split``,
+    or by default up to :data:`SPLIT_NODES` nodes."""
+    if split is not None:
+        return bool(split)
+    if case.outputs.split is not None:
+        return case.outputs.split
+    return case.cable.n_nodes <= SPLIT_NODES
+
+
 def run_history(
     case: Case,
     omega: float | None = None,
@@ -53,7 +69,7 @@ def run_history(
     w_int = max(omega, float(static.modes.omega[0]))
     step = output_interval(output_step or case.history.output_step, w_int, duration)
     integ = make_integrator(case.integrator, eom, w_int, integrator)
-    split = case.outputs.split if split is None else split
+    split = split_outputs(case, split)
     hist = simulate(eom, integ, duration, step, progress=progress, split=split)
     return static, hist, integ
 
@@ -112,6 +128,6 @@ def run_free_vibration(
     s0 = eom.initial_state(z0=z0, v0=v0)
     step = output_interval(output_step or fv.output_step, w_int, duration)
     integ = make_integrator(case.integrator, eom, w_int, integrator)
-    split = case.outputs.split if split is None else split
+    split = split_outputs(case, split)
     hist = simulate(eom, integ, duration, step, s0=s0, progress=progress, split=split)
     return static, hist, integ

@@ -83,6 +83,7 @@ class InextensibleEquilibrium:
         Tangent transformation ``B = dT/dP`` (eq. 7).
     D : ndarray, shape (2n, 2n)
         Tangent configurational flexibility ``D = dx/dP``, m/N; symmetric, ``D P = 0``.
+        ``B`` and ``D`` are dense: they are computed on first use.
     omega_c : float
         Configurational complementary energy ``Omega_c = T . S``, J.
     segments : SegmentForces
@@ -92,10 +93,23 @@ class InextensibleEquilibrium:
     P: np.ndarray
     x: np.ndarray
     T: np.ndarray
-    B: np.ndarray
-    D: np.ndarray
     omega_c: float
     segments: SegmentForces
+    cable: Cable
+
+    @functools.cached_property
+    def _tangents(self) -> _Tangents:
+        return _tangents(self.cable, self.segments, 0.0)
+
+    @property
+    def B(self) -> np.ndarray:
+        """Tangent transformation ``B = dT/dP``."""
+        return self._tangents.b
+
+    @functools.cached_property
+    def D(self) -> np.ndarray:
+        """Tangent configurational flexibility ``D = dx/dP``, m/N."""
+        return _sym(self._tangents.dydP)
 
     @property
     def F_end(self) -> np.ndarray:
@@ -198,11 +212,8 @@ def inextensible_equilibrium(
     """
     P = np.asarray(P, dtype=float)
     seg = solve_segment_forces(cable, P, elastic=False, F_start=F_start, check_slack=check_slack)
-    tg = _tangents(cable, seg, 0.0)
     x = _positions(seg, cable.n_nodes)
-    return InextensibleEquilibrium(
-        P=P, x=x, T=seg.T, B=tg.b, D=_sym(tg.dydP), omega_c=float(seg.T @ cable.S), segments=seg
-    )
+    return InextensibleEquilibrium(P=P, x=x, T=seg.T, omega_c=float(seg.T @ cable.S), segments=seg, cable=cable)
 
 
 def elastic_flexibility(cable: Cable, inext: InextensibleEquilibrium) -> np.ndarray:

@@ -103,3 +103,13 @@ def test_banded_stiffness_kernel_and_solve(equations):
     b, x = np.arange(2.0 * N), np.empty(2 * N)
     assert bd.solve_band(Jb, b, x, np.empty_like(Jb))
     np.testing.assert_allclose(x, np.linalg.solve(J, b), rtol=1e-10, atol=0)
+
+
+def test_split_is_skipped_by_default_above_100_nodes():
+    from cablesim.analyses.dynamic import split_outputs
+
+    text = "cable: {L: 100.0, H: 0.0, length: 102.5, nodes: %d, EA: 2.0e8, mass_per_length: 10.0}\nloads: {gravity: 9.81}\n"
+    assert split_outputs(parse_case(text % 100)) and not split_outputs(parse_case(text % 101))
+    assert split_outputs(parse_case(text % 101 + "outputs: {split: true}\n"))
+    assert not split_outputs(parse_case(text % 10 + "outputs: {split: false}\n"))
+    assert split_outputs(parse_case(text % 101), split=True)

@@ -19,6 +19,22 @@ from .setup import build_equations, make_integrator, mode_velocity, need_inexten
 from .static import StaticResult, run_static
 
 
+#: Above this many nodes time histories skip the configurational/elastic split unless the case
+#: asks for it (``outputs.split: true``): it solves the dense inextensible problem at every
+#: saved instant, which costs more than the integration itself for heavy cables.
+SPLIT_NODES = 100
+
+
+def split_outputs(case: Case, split: bool | None = None) -> bool:
+    """Whether a time history computes the split: the argument, the case's ``outputs.split``,
+    or by default up to :data:`SPLIT_NODES` nodes."""
+    if split is not None:
+        return bool(split)
+    if case.outputs.split is not None:
+        return case.outputs.split
+    return case.cable.n_nodes <= SPLIT_NODES
+
+
 @dataclass(frozen=True)
 class HistoryPlan:
     """A time history ready to run: every input checked, the integrator and steps chosen.
@@ -77,7 +93,7 @@ def plan_history(
     w_int = max(omega, float(static.modes.omega[0]))
     step = output_interval(output_step or case.history.output_step, w_int, duration)
     integ = make_integrator(case.integrator, eom, w_int, integrator)
-    split = case.outputs.split if split is None else split
+    split = split_outputs(case, split)
     s0 = eom.initial_state()
     check_initial_state(s0, "loads.F0")
     return HistoryPlan("history", static, eom, integ, w_int, duration, step, None, split)
@@ -162,7 +178,7 @@ def plan_free_vibration(
         _check_taut_start(static, z0)
     step = output_interval(output_step or fv.output_step, w_int, duration)
     integ = make_integrator(case.integrator, eom, w_int, integrator)
-    split = case.outputs.split if split is None else split
+    split = split_outputs(case, split)
     return HistoryPlan("free-vibration", static, eom, integ, w_int, duration, step, s0, split)
 
 

@@ -483,7 +483,8 @@ class OutputsSpec(StrictModel):
     """What time-history files keep (section ``outputs:``): a scene saves only what it draws."""
 
     channels: tuple[str, ...] | None = Field(default=None, description="DOF saved (default: all)")
-    split: bool = Field(default=True, description="compute and save the configurational/elastic split")
+    split: bool | None = Field(default=None, description="compute and save the configurational/elastic split "
+                               "(default: up to 100 nodes; it costs a dense inner solve per saved instant)")
 
 
 FIGURE_KINDS = ("fdr", "waveform", "waveform_phase", "waveform_fft", "split", "lissajous_tension")

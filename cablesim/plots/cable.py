@@ -9,6 +9,9 @@ import numpy as np
 from ..cable import nodes_with_supports
 from .base import pyplot, save_atomic
 
+#: Above this many nodes the loads are drawn as one quiver rather than an arrow per node.
+ARROW_NODES = 40
+
 
 def plot_cable(result, path: str | Path, title: str) -> Path:
     """Draw the cable: natural and deformed shapes, supports, loads and tensions.
@@ -35,7 +38,7 @@ def plot_cable(result, path: str | Path, title: str) -> Path:
         deformed_label = f"deformed y ({result.analysis} analysis)"
     ax.plot(pts[:, 0], pts[:, 1], "-", color="C0", lw=2, label=deformed_label)
     masses = cable.masses
-    sizes = 30 + 120 * masses / masses.max()
+    sizes = (30 + 120 * masses / masses.max()) * min(1.0, ARROW_NODES / cable.n_nodes)
     ax.scatter(pts[1:-1, 0], pts[1:-1, 1], s=sizes, color="C0", zorder=3, label="lumped masses (area ~ mass)")
     ax.plot([0, cable.L], [0, cable.H], "^", color="k", ms=11, zorder=4, label="supports A, B")
     ax.annotate("A", (0, 0), textcoords="offset points", xytext=(-12, -14))
@@ -47,7 +50,10 @@ def plot_cable(result, path: str | Path, title: str) -> Path:
     span = max(cable.L, np.ptp(pts[:, 1]), 1e-9)
     if pmax > 0:
         scale = 0.15 * span / np.hypot(P[:, 0], P[:, 1]).max()
-        for k, (node, load) in enumerate(zip(pts[1:-1], P)):
+        if cable.n_nodes > ARROW_NODES:  # one quiver: thousands of annotations take many seconds
+            ax.quiver(pts[1:-1, 0], pts[1:-1, 1], P[:, 0] * scale, P[:, 1] * scale, angles="xy",
+                      scale_units="xy", scale=1.0, color="C3", width=0.002)
+        for k, (node, load) in enumerate(zip(pts[1:-1], P) if cable.n_nodes <= ARROW_NODES else ()):
             if np.hypot(*load) == 0:
                 continue
             ax.annotate(

@@ -131,6 +131,22 @@ def exact_force_and_Kv(y, v, S, EA, L, H, P, Kv, taut):
 
 
 @njit(cache=True)
+def segment_stiffness(y, k, n, S, EA, L, H, taut_k):
+    """Segment ``k``'s tension, unit vector and 2x2 stiffness block ``(EA/S) e e^T + (T/l)(I - e e^T)``
+    in configuration ``y``, scaled by ``taut_k`` (0 while slack): ``(T, e0, e1, k00, k01, k11,
+    short)``, ``short`` whether the segment is not longer than its natural length."""
+    dx, dy = _segment(y, k, n, L, H)
+    l = np.sqrt(dx * dx + dy * dy)
+    e0, e1 = dx / l, dy / l
+    T = EA * (l - S[k]) / S[k]
+    short = T <= 0.0
+    T *= taut_k
+    ka = taut_k * EA / S[k]
+    kg = T / l
+    return T, e0, e1, kg + (ka - kg) * e0 * e0, (ka - kg) * e0 * e1, kg + (ka - kg) * e1 * e1, short
+
+
+@njit(cache=True)
 def exact_force_and_stiffness(y, S, EA, L, H, P, K, taut):
     """Resisting force ``P(y)`` and the assembled tangent stiffness ``K(y)`` of the segments with
     ``taut[k] = 1`` (see :func:`exact_force_and_Kv`); the first segment not longer than S, or -1."""
@@ -139,18 +155,9 @@ def exact_force_and_stiffness(y, S, EA, L, H, P, K, taut):
     K[:, :] = 0.0
     slack = -1
     for k in range(n + 1):
-        dx, dy = _segment(y, k, n, L, H)
-        l = np.sqrt(dx * dx + dy * dy)
-        e0, e1 = dx / l, dy / l
-        T = EA * (l - S[k]) / S[k]
-        if T <= 0.0 and slack < 0:
+        T, e0, e1, k00, k01, k11, short = segment_stiffness(y, k, n, S, EA, L, H, taut[k])
+        if short and slack < 0:
             slack = k
-        T *= taut[k]
-        ka = taut[k] * EA / S[k]
-        kg = T / l
-        k00 = kg + (ka - kg) * e0 * e0
-        k01 = (ka - kg) * e0 * e1
-        k11 = kg + (ka - kg) * e1 * e1
         i = k - 1  # start block
         j = k  # end block
         if j < n:
@@ -527,18 +534,9 @@ def exact_force_and_stiffness_band(y, S, EA, L, H, P, Kb, taut):
     Kb[:, :] = 0.0
     slack = -1
     for k in range(n + 1):
-        dx, dy = _segment(y, k, n, L, H)
-        l = np.sqrt(dx * dx + dy * dy)
-        e0, e1 = dx / l, dy / l
-        T = EA * (l - S[k]) / S[k]
-        if T <= 0.0 and slack < 0:
+        T, e0, e1, k00, k01, k11, short = segment_stiffness(y, k, n, S, EA, L, H, taut[k])
+        if short and slack < 0:
             slack = k
-        T *= taut[k]
-        ka = taut[k] * EA / S[k]
-        kg = T / l
-        k00 = kg + (ka - kg) * e0 * e0
-        k01 = (ka - kg) * e0 * e1
-        k11 = kg + (ka - kg) * e1 * e1
         hb = BAND_HALF
         for b, sign in ((k - 1, -1.0), (k, 1.0)):  # start block (force -T e), end block (+T e)
             if 0 <= b < n:

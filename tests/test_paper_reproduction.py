@@ -19,6 +19,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from cablesim.api import load_case
@@ -175,3 +176,46 @@ def test_make_reruns_a_scene_when_the_code_or_its_settings_change(tmp_path):
     assert run("ARGS_fig3a=--set sweep.duration=100") == []
     plot.write_text("b = 2\n")
     assert run("ARGS_fig3a=--set sweep.duration=100") == ["plot"]  # only the drawing changed
+
+
+def paper_numbers_module():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("paper_numbers", ROOT / "benchmarks" / "paper_numbers.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_jump_time_is_where_the_envelope_stays_above_half_its_final_value():
+    # A response at w/2 whose amplitude rises smoothly from 0.1 to 4 around t = 1000 s: the
+    # amplitude is half its final value where 0.1 + 3.9 s(t) = 2, s the logistic below.
+    pn = paper_numbers_module()
+    w = 5.0
+    t = np.arange(0.0, 3000.0, 0.02)
+    s = 1.0 / (1.0 + np.exp(-(t - 1000.0) / 60.0))
+    z = (0.1 + 3.9 * s) * np.sin(0.5 * w * t)
+    # an early transient above half the final value must not count: the envelope has to stay up
+    z[t < 20] += 3.0 * np.exp(-t[t < 20])
+    tj, block, final = pn.jump_time(t, z, w)
+    expected = 1000.0 + 60.0 * np.log((2.0 - 0.1) / (4.0 - 2.0))
+    assert block == pytest.approx(4 * np.pi / w)
+    assert final == pytest.approx(4.0, rel=1e-3)
+    assert expected - block <= tj <= expected + block
+
+
+def test_the_check_reports_every_number_that_changed(tmp_path):
+    pn = paper_numbers_module()
+    stored = {"a": {"text": "6.56"}, "b": {"text": "5.04"}, "gone": {"text": "1"}}
+    (tmp_path / "n.json").write_text(json.dumps({"numbers": stored}))
+    now = {"a": {"text": "6.58"}, "b": {"text": "5.04"}, "new": {"text": "2"}}
+    diff = pn.compare(now, tmp_path / "n.json")
+    assert len(diff) == 3 and any(d.startswith("a: 6.56") for d in diff)
+    assert pn.compare(stored, tmp_path / "n.json") == []
+    assert pn.compare(now, tmp_path / "missing.json") != []
+
+
+def test_grid_frequencies_print_to_the_step():
+    pn = paper_numbers_module()
+    assert [pn.step_decimals(s) for s in (0.02, 0.025, 0.005, 0.5, 1.0)] == [2, 3, 3, 1, 0]
+    assert pn.decimals(2 * np.pi / 600) == 2 and pn.decimals(2 * np.pi / 29.2) == 1

@@ -474,6 +474,10 @@ def fig8(N, D):
         if b["period"] == 2:
             maxima += find_peaks(b["amplitude"][:, 0])[0].size
     N.add("fig8a.cont.p2.maxima", maxima, f"{maxima}", "", "count of local maxima of z2 along the period-2 branch", src)
+    orbits = sum(b["trusted"].size for b in cont["branches"])
+    untrusted = orbits - sum(int(b["trusted"].sum()) for b in cont["branches"])
+    N.add("fig8a.cont.orbits", orbits, f"{orbits}", "", "count of periodic orbits computed", src)
+    N.add("fig8a.cont.untrusted", untrusted, f"{untrusted}", "", "count of orbits whose multipliers failed a check", src)
     # its end points are the period doublings, where a multiplier is on the unit circle
     stable = all(b["stable"][1:-1].all() for b in cont["branches"] if b["period"] == 2)
     N.add("fig8a.cont.p2.stable", stable, "stable" if stable else "unstable", "",

@@ -46,8 +46,8 @@ clean:
 #
 # FAST=1 runs the same scenes into runs/paper-fast/ on coarse grids that keep every frequency
 # docs/paper-reproduction.md names (peaks, band points), with histories long enough for the
-# jumps, and stamps each figure as a preview (`make figures FAST=1`: about 3 minutes on 2 cores
-# with -j2).
+# jumps (`make figures FAST=1`: 3.9 minutes of CPU in all; -j2 runs two scenes at a time); with
+# PREVIEW_STAMP=1 each FAST figure is stamped as a preview.
 # ---------------------------------------------------------------------------------------------
 FIGS := fig2 fig3a fig3b fig4 fig5a fig5b fig6 fig7a fig7b fig7c fig8a fig8b fig8c
 # Frequency-response figures also get their continuation: every periodic response, stable and
@@ -74,6 +74,8 @@ CMD_fig8c := history
 CMD_fig4-peak := sweep
 CMD_fig5a-updown := sweep
 
+# `cablesim plot --stamp TEXT` draws TEXT on a figure; set PREVIEW_STAMP=1 once the option exists.
+PREVIEW_STAMP ?=
 ifdef FAST
 OUTD := runs/paper-fast
 # The FAST grids: a coarse grid plus the frequencies the document quotes (the test
@@ -99,8 +101,6 @@ else
 OUTD := runs/paper
 STAMP_OPT :=
 endif
-# `cablesim plot --stamp TEXT` draws TEXT on a figure; set PREVIEW_STAMP=1 once the option exists.
-PREVIEW_STAMP ?=
 RUN := $(CLI)
 # A history that stops early (exit 3: a segment went slack) has written its results up to then,
 # and the figure shows them with the reason; a sweep with failed (slack) points has written them

@@ -1,12 +1,15 @@
 """The paper-figure make targets, end to end, in their FAST form.
 
 Runs ``make fig3a fig3a-continuation fig3b FAST=1`` (a frequency-response figure, its
-continuation over the brute-force points, and a waveform figure) into a temporary folder and checks the HDF5 results and the PNGs; then that make does not rerun a
-scene whose case file has not changed.
+continuation over the brute-force points, and a waveform figure) into a temporary folder and
+checks the HDF5 results and the PNGs, and that the FAST figures still show the phenomena they
+are named for (the subharmonic band, the late jump); then that make does not rerun a scene whose
+case file, code and settings have not changed.
 """
 
 from __future__ import annotations
 
+import re
 import shutil
 import subprocess
 import sys
@@ -46,10 +49,16 @@ def test_fdr_figure(built):
         assert f.attrs["command"] == "sweep"
         w = f["sweep/omega"][()]
         amp = f["sweep/amplitude"][()]
+        period = f["sweep/period"][()]
         assert f["sweep/done"][()].all()
-        assert w.size == 23  # the FAST grid, not the full one
+        # the FAST grid the Makefile gave on the command line, not the full one
+        grid = re.search(r"sweep\.omega=\[([^]]*)\]", built[1].stdout).group(1)
+        assert np.allclose(np.sort(w), sorted(float(x) for x in grid.split(",")))
+        assert w.size < 276
         # The fundamental resonance of the paper example (2.52 rad/s, softening) dominates z2.
         assert abs(w[np.argmax(amp[:, 0])] - 2.5) < 0.3
+        # The FAST grid keeps the subharmonic band: period-2 responses near 2 w1 and only there.
+        assert np.all((period >= 2) <= (np.abs(w - 5.05) < 0.05)) and (period >= 2).sum() >= 2
         assert "history" not in f  # an FDR scene stores amplitudes, not time histories
 
 
@@ -74,7 +83,11 @@ def test_waveform_figure(built):
         assert list(f["history/dof"][()]) == [2]  # the scene keeps only the channel it draws
         assert "zc" not in f["history"]  # and skips the configurational/elastic split
         t = f["history/t"][()]
-        assert abs(t[-1] - 600.0) < 1.0 and np.isfinite(f["history/z"][()]).all()
+        z = f["history/z"][()][:, 0]
+        assert abs(t[-1] - 3000.0) < 1.0 and np.isfinite(z).all()
+        # long enough for the late jump: the small response grows over ten times larger
+        small = np.abs(z[(t > 400) & (t < 500)]).max()
+        assert np.abs(z[t > 2900]).max() > 10 * small
 
 
 def test_make_does_not_rerun_an_unchanged_scene(built):
@@ -82,5 +95,5 @@ def test_make_does_not_rerun_an_unchanged_scene(built):
     before = (out / "fig3a.h5").stat().st_mtime_ns
     r = make(out, "fig3a")
     assert r.returncode == 0, r.stderr
-    assert "cablesim.cli sweep" not in r.stdout
+    assert "cablesim.cli sweep" not in r.stdout and "cablesim.cli plot" not in r.stdout
     assert (out / "fig3a.h5").stat().st_mtime_ns == before

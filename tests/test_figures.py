@@ -293,6 +293,54 @@ def test_standard_static_plot(work, results):
 
 
 # --------------------------------------------------------------------------------------------
+# Provenance and the preview stamp
+# --------------------------------------------------------------------------------------------
+
+
+@pytest.fixture
+def saved_texts(monkeypatch):
+    """The texts of every figure as it is saved."""
+    from matplotlib.figure import Figure
+
+    seen = []
+    real = Figure.savefig
+
+    def spy(self, *args, **kwargs):
+        seen.append([t.get_text() for t in self.texts])
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(Figure, "savefig", spy)
+    return seen
+
+
+def test_plot_stamp_is_drawn_and_the_png_records_how_it_was_made(work, results, saved_texts):
+    from test_plot_style import png_text_chunks
+
+    from cablesim.io.provenance import git_commit
+    from cablesim.version import __version__
+
+    a = with_figure(results, "sweep.h5", work / "sw.h5", "  kind: fdr\n")
+    _ok(_invoke("plot", a, "-o", "preview.png", "--stamp", "preview: coarse grid"))
+    assert len(saved_texts) == 1 and saved_texts[0].count("preview: coarse grid") == 1
+    chunks = png_text_chunks(work / "preview.png")
+    assert chunks["cablesim version"] == __version__
+    assert chunks["git commit"] == (git_commit() or "unknown (not a git checkout)")
+    assert chunks["Command"] == f"cablesim plot {a} --output preview.png --stamp 'preview: coarse grid'"
+    assert chunks["Stamp"] == "preview: coarse grid"
+    _ok(_invoke("plot", a, "-o", "plain.png"))
+    assert "preview: coarse grid" not in saved_texts[-1] and "Stamp" not in png_text_chunks(work / "plain.png")
+
+
+def test_the_api_stamps_the_standard_plots_too(work, results, saved_texts):
+    import cablesim
+
+    a = with_figure(results, "full.h5", work / "h.h5", None)
+    paths = cablesim.plot([a], stamp="preview")
+    assert len(paths) == len(HISTORY_SUFFIXES)
+    assert all("preview" in texts for texts in saved_texts)
+
+
+# --------------------------------------------------------------------------------------------
 # Bad input: one paragraph, exit status 2, nothing written
 # --------------------------------------------------------------------------------------------
 

@@ -77,7 +77,8 @@ def figures(monkeypatch):
 
     def spy(fig, path, *a, **k):
         axes = [ax for ax in fig.axes if ax.get_visible()]
-        legend_texts = [t.get_text() for ax in axes if ax.get_legend() for t in ax.get_legend().get_texts()]
+        legends = [ax.get_legend() for ax in axes if ax.get_legend()] + list(fig.legends)
+        legend_texts = [t.get_text() for lg in legends for t in lg.get_texts()]
         texts = [t.get_text() for ax in axes for t in ax.texts] + [t.get_text() for t in fig.texts]
         seen.append(dict(
             n_axes=len(axes),
@@ -86,6 +87,8 @@ def figures(monkeypatch):
             texts=texts,
             title=fig._suptitle.get_text() if fig._suptitle else "",
             n_lines=[len(ax.lines) for ax in axes],
+            markers=[ln.get_marker() for ax in axes for ln in ax.lines],
+            width=fig.get_figwidth(),
         ))
         return real(fig, path, *a, **k)
 
@@ -110,17 +113,22 @@ def test_independent_without_gamma_default_path(tmp_path, figures):
     assert _is_png(out)
     (fig,) = figures
     assert fig["n_axes"] == 2
-    assert fig["ylabels"][0].startswith("z2 peak |z| (m)")
+    assert fig["ylabels"][0].startswith("$z_{2}$: peak $|z|$ (m)")
     assert "vertical" in fig["ylabels"][0]
-    assert fig["title"].splitlines()[0] == "demo: frequency response (exact analysis)"
+    assert fig["title"].splitlines()[0] == "demo: frequency response"
     sub = fig["title"].splitlines()[1]
-    assert "z2, z4" in sub and "independent" in sub and "cap 600 s" in sub
-    assert "independent sweep" in fig["legend"]
+    assert "exact analysis (newmark)" in sub and "from rest at each frequency" in sub
+    assert "at most 600 s per point" in sub
+    assert fig["title"].count("exact analysis") == 1
+    assert "from rest at each frequency" in fig["legend"]
+    assert fig["width"] == 7.0
+    # 121 frequencies: a plain line, no marker on every few computed points.
+    assert set(fig["markers"]) <= {"None", "none", ""}
     # Modal frequencies in range are named; 30 rad/s is out of range.
-    assert {"w1 = 2.524", "w2 = 4.1"} <= set(fig["texts"])
-    assert not any(t.startswith("w4") for t in fig["texts"])
+    assert {"$\\omega_{1}$ = 2.524", "$\\omega_{2}$ = 4.1"} <= set(fig["texts"])
+    assert not any(t.startswith("$\\omega_{4}") for t in fig["texts"])
     assert not any("incomplete" in t for t in fig["texts"])
-    assert "not steady (cap reached)" not in fig["legend"]  # nothing to mark
+    assert "not steady within the time limit" not in fig["legend"]  # nothing to mark
 
 
 def test_independent_with_gamma_and_halfrange(tmp_path, figures):
@@ -131,9 +139,10 @@ def test_independent_with_gamma_and_halfrange(tmp_path, figures):
     out = plot_sweep(h5, tmp_path / "sub" / "g-half.png", quantity="halfrange", title="My title")
     assert out == tmp_path / "sub" / "g-half.png" and _is_png(out)
     (fig,) = figures
-    assert [t for t in fig["legend"] if t.startswith("gamma")] == ["gamma = 0.5", "gamma = 1", "gamma = 2"]
+    assert [t for t in fig["legend"] if "gamma" in t] == ["$\\gamma$ = 0.5", "$\\gamma$ = 1", "$\\gamma$ = 2"]
     assert fig["title"].splitlines()[0] == "My title"
-    assert "3 gamma values" in fig["title"]
+    assert "gamma" not in fig["title"]  # the legend names the values
+    assert "o" in fig["markers"]  # 60 frequencies: each computed point marked
     assert "half range" in fig["ylabels"][0]
     rows = sweep_summary_rows(h5)
     assert len(rows) == 3 * 2
@@ -166,11 +175,12 @@ def test_both_directions_with_jump(tmp_path, figures):
     assert _is_png(out)
     (fig,) = figures
     legend = fig["legend"]
-    for label in ("up sweep", "down sweep", "not steady (cap reached)", "linear modal frequencies"):
+    for label in ("increasing frequency (from the previous state)", "decreasing frequency (from the previous state)",
+                  "not steady within the time limit", "linear modal frequencies"):
         assert label in legend
-    assert any(t.startswith("subharmonic response (period p >= 2)") for t in legend)
+    assert any(t.startswith("subharmonic response (period p > 1)") for t in legend)
     assert "1/2" in fig["texts"]
-    assert "up and down sweeps" in fig["title"]
+    assert "increasing and decreasing frequency" in fig["title"]
     rows = sweep_summary_rows(h5)
     assert [(r["direction"], r["channel"]) for r in rows] == [("up", "z2"), ("up", "z4"), ("down", "z2"), ("down", "z4")]
     up_z2, down_z2 = rows[0], rows[2]
@@ -190,7 +200,7 @@ def test_incomplete_sweep_note_and_summary(tmp_path, figures):
     assert _is_png(plot_sweep(h5))
     (fig,) = figures
     assert "incomplete sweep: 30 of 50 points" in fig["texts"]
-    assert "down sweep" in fig["legend"]
+    assert "decreasing frequency (from the previous state)" in fig["legend"]
     rows = sweep_summary_rows(h5)
     assert all(r["points_done"] == 30 and r["points"] == 50 for r in rows)
     assert all(np.isfinite(r["value"]) for r in rows)
@@ -237,21 +247,20 @@ def test_channel_selection_by_name(simple, tmp_path, figures, chosen):
     assert _is_png(out)
     (fig,) = figures
     assert fig["n_axes"] == 1
-    assert fig["ylabels"][0].startswith("z4 ")
-    assert "channels z4," in fig["title"]
+    assert fig["ylabels"][0].startswith("$z_{4}$: ")
 
 
 def test_fixed_length_byte_channel_names(tmp_path, figures):
     omega = np.linspace(1.0, 6.0, 20)
     h5 = write_sweep(tmp_path / "b.h5", omega, {None: _results(omega, two_channel(omega))}, channel_dtype="S")
     plot_sweep(h5, channels="z4")
-    assert figures[0]["ylabels"][0].startswith("z4 ")
+    assert figures[0]["ylabels"][0].startswith("$z_{4}$: ")
     assert [r["channel"] for r in sweep_summary_rows(h5)] == ["z2", "z4"]
 
 
 def test_channel_order_follows_the_request(simple, figures):
     plot_sweep(simple, channels=["z4", "z2"])
-    assert [y.split()[0] for y in figures[0]["ylabels"]] == ["z4", "z2"]
+    assert [y.split(":")[0] for y in figures[0]["ylabels"]] == ["$z_{4}$", "$z_{2}$"]
 
 
 def test_unknown_channel_is_a_clear_error(simple, tmp_path):

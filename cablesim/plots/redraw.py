@@ -15,6 +15,7 @@ from ..case import parse_case, read_figure
 from ..channels import normalise_channel
 from ..errors import CablesimError
 from ..io.hdf5 import FAMILY_TEXT, ResultInfo, inspect_result, read_history, read_static_drawing
+from .base import stamp_figures
 from .cable import plot_cable
 from .composite import draw_figure
 from .continuation import plot_continuation
@@ -22,7 +23,7 @@ from .history import plot_history
 from .sweep import plot_sweep
 
 
-def redraw(paths, output=None, figure=None) -> list[Path]:
+def redraw(paths, output=None, figure=None, stamp: str | None = None) -> list[Path]:
     """Redraw figures from stored result files; nothing is recomputed.
 
     Parameters
@@ -37,6 +38,9 @@ def redraw(paths, output=None, figure=None) -> list[Path]:
     figure : Path or FigureSpec, optional
         A composite figure to draw instead of the stored case's ``figure:`` section: a YAML
         file with a ``figure:`` section (see :func:`read_figure`), or the spec itself.
+    stamp : str, optional
+        Text drawn in a corner of every figure and recorded in the PNG metadata, e.g.
+        ``"preview: coarse grid"``.
 
     Returns
     -------
@@ -50,7 +54,11 @@ def redraw(paths, output=None, figure=None) -> list[Path]:
         figure does not fit the files (e.g. ``fdr`` from time histories, ``split`` without
         z_c/z_e), or a channel, segment or label list does not fit.
     """
-    paths = [Path(p) for p in paths]
+    with stamp_figures(stamp):
+        return _redraw([Path(p) for p in paths], output, figure)
+
+
+def _redraw(paths: list[Path], output, figure) -> list[Path]:
     if not paths:
         raise CablesimError("Give at least one result file (.h5) to plot.")
     infos = [inspect_result(p) for p in paths]
@@ -104,7 +112,6 @@ def _standard(info: ResultInfo, output: Path | None) -> list[Path]:
     if wanted:  # the case's plotted channels, among those the file kept
         channels = [c for c in wanted if normalise_channel(c) in stored] or None
     prefix = output.with_suffix("") if output is not None else info.path.with_suffix("")
-    what = f"{case.name} ({hist.analysis} analysis, {hist.integrator})"
-    return plot_history(hist, prefix, what, channels=channels)
+    return plot_history(hist, prefix, case.name, channels=channels)
 
 

@@ -247,4 +247,4 @@ def test_spectrum_labels_state_the_window_and_print_peaks_to_the_bin(tmp_path, m
     assert not any(t.startswith("2.50") for t in texts)
     stopped = _history(False, "stopped at t = 80 s: step size underflow")
     plot_history(stopped, tmp_path / "stopped", "spectrum", channels=["z2"])
-    assert any(t.startswith("window $t$ = 0.00 s to 120.00 s (whole run: it stopped early)") for t in seen[-1])
+    assert any(t.startswith("window $t$ = 0.00 s to 120.00 s (whole run, stopped early)") for t in seen[-1])

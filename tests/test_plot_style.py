@@ -186,3 +186,27 @@ def test_the_stamp_is_drawn_and_recorded(tmp_path, monkeypatch):
     base.save_atomic(fig, tmp_path / "plain.png")
     assert drawn == [["preview: coarse grid"], []]
     assert png_text_chunks(png)["Stamp"] == "preview: coarse grid"
+
+
+def test_the_cable_drawing_names_the_lowest_modes_by_their_shape(tmp_path, monkeypatch):
+    """A level cable with mirrored masses: its lowest modes are named symmetric/antisymmetric
+    from their shapes; an inclined cable's modes are named by number only."""
+    from matplotlib.figure import Figure
+
+    from cablesim import api
+
+    titles = []
+    real = Figure.savefig
+
+    def spy(self, *args, **kwargs):
+        titles.append(self._suptitle.get_text().replace("\u00a0", " "))
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(Figure, "savefig", spy)
+    level = api.load_case({"name": "level", "cable": {"L": 300.0, "H": 0.0, "S": [110.0, 100.0, 110.0], "EA": 1.0e9,
+                                                      "masses": [1.0e4, 1.0e4]},
+                           "loads": {"F0": [0.0, 1.0e5, 0.0, 1.0e5], "FL": [0.0, 1.0e3, 0.0, 1.0e3]}})
+    api.static(level).plot(tmp_path / "level.png")
+    assert "(mode 1, antisymmetric)" in titles[-1] and "(mode 2, symmetric)" in titles[-1]
+    api.static(api.load_case(None)).plot(tmp_path / "inclined.png")  # the paper's example: H = 20 m
+    assert "(mode 1)" in titles[-1] and "symmetric" not in titles[-1]

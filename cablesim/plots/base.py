@@ -25,7 +25,7 @@ ENVELOPE_BUCKETS = 2000
 #: Largest number of samples drawn per part of a phase plot or Lissajous figure.
 CURVE_POINTS = 20000
 #: Characters of a title line at the figure width.
-TITLE_CHARS = 110
+TITLE_CHARS = 85
 #: Text drawn in a corner of every figure saved inside :func:`stamp_figures` (None: none).
 _STAMP = {"text": None}
 
@@ -107,8 +107,9 @@ def figure_grid(nrows, ncols, row_height, *, sharex=False, sharey=False, extra_h
 
 def title_line(fig, text: str, note: str | None = None) -> None:
     """The figure's title line; an optional line of conditions under it (wrapped to the width)."""
-    if note:
-        text += "\n" + "\n".join(textwrap.wrap(note, width=TITLE_CHARS))
+    if note:  # without the conditions the title states already
+        parts = [p for p in note.split("; ") if p.lower() not in text.lower()]
+        text += "\n" + "\n".join(textwrap.wrap("; ".join(parts), width=TITLE_CHARS)) if parts else ""
     fig.suptitle(text, fontsize=9.5)
 
 

@@ -325,7 +325,9 @@ def _draw_split(sf, h, cols, win, tw=None) -> dict:
     drawn, k = {}, 0
     for r, c in enumerate(cols):
         ax = axes[k]
-        envelope_plot(ax, t[i0:i1], h.z[i0:i1, c], "-", color=COLOURS["response"], lw=1.1, label="$z = z_c + z_e$")
+        # z wide and light beneath its parts, so that it shows where it coincides with one of them
+        envelope_plot(ax, t[i0:i1], h.z[i0:i1, c], "-", color=COLOURS["response"], lw=2.4, alpha=0.45,
+                      label="$z = z_c + z_e$")
         envelope_plot(ax, t[i0:i1], h.zc[i0:i1, c], "--", color=COLOURS["configurational"], lw=0.9,
                       label="configurational $z_c$")
         ze_ax = axes[k + 1] if own[r] else ax
@@ -391,7 +393,7 @@ def _draw_waveform_fft(sf, h, c, win, tw=None) -> dict:
                  color=COLOURS["failure"], wrap=True)
         return {"y:waveform": ax1}
     bin_width = 2 * np.pi / (n * dt)
-    ax2.set_title(f"amplitude spectrum of {name}\n" + window_text(t[-n], t[-1], t, how, bin_width), fontsize=8)
+    ax2.set_title(f"amplitude spectrum of {name}\n" + window_text(t[-n], t[-1], t, how, bin_width, "\n"), fontsize=8)
     w_pk, a_pk = spectral_peaks(omega, amp, 4, 0.05)
     modal = np.sort(np.asarray(h.modal_omega, dtype=float).ravel())
     modal = modal[np.isfinite(modal) & (modal > 0)]
@@ -406,12 +408,12 @@ def _draw_waveform_fft(sf, h, c, win, tw=None) -> dict:
     top = amp[sel][1:].max() if sel.sum() > 1 else 0.0
     if top > 0:
         ax2.set_ylim(top * 1e-5, top * 30.0)
-    label_peaks(ax2, *resolved_peaks(w_pk, a_pk, bin_width, x_max), bin_width)
+    label_peaks(ax2, *resolved_peaks(w_pk, a_pk, bin_width, x_max), bin_width, x_max)
     if h.omega is not None and h.omega <= x_max:
         ax2.axvline(h.omega, color=COLOURS["forcing"], ls="--", lw=1.0, label="forcing frequency")
     draw_modal_lines(ax2, modal, x_max)
     ax2.set_xlim(0.0, x_max)
-    handles = ax1.get_legend_handles_labels()[0][:1] + ax2.get_legend_handles_labels()[0]
+    handles = ax2.get_legend_handles_labels()[0]  # the response's colour is the same on both
     sf.legend(handles=handles, loc="outside lower center", ncol=3, frameon=False)
     return {"y:waveform": ax1, "y:spectrum": ax2}
 
@@ -443,6 +445,6 @@ def _draw_lissajous_tension(sf, h, pair, segs, win, tw=None) -> dict:
         span = f"last {TENSION_PERIODS} forcing periods"
     else:
         span = "last quarter of the run"
-    ax2.set_title(f"segment tension changes ({span})")
+    ax2.set_title(f"segment tension changes\n({span})")
     ax2.legend(loc="upper center", bbox_to_anchor=(0.5, -0.28), ncol=1, frameon=False)
     return {"xy:lissajous": ax1, "y:tension": ax2}

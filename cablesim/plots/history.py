@@ -194,7 +194,7 @@ def spectrum_window(result) -> tuple[float, str]:
     whose steady part never came (the longest stretch available, for the finest bins)."""
     if getattr(result, "completed", True):
         return 0.5, "last half"
-    return 1.0, "whole run: it stopped early"
+    return 1.0, "whole run, stopped early"
 
 
 def resolved_peaks(w_pk, a_pk, bin_width: float, x_max: float):
@@ -208,19 +208,23 @@ def resolved_peaks(w_pk, a_pk, bin_width: float, x_max: float):
     return np.array(kept_w), np.array(kept_a)
 
 
-def window_text(t0: float, t1: float, t, how: str, bin_width: float) -> str:
-    """``"window t = 300.00-600.00 s (last half), bins 0.021 rad/s"``."""
-    return (f"window $t$ = {time_text(t, t0)} to {time_text(t, t1)} ({how}); "
+def window_text(t0: float, t1: float, t, how: str, bin_width: float, sep: str = "; ") -> str:
+    """``"window t = 300.00 s to 600.00 s (last half); bins 2 pi/T = 0.021 rad/s"``."""
+    return (f"window $t$ = {time_text(t, t0)} to {time_text(t, t1)} ({how}){sep}"
             f"bins $2\\pi/T$ = {bin_width:.2g} rad/s")
 
 
-def label_peaks(ax, w_pk, a_pk, bin_width: float) -> None:
-    """Mark the peaks and write each frequency to the bin width."""
+def label_peaks(ax, w_pk, a_pk, bin_width: float, span: float) -> None:
+    """Mark the peaks and write each frequency to the bin width (``span``: the axis range)."""
     if not w_pk.size:
         return
     ax.plot(w_pk, a_pk, "v", color=COLOURS["annotation"], ms=5, zorder=4, label="spectral peaks")
-    for r, (w, a) in enumerate(sorted(zip(w_pk, a_pk))):
-        ax.annotate(to_resolution(w, bin_width), (w, a), textcoords="offset points", xytext=(4, 3 + 9 * (r % 2)),
+    peaks = sorted(zip(w_pk, a_pk))
+    for r, (w, a) in enumerate(peaks):
+        # a label whose right neighbour is close goes to the left of its peak
+        crowded = r + 1 < len(peaks) and peaks[r + 1][0] - w < 0.1 * span
+        ax.annotate(to_resolution(w, bin_width), (w, a), textcoords="offset points",
+                    xytext=(-4 if crowded else 4, 3), ha="right" if crowded else "left",
                     fontsize=8, color=COLOURS["annotation"])
 
 
@@ -287,7 +291,7 @@ def _plot_fft(result, chans, title, path, notes):
         a_top = amp[sel][1:].max() if sel.sum() > 1 else 0.0
         if a_top > 0:
             ax.set_ylim(a_top * 1e-6, a_top * 20.0)  # headroom for the labels
-        label_peaks(ax, *resolved_peaks(w_pk, a_pk, bin_width, x_max), bin_width)
+        label_peaks(ax, *resolved_peaks(w_pk, a_pk, bin_width, x_max), bin_width, x_max)
         if forcing is not None and forcing <= x_max:
             ax.axvline(forcing, color=COLOURS["forcing"], ls="--", lw=1.0, label="forcing frequency")
         draw_modal_lines(ax, modal, x_max)

@@ -138,7 +138,8 @@ def test_mode_symmetry_is_undecided_for_inclined_or_unsymmetric_cables():
 
 @pytest.mark.parametrize("plain, tex", [
     ("beats of z4 at w = 12.63 rad/s, xi = 0.002", r"beats of $z_{4}$ at $\omega$ = 12.63 rad/s, $\xi$ = 0.002"),
-    ("FL = gamma [-300, 1100] kN", r"FL = $\gamma$ [-300, 1100] kN"),
+    ("FL = gamma [-300, 1100] kN", r"$F_{L}$ = $\gamma$ [-300, 1100] kN"),
+    ("F0 = [300, 1100] kN, FL = 0.02 F0", r"$F_{0}$ = [300, 1100] kN, $F_{L}$ = 0.02 $F_{0}$"),
     ("Lissajous z2-z4 and T1 waveforms", r"Lissajous $z_{2}$-$z_{4}$ and $T_{1}$ waveforms"),
     ("z_c and z_e", r"$z_c$ and $z_e$"),
     ("forcing omega", r"forcing $\omega$"),

@@ -63,7 +63,7 @@ def add_time_inset(ax, t, y, label: str = "enlarged"):
     if found is None:
         return None
     t0, t1, where = found
-    bounds = [0.5, 0.5, 0.48, 0.42] if where == "late" else [0.06, 0.5, 0.44, 0.42]
+    bounds = [0.5, 0.5, 0.48, 0.42] if where == "late" else [0.16, 0.5, 0.42, 0.42]
     inset = ax.inset_axes(bounds)
     sel = (t >= t0) & (t <= t1)
     envelope_plot(inset, t[sel], y[sel], "-", color=COLOURS["response"], lw=0.8)

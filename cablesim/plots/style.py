@@ -36,6 +36,7 @@ RC = {
     "figure.titlesize": 10.0,
     "figure.labelsize": 9.0,
     "mathtext.fontset": "dejavusans",
+    "axes.formatter.use_mathtext": True,
     "axes.grid": True,
     "grid.alpha": 0.3,
     "grid.linewidth": 0.6,
@@ -79,6 +80,7 @@ _SYMBOLS = [
     (re.compile(r"\bgamma\b"), r"$\\gamma$"),
     (re.compile(r"\bz_?([ce])\b"), r"$z_\1$"),
     (re.compile(r"\b([zT])_?(\d+)\b"), r"$\1_{\2}$"),
+    (re.compile(r"\bF_?([0L])\b"), r"$F_{\1}$"),
 ]
 
 
@@ -102,7 +104,7 @@ def styled(func):
 
 def symbols(text: str) -> str:
     """Text with its plain-text symbols as mathtext: ``w =`` and ``omega`` as omega, ``xi``,
-    ``gamma``, ``z2`` and ``T1`` with subscripts, ``z_c``/``z_e``. Text already holding mathtext
+    ``gamma``, ``z2``, ``T1``, ``F0`` and ``FL`` with subscripts, ``z_c``/``z_e``. Text already holding mathtext
     (a ``$``) is returned unchanged."""
     if "$" in text:
         return text

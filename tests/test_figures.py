@@ -292,6 +292,42 @@ def test_standard_static_plot(work, results):
     check_png(work / "cable.png")
 
 
+@pytest.fixture
+def saved_axes(monkeypatch):
+    """Per figure as it is saved: (title, ylim, number of insets) of each axes."""
+    from matplotlib.figure import Figure
+
+    seen = []
+    real = Figure.savefig
+
+    def spy(self, *args, **kwargs):
+        seen.append([(ax.get_title(), ax.get_ylim(), len(ax.child_axes)) for ax in self.axes])
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(Figure, "savefig", spy)
+    return seen
+
+
+def test_compared_panels_share_their_scales(work, results, saved_axes):
+    """Two runs side by side: each panel role (Lissajous figure, tension changes) has the same
+    limits in both columns, so that the sizes compare at a glance."""
+    a = with_figure(results, "full.h5", work / "a.h5", KINDS["lissajous_tension"])
+    b = with_figure(results, "w25.h5", work / "b.h5", None)
+    _ok(_invoke("plot", a, b, "-o", "lt.png"))
+    (axes,) = saved_axes
+    tension = [ylim for title, ylim, _ in axes if title.startswith("segment tension")]
+    lissajous = [ylim for title, ylim, _ in axes if title.startswith("Lissajous")]
+    assert len(tension) == 2 and tension[0] == tension[1]
+    assert len(lissajous) == 2 and lissajous[0] == lissajous[1]
+
+
+def test_a_decaying_free_vibration_gets_an_inset(work, results, saved_axes):
+    a = with_figure(results, "fv.h5", work / "fv.h5", "  kind: waveform\n  channels: [z2]\n")
+    _ok(_invoke("plot", a, "-o", "fv.png"))
+    (axes,) = saved_axes
+    assert sum(n for _, _, n in axes) == 1
+
+
 # --------------------------------------------------------------------------------------------
 # Provenance and the preview stamp
 # --------------------------------------------------------------------------------------------

@@ -185,7 +185,7 @@ def test_the_stamp_is_drawn_and_recorded(tmp_path, monkeypatch):
         png = base.save_atomic(fig, tmp_path / "stamped.png")
     fig, _ = base.figure_grid(1, 1, 2.0)
     base.save_atomic(fig, tmp_path / "plain.png")
-    assert drawn == [["preview: coarse grid"], []]
+    assert "preview: coarse grid" in drawn[0] and "preview: coarse grid" not in drawn[1]
     assert png_text_chunks(png)["Stamp"] == "preview: coarse grid"
 
 
@@ -211,3 +211,22 @@ def test_the_cable_drawing_names_the_lowest_modes_by_their_shape(tmp_path, monke
     assert "(mode 1, antisymmetric)" in titles[-1] and "(mode 2, symmetric)" in titles[-1]
     api.static(api.load_case(None)).plot(tmp_path / "inclined.png")  # the paper's example: H = 20 m
     assert "(mode 1)" in titles[-1] and "symmetric" not in titles[-1]
+
+
+# --------------------------------------------------------------------------------------------
+# Small stretches get an inset
+# --------------------------------------------------------------------------------------------
+
+
+def test_quiet_stretch_finds_a_small_ending_or_beginning():
+    from cablesim.plots.insets import quiet_stretch
+
+    t = np.linspace(0.0, 3.0, 3001)
+    decaying = np.exp(-4.0 * t) * np.sin(20.0 * t)
+    t0, t1, where = quiet_stretch(t, decaying)
+    assert where == "late" and t1 == 3.0 and 0.3 < t0 < 1.0
+    assert np.abs(decaying[t >= t0]).max() < 0.12 * np.abs(decaying).max()
+    growing = np.where(t < 2.0, 0.02, 1.0) * np.sin(20.0 * t)
+    t0, t1, where = quiet_stretch(t, growing)
+    assert where == "early" and t0 == 0.0 and abs(t1 - 2.0) < 0.1
+    assert quiet_stretch(t, np.sin(20.0 * t)) is None  # nothing small: no inset

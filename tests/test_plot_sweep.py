@@ -88,6 +88,8 @@ def figures(monkeypatch):
             title=fig._suptitle.get_text() if fig._suptitle else "",
             n_lines=[len(ax.lines) for ax in axes],
             markers=[ln.get_marker() for ax in axes for ln in ax.lines],
+            lines=[(ln.get_marker(), np.asarray(ln.get_xdata(), float), np.asarray(ln.get_ydata(), float))
+                   for ax in axes for ln in ax.lines],
             width=fig.get_figwidth(),
         ))
         return real(fig, path, *a, **k)
@@ -345,7 +347,7 @@ def test_summary_unsorted_omega_is_sorted(tmp_path):
     assert rows[0]["omega"] == pytest.approx(omega[np.argmax(amp[:, 0])])
 
 
-def test_failed_points_are_never_peaks_nor_part_of_a_curve(tmp_path):
+def test_failed_points_are_never_peaks_nor_part_of_a_curve(tmp_path, figures):
     """A point that stopped early (a segment went slack) keeps its partial amplitude in the file,
     but the summary never quotes it as a peak and the plot never joins it into the curve."""
     from cablesim import api
@@ -370,6 +372,13 @@ def test_failed_points_are_never_peaks_nor_part_of_a_curve(tmp_path):
     assert row["value"] == pytest.approx(0.7) and row["omega"] == pytest.approx(2.8)
     png = plot_sweep(path, tmp_path / "failed.png")
     assert png.stat().st_size > 10_000
+    # read back from the figure: the curve skips the failed point, a grey cross marks it
+    (fig,) = figures
+    curve = [(x, y) for m, x, y in fig["lines"] if m in ("o", "None", "none", "") and x.size >= 3]
+    assert curve and all(38.8 not in y for _, y in curve)
+    crosses = [(x, y) for m, x, y in fig["lines"] if m == "x"]
+    assert [list(y) for _, y in crosses] == [[38.8]]
+    assert "stopped early: a segment went slack\n(partial value, not a peak)" in fig["legend"]
 
 
 def test_points_that_went_slack_are_marked(tmp_path):
@@ -387,3 +396,32 @@ def test_points_that_went_slack_are_marked(tmp_path):
     assert list(curve.data["went_slack"]) == list((np.nan_to_num(frac) > 0).any(axis=1))
     assert curve.data["went_slack"][1] and not curve.data["went_slack"][0]
     assert plot_sweep(out, tmp_path / "slack.png").stat().st_size > 10_000
+
+
+def test_a_small_subharmonic_band_gets_an_inset(tmp_path, monkeypatch):
+    """A 1/2 subharmonic band at 5 rad/s a few percent of the main resonance is drawn again in
+    an inset on its own scale, with its edges to the grid step; a large band needs none."""
+    from matplotlib.figure import Figure
+
+    from cablesim.case.sections import FigureSpec
+    from cablesim.plots.composite import draw_figure
+
+    seen = []
+    real = Figure.savefig
+
+    def spy(self, *args, **kwargs):
+        seen.append([(ax.get_xlim(), [c.get_title() for c in ax.child_axes])
+                     for ax in self.axes])
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(Figure, "savefig", spy)
+    omega = np.round(np.linspace(1.0, 6.0, 101), 10)  # 0.05 rad/s steps
+    band = (omega >= 4.95) & (omega <= 5.1)
+    for size, insets in ((0.02, 1), (2.0, 0)):
+        amp = two_channel(omega)
+        amp[band] = size * amp.max(axis=0)
+        h5 = write_sweep(tmp_path / f"sub{size}.h5", omega, {None: _results(omega, amp, period=np.where(band, 2, 1))})
+        draw_figure(FigureSpec(kind="fdr", channels=["z2"]), [h5], tmp_path / f"sub{size}.png")
+        (row,) = seen[-1][:1]
+        assert len(row[1]) == insets
+    assert seen[0][0][1] == ["subharmonic band 4.95\u20135.10 rad/s (step 0.05)"]

@@ -53,10 +53,16 @@ def stamp_figures(text: str | None):
 
 
 def add_stamp(fig, text: str):
-    """The stamp: ``text`` in the figure's top right corner, in the warning colour."""
-    return fig.text(0.995, 0.995, text, ha="right", va="top", fontsize=9, fontweight="bold",
+    """The stamp: ``text`` in the figure's top right corner, in the warning colour, on a line
+    added above the title (so that it covers nothing)."""
+    title = fig._suptitle
+    if title is None:
+        fig.suptitle(" ")
+    else:
+        title.set_text("\n" + title.get_text())
+    return fig.text(0.995, 0.995, text, ha="right", va="top", fontsize=8.5, fontweight="bold",
                     color=COLOURS["failure"], zorder=100,
-                    bbox=dict(boxstyle="round,pad=0.25", fc="white", ec=COLOURS["failure"], lw=0.8))
+                    bbox=dict(boxstyle="round,pad=0.15", fc="white", ec=COLOURS["failure"], lw=0.8))
 
 
 def png_metadata(stamp: str | None = None) -> dict:

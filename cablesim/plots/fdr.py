@@ -151,16 +151,29 @@ def subharmonic_inset(ax, sweeps, name: str, colors):
         return None
     x_lo, x_hi = ax.get_xlim()
     peak_right = _peak_frequency(ax) > 0.5 * (x_lo + x_hi)  # the inset goes to the other side
-    inset = ax.inset_axes([0.05, 0.45, 0.4, 0.5] if peak_right else [0.57, 0.45, 0.4, 0.5])
+    inset = ax.inset_axes([0.12, 0.42, 0.42, 0.46] if peak_right else [0.54, 0.42, 0.42, 0.46])
     _draw_row(inset, sweeps, name, colors, True)
     margin = max(4 * step, 0.25 * (w1 - w0)) if np.isfinite(step) else 0.25 * (w1 - w0) + 0.05
-    inset.set_xlim(w0 - margin, w1 + margin)
-    inset.set_ylim(0.0, 1.5 * a_max)
+    lo, hi = w0 - margin, w1 + margin
+    top = 1.3 * max(a_max, _largest_between(inset, lo, hi))
+    inset.set_xlim(lo, hi)
+    inset.set_ylim(0.0, top)
     inset.tick_params(labelsize=8, pad=1)
-    inset.set_title(f"subharmonic band, {to_resolution(w0, step)} to {to_resolution(w1, step)} rad/s"
-                    f" (grid step {step:.2g})", fontsize=8, pad=2)
-    ax.indicate_inset([w0 - margin, 0.0, w1 - w0 + 2 * margin, 1.5 * a_max], inset, edgecolor="0.4", lw=0.7)
+    inset.set_title(f"subharmonic band {to_resolution(w0, step)}\u2013{to_resolution(w1, step)} rad/s"
+                    f" (step {step:.2g})", fontsize=8, pad=2)
+    ax.indicate_inset([lo, 0.0, hi - lo, top], inset, edgecolor="0.4", lw=0.7)
     return inset
+
+
+def _largest_between(ax, lo: float, hi: float) -> float:
+    """The largest value of the curves drawn on ``ax`` between the frequencies ``lo`` and ``hi``."""
+    best = 0.0
+    for line in ax.get_lines():
+        x, y = (np.asarray(v, dtype=float) for v in line.get_data())
+        inside = (x >= lo) & (x <= hi) & np.isfinite(y)
+        if inside.any():
+            best = max(best, float(y[inside].max()))
+    return best
 
 
 def _peak_frequency(ax) -> float:
@@ -168,6 +181,8 @@ def _peak_frequency(ax) -> float:
     best, where = -np.inf, np.nan
     for line in ax.get_lines():
         x, y = (np.asarray(v, dtype=float) for v in line.get_data())
+        if line.get_transform() != ax.transData:  # reference lines (axvline) are not data
+            continue
         if y.size and np.isfinite(y).any() and np.nanmax(y) > best:
             best, where = np.nanmax(y), x[np.nanargmax(y)]
     return float(where)

@@ -80,6 +80,7 @@ def figures(monkeypatch):
         legends = [ax.get_legend() for ax in axes if ax.get_legend()] + list(fig.legends)
         legend_texts = [t.get_text() for lg in legends for t in lg.get_texts()]
         texts = [t.get_text() for ax in axes for t in ax.texts] + [t.get_text() for t in fig.texts]
+        texts += [lg.get_title().get_text() for lg in legends if lg.get_title().get_text()]
         seen.append(dict(
             n_axes=len(axes),
             ylabels=[ax.get_ylabel() for ax in axes],

@@ -125,6 +125,23 @@ def legend_below(fig, handles, ncol: int = 2) -> None:
         fig.legend(handles=handles, loc="outside lower center", ncol=ncol, frameon=False)
 
 
+def bottom_notes(fig, lines, warn: bool = False) -> None:
+    """Notes under a figure (or subfigure), wrapped to its width: above the legend entries when
+    the figure has a legend below (the layout would put both in one place), else as its x label;
+    in the warning colour when ``warn`` (a run that stopped early, an incomplete sweep)."""
+    if not lines:
+        return
+    chars = int(TITLE_CHARS * 1.1 * fig.get_window_extent().width / (fig.get_figure(root=True).dpi * FIGURE_WIDTH))
+    text = "\n".join(w for line in lines for w in textwrap.wrap(line, width=max(30, chars)))
+    colour = COLOURS["failure"] if warn else "0.3"
+    below = [lg for lg in fig.legends if getattr(lg, "_outside_loc", None)]
+    if below:
+        below[0].set_title(text, prop={"size": 8.5, "weight": "bold" if warn else "normal"})
+        below[0].get_title().set_color(colour)
+    else:
+        fig.supxlabel(text, fontsize=8.5, color=colour, fontweight="bold" if warn else "normal")
+
+
 def steady_start(t: np.ndarray, steady_fraction: float = 0.5) -> int:
     """Index where the steady part (last ``steady_fraction``) starts."""
     return t.size - int(round(steady_fraction * t.size))

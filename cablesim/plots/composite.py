@@ -28,11 +28,11 @@ from ..channels import (
 from ..dynamics.spectra import amplitude_spectrum, spectral_peaks
 from ..errors import CablesimError
 from ..io.hdf5 import FAMILY_TEXT, ResultInfo, inspect_result, read_history
-from .base import FIGURE_WIDTH, envelope_plot, pyplot, save_atomic, steady_start, two_tone
+from .base import FIGURE_WIDTH, bottom_notes, envelope_plot, pyplot, save_atomic, steady_start, two_tone
 from .fdr import draw_fdr
 from .history import draw_modal_lines, label_peaks, resolved_peaks, spectrum_window, time_text, window_text
 from .insets import add_time_inset
-from .style import COLOURS, SERIES, channel_tex, styled, symbols
+from .style import COLOURS, SERIES, channel_tex, force_unit, styled, symbols
 
 #: Kinds drawing time histories (history or free-vibration files).
 HISTORY_KINDS = ("waveform", "waveform_phase", "waveform_fft", "split", "lissajous_tension")
@@ -227,7 +227,7 @@ def _draw_history_figure(fig_spec, infos, hists, captions, png: Path, title: str
         for role, ax in drawn.items():
             roles.setdefault(role, []).append(ax)
         if plan["notes"]:
-            sf.supxlabel("; ".join(plan["notes"]), fontsize=8, color="0.3")
+            bottom_notes(sf, ["; ".join(plan["notes"])])
     if n > 1:
         share_scales(roles)
     fig.suptitle(title, fontsize=10)
@@ -432,9 +432,10 @@ def _draw_lissajous_tension(sf, h, pair, segs, win, tw=None) -> dict:
     i0, i1 = win
     T = np.asarray(h.T, dtype=float)
     T0 = np.asarray(h.T0, dtype=float)
+    div, unit = force_unit(T0)
     for k, r in enumerate(segs):
         envelope_plot(ax2, t[i0:i1], (T[i0:i1, r] - T0[r]) / 1e3, "-", color=SERIES[k % len(SERIES)], lw=0.9,
-                      label=f"$T_{{{r + 1}}} - T_{{0}}$ ($T_0$ = {T0[r] / 1e3:.4g} kN)")
+                      label=f"$T_{{{r + 1}}} - T_{{0}}$ ($T_0$ = {T0[r] / div:.4g} {unit})")
     ax2.axhline(0.0, color=COLOURS["reference"], lw=0.7, ls="--")
     _xlim(ax2, t, win, tw)
     ax2.set_xlabel("time $t$ (s)")

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..io.hdf5 import attr_text
 from ..io.sweeps import read_sweep, select_channels
-from .base import FIGURE_WIDTH, legend_below, pyplot, save_atomic, title_line
+from .base import FIGURE_WIDTH, bottom_notes, legend_below, pyplot, save_atomic, title_line
 from .style import COLOURS, SERIES, grid_step, symbols, to_resolution
 from .sweep import DIRECTION_STYLE, channel_label, draw_curve, marker_handles, point_markers, sweep_conditions
 
@@ -100,8 +100,7 @@ def draw_fdr(fig_spec, infos, png: Path, title: str) -> Path:
                   if sum(int(cv.data["done"].sum()) for cv in sw.curves) < sw.omega.size * len(sw.curves)]
     if incomplete:
         notes.insert(0, "incomplete sweep(s): " + "; ".join(incomplete))
-    if notes:
-        fig.supxlabel("\n".join(notes), fontsize=8.5, color=COLOURS["failure"] if incomplete else "0.3")
+    bottom_notes(fig, notes, bool(incomplete))
     conditions = {sweep_conditions(sw) for sw in sweeps}
     title_line(fig, title, conditions.pop() if len(conditions) == 1 else None)
     return save_atomic(fig, png)

@@ -15,8 +15,8 @@ import numpy as np
 from ..channels import column_description, column_name, column_of, default_pair, resolve_columns
 from ..dynamics.spectra import amplitude_spectrum, spectral_peaks
 from ..errors import CablesimError
-from .base import envelope_plot, figure_grid, legend_below, save_atomic, steady_start, title_line, two_tone
-from .style import COLOURS, SERIES, channel_tex, styled, to_resolution
+from .base import bottom_notes, envelope_plot, figure_grid, legend_below, save_atomic, steady_start, title_line, two_tone
+from .style import COLOURS, SERIES, channel_tex, force_unit, styled, to_resolution
 
 #: Largest number of channels drawn in the waveform and spectrum figures.
 MAX_CHANNELS = 8
@@ -54,9 +54,7 @@ def _finish(fig, result, title: str, what: str, path: Path, notes: list[str] = (
     if not result.completed:
         lines.append(f"run stopped early: {result.message}")
     lines += list(notes)
-    if lines:
-        fig.supxlabel("\n".join(lines), color=COLOURS["failure"] if not result.completed else "0.3",
-                      fontsize=8.5, fontweight="bold" if not result.completed else "normal")
+    bottom_notes(fig, lines, warn=not result.completed)
     return save_atomic(fig, path)
 
 
@@ -139,16 +137,17 @@ def _plot_tensions(result, title, path, notes):
     segs = list(range(nseg)) if nseg <= 6 else sorted({0, nseg // 2, nseg - 1})
     fig, axes = figure_grid(1, 1, 3.2, extra_height=1.4)
     ax = axes[0, 0]
+    div, unit = force_unit(T0)
     for c, r in enumerate(segs):
         color = SERIES[c % len(SERIES)]
-        envelope_plot(ax, t, T[:, r] / 1e3, "-", color=color, lw=0.9, label=f"$T_{{{r + 1}}}(t)$")
-        ax.axhline(T0[r] / 1e3, ls="--", color=color, lw=0.9, alpha=0.8,
-                   label=f"static $T_{{{r + 1}}}$ = {T0[r] / 1e3:.4g} kN")
+        envelope_plot(ax, t, T[:, r] / div, "-", color=color, lw=0.9, label=f"$T_{{{r + 1}}}(t)$")
+        ax.axhline(T0[r] / div, ls="--", color=color, lw=0.9, alpha=0.8,
+                   label=f"static $T_{{{r + 1}}}$ = {T0[r] / div:.4g} {unit}")
     rec = getattr(result, "slack", None)
     if rec is not None:
-        _mark_slack(ax, rec, segs, float(t[-1]), t)
+        _mark_slack(ax, rec, segs, float(t[-1]), t, (div, unit))
     ax.set_xlabel("time $t$ (s)")
-    ax.set_ylabel("segment tension $T$ (kN)")
+    ax.set_ylabel(f"segment tension $T$ ({unit})")
     legend_below(fig, ax.get_legend_handles_labels()[0], ncol=3)
     which = "all segments" if nseg <= 6 else f"segments {', '.join(str(r + 1) for r in segs)} of {nseg}"
     return _finish(fig, result, title, f"segment tensions ({which})", path, notes)
@@ -169,7 +168,7 @@ def slack_intervals(rec, segment: int, t_end: float) -> list[tuple[float, float]
     return out
 
 
-def _mark_slack(ax, rec, segs, t_end, t):
+def _mark_slack(ax, rec, segs, t_end, t, unit=(1e3, "kN")):
     """Shade each shown segment's slack episodes and mark its peak tension (the snap load)."""
     for c, r in enumerate(segs):
         color = SERIES[c % len(SERIES)]
@@ -178,8 +177,8 @@ def _mark_slack(ax, rec, segs, t_end, t):
             ax.axvspan(a, b, color=COLOURS["failure"], alpha=0.12, lw=0,
                        label=f"segment {r + 1} slack" if i == 0 else None)
         if spans:
-            ax.plot(rec.peak_time[r], rec.peak_tension[r] / 1e3, "v", color=color, mec=COLOURS["annotation"], ms=6,
-                    label=f"snap load $T_{{{r + 1}}}$ = {rec.peak_tension[r] / 1e3:.4g} kN "
+            ax.plot(rec.peak_time[r], rec.peak_tension[r] / unit[0], "v", color=color, mec=COLOURS["annotation"], ms=6,
+                    label=f"snap load $T_{{{r + 1}}}$ = {rec.peak_tension[r] / unit[0]:.4g} {unit[1]} "
                           f"at {time_text(t, rec.peak_time[r])}")
 
 

@@ -253,3 +253,10 @@ def lowest_modes_text(cable, y0, modes, count: int = 2) -> str:
         text = f"{w:.4g} rad/s ({mode_name(k + 1, sym).replace(' (', ', ').rstrip(')')})"
         parts.append(text.replace(" ", "\u00a0"))  # no line break inside one mode's text
     return ", ".join(parts)
+
+
+def force_unit(values) -> tuple[float, str]:
+    """``(divisor, unit)`` that writes forces of the size of ``values`` (N) in kN, or in MN
+    from 10 MN up (no exponents in tick or legend labels)."""
+    top = float(np.nanmax(np.abs(values))) if np.size(values) else 0.0
+    return (1e6, "MN") if top >= 1e7 else (1e3, "kN")

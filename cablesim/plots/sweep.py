@@ -14,7 +14,7 @@ from ..channels import channel_description
 from ..errors import CablesimError
 from ..io.hdf5 import attr_text
 from ..io.sweeps import StoredSweep, read_sweep, select_channels
-from .base import figure_grid, legend_below, save_atomic, title_line
+from .base import bottom_notes, figure_grid, legend_below, save_atomic, title_line
 from .style import COLOURS, SERIES, WORDS, channel_tex, styled
 
 #: Largest number of channels drawn (one subplot each).
@@ -234,9 +234,7 @@ def plot_sweep(h5_path, png_path=None, channels=None, quantity: str = "amplitude
                         va="center", color=COLOURS["failure"], fontsize=10)
     first = title if title is not None else f"{attr_text(sweep.attrs.get('case_name', sweep.path.stem))}: frequency response"
     title_line(fig, first, sweep_conditions(sweep))
-    if notes:
-        fig.supxlabel("\n".join(notes), fontsize=8.5, color=COLOURS["failure"] if warn else "0.3",
-                      fontweight="bold" if warn else "normal")
+    bottom_notes(fig, notes, warn)
     return save_atomic(fig, png_path)
 
 

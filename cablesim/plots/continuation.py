@@ -155,7 +155,7 @@ def plot_continuation(h5_path, png_path=None, overlay=None, title: str | None = 
     fixed = f"$\\gamma$ = {float(d['fixed']):g}" if is_omega else f"$\\omega$ = {float(d['fixed']):g} rad/s"
     first = title or f"{d['case_name']}: periodic responses"
     symbol = "$\\omega$" if is_omega else "$\\gamma$"
-    sub = (f"{d['analysis']} analysis; continuation in {symbol}, {fixed}; {len(d['branches'])} branches, "
+    sub = (f"{d['analysis']} analysis; continuation in {symbol}, {fixed}; {len(d['branches'])} branch{'es' if len(d['branches']) != 1 else ''}, "
            f"{sum(b['parameter'].size for b in d['branches'])} orbits; bifurcations: {found}")
     title_line(fig, first, sub)
     return save_atomic(fig, png_path)

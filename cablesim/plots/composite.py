@@ -415,7 +415,7 @@ def _draw_waveform_fft(sf, h, c, win, tw=None) -> dict:
     ax2.set_xlim(0.0, x_max)
     handles = ax2.get_legend_handles_labels()[0]  # the response's colour is the same on both
     sf.legend(handles=handles, loc="outside lower center", ncol=3, frameon=False)
-    return {"y:waveform": ax1, "y:spectrum": ax2}
+    return {"y:waveform": ax1, "xy:spectrum": ax2}
 
 
 def _draw_lissajous_tension(sf, h, pair, segs, win, tw=None) -> dict:

@@ -400,8 +400,9 @@ def test_points_that_went_slack_are_marked(tmp_path):
 
 
 def test_a_small_subharmonic_band_gets_an_inset(tmp_path, monkeypatch):
-    """A 1/2 subharmonic band at 5 rad/s a few percent of the main resonance is drawn again in
-    an inset on its own scale, with its edges to the grid step; a large band needs none."""
+    """A 1/2 subharmonic band at 5 rad/s a few percent of the main resonance, or as high as the
+    resonance but narrow, is drawn again in an inset on its own scale, with its edges to the
+    grid step; a band both high and wide needs none."""
     from matplotlib.figure import Figure
 
     from cablesim.case.sections import FigureSpec
@@ -417,12 +418,12 @@ def test_a_small_subharmonic_band_gets_an_inset(tmp_path, monkeypatch):
 
     monkeypatch.setattr(Figure, "savefig", spy)
     omega = np.round(np.linspace(1.0, 6.0, 101), 10)  # 0.05 rad/s steps
-    band = (omega >= 4.95) & (omega <= 5.1)
-    for size, insets in ((0.02, 1), (2.0, 0)):
+    narrow = (omega >= 4.95) & (omega <= 5.1)
+    for size, band, insets in ((0.02, narrow, 1), (2.0, narrow, 1), (2.0, (omega >= 4.0) & (omega <= 5.5), 0)):
         amp = two_channel(omega)
         amp[band] = size * amp.max(axis=0)
-        h5 = write_sweep(tmp_path / f"sub{size}.h5", omega, {None: _results(omega, amp, period=np.where(band, 2, 1))})
-        draw_figure(FigureSpec(kind="fdr", channels=["z2"]), [h5], tmp_path / f"sub{size}.png")
+        h5 = write_sweep(tmp_path / f"sub{len(seen)}.h5", omega, {None: _results(omega, amp, period=np.where(band, 2, 1))})
+        draw_figure(FigureSpec(kind="fdr", channels=["z2"]), [h5], tmp_path / f"sub{len(seen)}.png")
         (row,) = seen[-1][:1]
         assert len(row[1]) == insets
     assert seen[0][0][1] == ["subharmonic band 4.95\u20135.10 rad/s (step 0.05)"]

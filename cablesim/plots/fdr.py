@@ -19,8 +19,12 @@ from .sweep import DIRECTION_STYLE, channel_label, draw_curve, marker_handles, p
 
 #: Largest number of channel rows.
 MAX_ROWS = 8
-#: A subharmonic band gets an inset when its largest amplitude is below this fraction of the axes' top.
+#: A subharmonic band gets an inset when its largest amplitude is below this fraction of the axes' top ...
 SMALL_BAND = 0.25
+#: ... or when it is narrower than this fraction of the frequency range.
+NARROW_BAND = 0.05
+#: Width of the inset (axes fraction).
+INSET_WIDTH = 0.34
 
 
 def _series(sweeps, names):
@@ -140,20 +144,21 @@ def subharmonic_band(sweeps, name: str):
 
 def subharmonic_inset(ax, sweeps, name: str, colors):
     """An inset of the subharmonic band of channel ``name`` on its own scale, when the band is
-    small beside the axes' largest value; on the side away from the main peak. Returns it or None."""
+    low beside the axes' largest value or narrow beside the frequency range; placed clear of
+    the main peak and of the band. Returns it or None."""
     band = subharmonic_band(sweeps, name)
     if band is None:
         return None
     w0, w1, a_max, step = band
-    top = ax.get_ylim()[1]
-    if not (a_max < SMALL_BAND * top):
-        return None
     x_lo, x_hi = ax.get_xlim()
-    peak_right = _peak_frequency(ax) > 0.5 * (x_lo + x_hi)  # the inset goes to the other side
-    inset = ax.inset_axes([0.12, 0.42, 0.42, 0.46] if peak_right else [0.54, 0.42, 0.42, 0.46])
-    _draw_row(inset, sweeps, name, colors, True)
+    width = w1 - w0 + (step if np.isfinite(step) else 0.0)
+    if not (a_max < SMALL_BAND * ax.get_ylim()[1] or width < NARROW_BAND * (x_hi - x_lo)):
+        return None
     margin = max(4 * step, 0.25 * (w1 - w0)) if np.isfinite(step) else 0.25 * (w1 - w0) + 0.05
     lo, hi = w0 - margin, w1 + margin
+    x0 = inset_position([(v - x_lo) / (x_hi - x_lo) for v in (_peak_frequency(ax), lo, hi)])
+    inset = ax.inset_axes([x0, 0.42, INSET_WIDTH, 0.46])
+    _draw_row(inset, sweeps, name, colors, True)
     top = 1.3 * max(a_max, _largest_between(inset, lo, hi))
     inset.set_xlim(lo, hi)
     inset.set_ylim(0.0, top)
@@ -162,6 +167,18 @@ def subharmonic_inset(ax, sweeps, name: str, colors):
                     f" (step {step:.2g})", fontsize=8, pad=2)
     ax.indicate_inset([lo, 0.0, hi - lo, top], inset, edgecolor="0.4", lw=0.7)
     return inset
+
+
+def inset_position(avoid, width: float = INSET_WIDTH, gap: float = 0.02) -> float:
+    """Left edge (axes fraction) of an inset ``width`` wide that covers none of the positions
+    ``avoid`` (axes fractions: the main peak, the band's edges), as close to the last ones as
+    possible; the side away from the band when no place is clear."""
+    candidates = np.linspace(0.1, 0.98 - width, 45)
+    clear = [x for x in candidates if all(not (x - gap <= a <= x + width + gap) for a in avoid if np.isfinite(a))]
+    if clear:
+        target = np.nanmean(avoid[1:]) if len(avoid) > 1 else 0.5
+        return float(min(clear, key=lambda x: abs(x + 0.5 * width - target)))
+    return 0.12 if np.nanmean(avoid[1:]) > 0.5 else 0.98 - width
 
 
 def _largest_between(ax, lo: float, hi: float) -> float:

@@ -308,6 +308,35 @@ def saved_axes(monkeypatch):
     return seen
 
 
+def test_every_figure_is_journal_width_with_readable_text(work, results, monkeypatch):
+    """Standard and composite figures: 7 in wide, no visible text under 8 pt, no plain-text
+    symbol (omega, a literal underscore) in any label."""
+    from matplotlib.figure import Figure
+    from matplotlib.text import Text
+
+    seen = []
+    real = Figure.savefig
+
+    def spy(self, *args, **kwargs):
+        texts = [t for t in self.findobj(Text) if t.get_visible() and t.get_text().strip()]
+        seen.append((self.get_figwidth(), min(t.get_fontsize() for t in texts), [t.get_text() for t in texts]))
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(Figure, "savefig", spy)
+    redraw([with_figure(results, "full.h5", work / "h.h5", None)])
+    redraw([with_figure(results, "sweep.h5", work / "s.h5", None)])
+    redraw([with_figure(results, "static.h5", work / "st.h5", None)])
+    for kind, figure in KINDS.items():
+        redraw([with_figure(results, "full.h5", work / f"{kind}.h5", figure),
+                with_figure(results, "w25.h5", work / f"{kind}-b.h5", None)])
+    assert len(seen) == 5 + 1 + 1 + len(KINDS)
+    for width, smallest, texts in seen:
+        assert width == 7.0 and smallest >= 8.0
+        outside_math = [re.sub(r"\$[^$]*\$", "", t) for t in texts]
+        plain = [t for t in outside_math if re.search(r"\bomega\b|\bw = |_", t)]
+        assert not plain, plain
+
+
 def test_compared_panels_share_their_scales(work, results, saved_axes):
     """Two runs side by side: each panel role (Lissajous figure, tension changes) has the same
     limits in both columns, so that the sizes compare at a glance."""

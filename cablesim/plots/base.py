@@ -86,7 +86,9 @@ def save_atomic(fig, path: str | Path, dpi: int = DPI) -> Path:
         add_stamp(fig, stamp)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(tmp, dpi=dpi, format="png", metadata=png_metadata(stamp))
+        # a figure laid out by matplotlib keeps its width; one placed by hand is cropped to its content
+        crop = None if fig.get_layout_engine() is not None else "tight"
+        fig.savefig(tmp, dpi=dpi, format="png", metadata=png_metadata(stamp), bbox_inches=crop)
         tmp.replace(path)
     except OSError as exc:
         raise write_error(path, exc) from None

@@ -16,6 +16,7 @@ from ..channels import column_description, column_name, column_of, default_pair,
 from ..dynamics.spectra import amplitude_spectrum, spectral_peaks
 from ..errors import CablesimError
 from .base import bottom_notes, envelope_plot, figure_grid, legend_below, save_atomic, steady_start, title_line, two_tone
+from .insets import add_time_inset
 from .style import COLOURS, SERIES, channel_tex, force_unit, styled, to_resolution
 
 #: Largest number of channels drawn in the waveform and spectrum figures.
@@ -81,6 +82,7 @@ def _plot_waveforms(result, chans, title, path, notes):
         if result.ze is not None:
             envelope_plot(ax, t, result.ze[:, i], "-", color=COLOURS["elastic"], lw=0.7, alpha=0.8)
         ax.set_ylabel(_ylabel(result, i))
+        add_time_inset(ax, t, result.z[:, i])
     handles = [Line2D([], [], color=COLOURS["response"], label="$z = z_c + z_e$" if split else "displacement $z$")]
     if result.zc is not None:
         handles.append(Line2D([], [], color=COLOURS["configurational"], ls="--", label="configurational part $z_c$"))

@@ -4,7 +4,8 @@
 ``history``, ``free-vibration``, ``sweep`` or ``continue``. If the case stored in the first
 file (root attribute ``case_yaml``) has a ``figure:`` section, or ``--figure FILE.yaml`` gives
 one, one composite PNG is drawn from all the files (one column per file); otherwise each file
-gets the standard plots of its command.
+gets the standard plots of its command. A continuation file given with a sweep file is drawn
+with the sweep's points on top, as ``cablesim continue --overlay`` draws it.
 """
 
 from __future__ import annotations
@@ -29,8 +30,9 @@ def redraw(paths, output=None, figure=None, stamp: str | None = None) -> list[Pa
     Parameters
     ----------
     paths : list of Path
-        Result files of cablesim static, history, free-vibration or sweep; all of one type
-        (history and free-vibration files count as one type: time histories).
+        Result files of cablesim static, history, free-vibration, sweep or continue; all of one
+        type (history and free-vibration files count as one type: time histories), except one
+        continuation file with one sweep file, whose points are drawn on the continuation.
     output : Path, optional
         With a ``figure:`` section: the PNG (default: the first file with suffix ``.png``).
         Without one (one file only): the PNG of a static or sweep file, or the prefix of the
@@ -63,6 +65,8 @@ def _redraw(paths: list[Path], output, figure) -> list[Path]:
         raise CablesimError("Give at least one result file (.h5) to plot.")
     infos = [inspect_result(p) for p in paths]
     families = {i.family for i in infos}
+    if families == {"continuation", "sweep"} and figure is None:
+        return [_continuation_with_sweep(infos, output)]
     if len(families) > 1:
         listing = "; ".join(f"{i.path} is {FAMILY_TEXT[i.family]}" for i in infos)
         raise CablesimError(
@@ -90,6 +94,19 @@ def _redraw(paths: list[Path], output, figure) -> list[Path]:
     for info in infos:
         written += _standard(info, output)
     return written
+
+
+def _continuation_with_sweep(infos, output) -> Path:
+    """One continuation file drawn with one sweep file's points on top (as ``continue --overlay``)."""
+    conts = [i for i in infos if i.family == "continuation"]
+    sweeps = [i for i in infos if i.family == "sweep"]
+    if len(conts) != 1 or len(sweeps) != 1:
+        raise CablesimError(
+            f"A continuation file is drawn with at most one sweep file on top; got {len(conts)} continuation "
+            f"and {len(sweeps)} sweep files. Plot one continuation file and the sweep of the same case."
+        )
+    png = Path(output) if output is not None else conts[0].path.with_suffix(".png")
+    return plot_continuation(conts[0].path, png, overlay=sweeps[0].path)
 
 
 def _standard(info: ResultInfo, output: Path | None) -> list[Path]:

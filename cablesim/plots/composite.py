@@ -2,12 +2,18 @@
 
 Composite kinds (``figure.kind``):
 
-- ``fdr``: frequency response of every sweep file on shared axes, one row per channel;
+- ``fdr``: frequency response of every sweep file on shared axes, one row per channel
+  (:mod:`cablesim.plots.fdr`);
 - ``waveform``: z(t) of the channels, one row per channel;
 - ``waveform_phase``: z(t) of the first channel beside its phase plot z' against z;
-- ``waveform_fft``: z(t) of the first channel beside the amplitude spectrum of the last half;
-- ``split``: z with its configurational and elastic parts z_c, z_e, one row per channel;
+- ``waveform_fft``: z(t) of the first channel beside the amplitude spectrum of the last half
+  (of the whole record if the run stopped early), with its window and bin width;
+- ``split``: z with its configurational and elastic parts z_c, z_e, one row per channel (z_e
+  on a panel of its own when it is too small to read beside z);
 - ``lissajous_tension``: z_j against z_i above the tension changes T_r - T0_r (last quarter).
+
+Files side by side (or, for the two-panel kinds, stacked) share the scales of the panels that
+compare them; a stretch too small to read on a waveform gets an inset.
 """
 
 from __future__ import annotations

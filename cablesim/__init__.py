@@ -12,6 +12,7 @@ Python API (the command line's analyses; see :mod:`cablesim.api`)::
     h = cablesim.history(case, omega=2.4, duration=600.0)   # HistoryRun: .history, .to_hdf5(path)
     fv = cablesim.free_vibration(case, mode=3, peak_velocity=1.0)
     sw = cablesim.sweep(case, jobs=2)              # SweepRun: .result, .to_hdf5(path)
+    cablesim.plot(["sweep.h5"], "sweep.png", stamp="preview: coarse grid")   # redraw stored results
 
 The package, from the bottom layer up (a module imports only from layers below it; checked by
 ``tests/test_architecture.py``):
@@ -38,7 +39,7 @@ The package, from the bottom layer up (a module imports only from layers below i
 
 from .version import __version__
 
-_API = ("load_case", "static", "history", "free_vibration", "sweep", "continuation",
+_API = ("load_case", "static", "history", "free_vibration", "sweep", "continuation", "plot",
         "StaticRun", "HistoryRun", "SweepRun", "ContinuationRun")
 
 __all__ = ["__version__", *_API]

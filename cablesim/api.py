@@ -35,6 +35,7 @@ from .orbits import OrbitPoint
 from .plots.cable import plot_cable
 from .plots.continuation import plot_continuation
 from .plots.history import plot_history
+from .plots.redraw import redraw
 from .plots.sweep import plot_sweep
 
 
@@ -93,8 +94,7 @@ class HistoryRun:
 
     def plot(self, prefix: str | Path, channels=None) -> list[Path]:
         """Draw the waveform, phase, Lissajous, tension and spectrum PNGs (``prefix-*.png``)."""
-        what = f"{self.case.name} ({self.history.analysis} analysis, {self.integrator.name})"
-        return plot_history(self.history, Path(prefix), what, channels=channels)
+        return plot_history(self.history, Path(prefix), self.case.name, channels=channels)
 
 
 @dataclass(frozen=True)
@@ -303,3 +303,29 @@ def estimates(case: Case, analysis: str | None = None, integrator: str | None = 
         why = cost.impossible() or cost.excess()
         out[command] = cost.text().split(": ", 1)[1] + (f"; needs --force: {why}" if why else "")
     return out
+
+
+def plot(results, output: str | Path | None = None, figure: str | Path | None = None,
+         stamp: str | None = None) -> list[Path]:
+    """Redraw figures from stored result files, as ``cablesim plot`` does (nothing is
+    recomputed): the ``figure:`` section of the stored case (or of ``figure``) as one PNG, or
+    else each file's standard plots.
+
+    Parameters
+    ----------
+    results : list of str or Path
+        HDF5 files of ``static``, ``history``, ``free-vibration``, ``sweep`` or ``continue``.
+    output : str or Path, optional
+        The PNG (or, for time histories, the prefix of the PNGs).
+    figure : str or Path, optional
+        A YAML file with a ``figure:`` section to draw instead of the stored case's.
+    stamp : str, optional
+        Text drawn in a corner of every figure and kept in the PNG metadata, e.g.
+        ``"preview: coarse grid"``.
+
+    Returns
+    -------
+    list of Path
+        The PNGs written.
+    """
+    return redraw(results, output, figure=figure, stamp=stamp)

@@ -517,6 +517,7 @@ def continue_(
 @app.command()
 @user_errors
 def plot(
+    ctx: typer.Context,
     results: list[Path] = typer.Argument(..., metavar="RESULT.h5", show_default=False,
                                          help="HDF5 result files of cablesim static, history, free-vibration "
                                          "or sweep (one type at a time)."),
@@ -524,15 +525,18 @@ def plot(
                                           help="PNG file (default: the first file with suffix .png)."),
     figure: Optional[Path] = typer.Option(None, "--figure", metavar="FIGURE.yaml",
                                           help="YAML file with a figure: section to draw instead of the stored case's."),
+    stamp: Optional[str] = typer.Option(None, "--stamp", metavar="TEXT",
+                                        help="Text drawn in a corner of every figure and kept in the PNG, e.g. 'preview: coarse grid'."),
 ):
     """Redraw figures from stored results, recomputing nothing: the figure: section of the stored
     case (or of --figure) as one PNG from all the files, or else each file's standard plots."""
     from .io.paths import check_output
     from .plots.redraw import redraw
 
+    _begin(ctx)
     if output is not None:
         check_output(output, inputs=[*results, figure], suffixes=(".png", ""))
-    paths = redraw(results, output, figure=figure)
+    paths = redraw(results, output, figure=figure, stamp=stamp)
     _echo("Wrote " + ", ".join(str(p) for p in paths))
 
 

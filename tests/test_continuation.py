@@ -115,6 +115,30 @@ def test_plot_redraws_from_the_file(near_2w1, invoke_cli, tmp_path):
     assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 20_000
 
 
+def test_plot_draws_a_continuation_with_a_sweep_on_top(near_2w1, tmp_path, monkeypatch):
+    """`cablesim plot CONT.h5 SWEEP.h5 --stamp TEXT`: the continuation with the sweep's points on
+    top (as `continue --overlay` draws it), stamped."""
+    from matplotlib.figure import Figure
+    from test_plot_sweep import _results, two_channel, write_sweep
+
+    from cablesim.plots.redraw import redraw
+
+    out, _ = near_2w1
+    omega = np.linspace(4.9, 5.2, 7)
+    sweep = write_sweep(tmp_path / "sweep.h5", omega, {None: _results(omega, two_channel(omega))})
+    legends = []
+    real = Figure.savefig
+
+    def spy(self, *args, **kwargs):
+        legends.append([t.get_text() for lg in self.legends for t in lg.get_texts()] + [t.get_text() for t in self.texts])
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(Figure, "savefig", spy)
+    (png,) = redraw([out, sweep], tmp_path / "both.png", stamp="preview")
+    assert png == tmp_path / "both.png" and png.stat().st_size > 20_000
+    assert "time integration: steady response" in legends[-1] and "preview" in legends[-1]
+
+
 def test_continuation_in_gamma_finds_the_softening_folds():
     """At 2.44 rad/s the harmonic response folds over as FL grows (jumps, hysteresis): two folds
     in gamma, and between them the middle orbits are unstable with a real multiplier > 1."""

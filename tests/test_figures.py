@@ -292,6 +292,119 @@ def test_standard_static_plot(work, results):
     check_png(work / "cable.png")
 
 
+@pytest.fixture
+def saved_axes(monkeypatch):
+    """Per figure as it is saved: (title, ylim, number of insets) of each axes."""
+    from matplotlib.figure import Figure
+
+    seen = []
+    real = Figure.savefig
+
+    def spy(self, *args, **kwargs):
+        seen.append([(ax.get_title(), ax.get_ylim(), len(ax.child_axes)) for ax in self.axes])
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(Figure, "savefig", spy)
+    return seen
+
+
+def test_every_figure_is_journal_width_with_readable_text(work, results, monkeypatch):
+    """Standard and composite figures: 7 in wide, no visible text under 8 pt, no plain-text
+    symbol (omega, a literal underscore) in any label."""
+    from matplotlib.figure import Figure
+    from matplotlib.text import Text
+
+    seen = []
+    real = Figure.savefig
+
+    def spy(self, *args, **kwargs):
+        texts = [t for t in self.findobj(Text) if t.get_visible() and t.get_text().strip()]
+        seen.append((self.get_figwidth(), min(t.get_fontsize() for t in texts), [t.get_text() for t in texts]))
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(Figure, "savefig", spy)
+    redraw([with_figure(results, "full.h5", work / "h.h5", None)])
+    redraw([with_figure(results, "sweep.h5", work / "s.h5", None)])
+    redraw([with_figure(results, "static.h5", work / "st.h5", None)])
+    for kind, figure in KINDS.items():
+        redraw([with_figure(results, "full.h5", work / f"{kind}.h5", figure),
+                with_figure(results, "w25.h5", work / f"{kind}-b.h5", None)])
+    assert len(seen) == 5 + 1 + 1 + len(KINDS)
+    for width, smallest, texts in seen:
+        assert width == 7.0 and smallest >= 8.0
+        outside_math = [re.sub(r"\$[^$]*\$", "", t) for t in texts]
+        plain = [t for t in outside_math if re.search(r"\bomega\b|\bw = |_", t)]
+        assert not plain, plain
+
+
+def test_compared_panels_share_their_scales(work, results, saved_axes):
+    """Two runs side by side: each panel role (Lissajous figure, tension changes) has the same
+    limits in both columns, so that the sizes compare at a glance."""
+    a = with_figure(results, "full.h5", work / "a.h5", KINDS["lissajous_tension"])
+    b = with_figure(results, "w25.h5", work / "b.h5", None)
+    _ok(_invoke("plot", a, b, "-o", "lt.png"))
+    (axes,) = saved_axes
+    tension = [ylim for title, ylim, _ in axes if title.startswith("segment tension")]
+    lissajous = [ylim for title, ylim, _ in axes if title.startswith("Lissajous")]
+    assert len(tension) == 2 and tension[0] == tension[1]
+    assert len(lissajous) == 2 and lissajous[0] == lissajous[1]
+
+
+def test_a_decaying_free_vibration_gets_an_inset(work, results, saved_axes):
+    a = with_figure(results, "fv.h5", work / "fv.h5", "  kind: waveform\n  channels: [z2]\n")
+    _ok(_invoke("plot", a, "-o", "fv.png"))
+    (axes,) = saved_axes
+    assert sum(n for _, _, n in axes) == 1
+
+
+# --------------------------------------------------------------------------------------------
+# Provenance and the preview stamp
+# --------------------------------------------------------------------------------------------
+
+
+@pytest.fixture
+def saved_texts(monkeypatch):
+    """The texts of every figure as it is saved."""
+    from matplotlib.figure import Figure
+
+    seen = []
+    real = Figure.savefig
+
+    def spy(self, *args, **kwargs):
+        seen.append([t.get_text() for t in self.texts])
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(Figure, "savefig", spy)
+    return seen
+
+
+def test_plot_stamp_is_drawn_and_the_png_records_how_it_was_made(work, results, saved_texts):
+    from test_plot_style import png_text_chunks
+
+    from cablesim.io.provenance import git_commit
+    from cablesim.version import __version__
+
+    a = with_figure(results, "sweep.h5", work / "sw.h5", "  kind: fdr\n")
+    _ok(_invoke("plot", a, "-o", "preview.png", "--stamp", "preview: coarse grid"))
+    assert len(saved_texts) == 1 and saved_texts[0].count("preview: coarse grid") == 1
+    chunks = png_text_chunks(work / "preview.png")
+    assert chunks["cablesim version"] == __version__
+    assert chunks["git commit"] == (git_commit() or "unknown (not a git checkout)")
+    assert chunks["Command"] == f"cablesim plot {a} --output preview.png --stamp 'preview: coarse grid'"
+    assert chunks["Stamp"] == "preview: coarse grid"
+    _ok(_invoke("plot", a, "-o", "plain.png"))
+    assert "preview: coarse grid" not in saved_texts[-1] and "Stamp" not in png_text_chunks(work / "plain.png")
+
+
+def test_the_api_stamps_the_standard_plots_too(work, results, saved_texts):
+    import cablesim
+
+    a = with_figure(results, "full.h5", work / "h.h5", None)
+    paths = cablesim.plot([a], stamp="preview")
+    assert len(paths) == len(HISTORY_SUFFIXES)
+    assert all("preview" in texts for texts in saved_texts)
+
+
 # --------------------------------------------------------------------------------------------
 # Bad input: one paragraph, exit status 2, nothing written
 # --------------------------------------------------------------------------------------------

@@ -197,3 +197,54 @@ def test_plot_history_bad_channels(tmp_path, kwargs):
     with pytest.raises(CablesimError):
         plot_history(_history(False), tmp_path / "bad", "bad", **kwargs)
     assert not list(tmp_path.glob("*.png"))
+
+
+def test_waveforms_are_drawn_as_true_envelopes(tmp_path, monkeypatch):
+    """A long record is thinned to the extremes of each bucket, never to every k-th sample: a
+    one-sample spike and each bucket's extremes stay on the drawn line."""
+    from matplotlib.figure import Figure
+
+    drawn = []
+    real = Figure.savefig
+
+    def spy(self, *args, **kwargs):
+        drawn.append([(ln.get_xdata(), ln.get_ydata()) for ax in self.axes for ln in ax.lines])
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(Figure, "savefig", spy)
+    result = _history(False, m=120_001)
+    spike = 54_321  # not a multiple of any stride
+    result.z[spike, 1] = 0.5
+    plot_history(result, tmp_path / "env", "envelope", channels=["z2"])
+    t_drawn, z_drawn = drawn[0][0]  # waveforms: the first line of the first axes
+    assert z_drawn.max() == 0.5 and t_drawn[np.argmax(z_drawn)] == result.t[spike]
+    assert z_drawn.size < 10_000
+    z = result.z[:, 1]
+    for lo in range(0, z.size, 20_000):  # each stretch's extremes are on the line
+        inside = (t_drawn >= result.t[lo]) & (t_drawn <= result.t[min(lo + 19_999, z.size - 1)])
+        assert z_drawn[inside].min() == pytest.approx(z[lo:lo + 20_000].min(), abs=0.0005)
+        assert z_drawn[inside].max() == pytest.approx(z[lo:lo + 20_000].max(), abs=0.0005)
+
+
+def test_spectrum_labels_state_the_window_and_print_peaks_to_the_bin(tmp_path, monkeypatch):
+    """The spectrum names the window it analysed and its bin width; peak labels carry the digits
+    the bin allows; a run that stopped early is analysed whole (its longest stretch)."""
+    from matplotlib.figure import Figure
+
+    seen = []
+    real = Figure.savefig
+
+    def spy(self, *args, **kwargs):
+        seen.append([t.get_text() for ax in self.axes for t in [ax.title, ax._right_title, *ax.texts]])
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(Figure, "savefig", spy)
+    plot_history(_history(False), tmp_path / "done", "spectrum", channels=["z2"])
+    texts = seen[-1]
+    window = [t for t in texts if t.startswith("window")]
+    assert window == ["window $t$ = 60.02 s to 120.00 s (last half); bins $2\\pi/T$ = 0.1 rad/s"]
+    assert "2.5" in texts  # the forcing at 2.5 rad/s, to the 0.1 rad/s bin: one decimal
+    assert not any(t.startswith("2.50") for t in texts)
+    stopped = _history(False, "stopped at t = 80 s: step size underflow")
+    plot_history(stopped, tmp_path / "stopped", "spectrum", channels=["z2"])
+    assert any(t.startswith("window $t$ = 0.00 s to 120.00 s (whole run, stopped early)") for t in seen[-1])

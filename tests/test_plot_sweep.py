@@ -77,8 +77,10 @@ def figures(monkeypatch):
 
     def spy(fig, path, *a, **k):
         axes = [ax for ax in fig.axes if ax.get_visible()]
-        legend_texts = [t.get_text() for ax in axes if ax.get_legend() for t in ax.get_legend().get_texts()]
+        legends = [ax.get_legend() for ax in axes if ax.get_legend()] + list(fig.legends)
+        legend_texts = [t.get_text() for lg in legends for t in lg.get_texts()]
         texts = [t.get_text() for ax in axes for t in ax.texts] + [t.get_text() for t in fig.texts]
+        texts += [lg.get_title().get_text() for lg in legends if lg.get_title().get_text()]
         seen.append(dict(
             n_axes=len(axes),
             ylabels=[ax.get_ylabel() for ax in axes],
@@ -86,6 +88,10 @@ def figures(monkeypatch):
             texts=texts,
             title=fig._suptitle.get_text() if fig._suptitle else "",
             n_lines=[len(ax.lines) for ax in axes],
+            markers=[ln.get_marker() for ax in axes for ln in ax.lines],
+            lines=[(ln.get_marker(), np.asarray(ln.get_xdata(), float), np.asarray(ln.get_ydata(), float))
+                   for ax in axes for ln in ax.lines],
+            width=fig.get_figwidth(),
         ))
         return real(fig, path, *a, **k)
 
@@ -110,17 +116,22 @@ def test_independent_without_gamma_default_path(tmp_path, figures):
     assert _is_png(out)
     (fig,) = figures
     assert fig["n_axes"] == 2
-    assert fig["ylabels"][0].startswith("z2 peak |z| (m)")
+    assert fig["ylabels"][0].startswith("$z_{2}$: peak $|z|$ (m)")
     assert "vertical" in fig["ylabels"][0]
-    assert fig["title"].splitlines()[0] == "demo: frequency response (exact analysis)"
+    assert fig["title"].splitlines()[0] == "demo: frequency response"
     sub = fig["title"].splitlines()[1]
-    assert "z2, z4" in sub and "independent" in sub and "cap 600 s" in sub
-    assert "independent sweep" in fig["legend"]
+    assert "exact analysis (newmark)" in sub and "from rest at each frequency" in sub
+    assert "at most 600 s per point" in sub
+    assert fig["title"].count("exact analysis") == 1
+    assert "from rest at each frequency" in fig["legend"]
+    assert fig["width"] == 7.0
+    # 121 frequencies: a plain line, no marker on every few computed points.
+    assert set(fig["markers"]) <= {"None", "none", ""}
     # Modal frequencies in range are named; 30 rad/s is out of range.
-    assert {"w1 = 2.524", "w2 = 4.1"} <= set(fig["texts"])
-    assert not any(t.startswith("w4") for t in fig["texts"])
+    assert {"$\\omega_{1}$ = 2.524", "$\\omega_{2}$ = 4.1"} <= set(fig["texts"])
+    assert not any(t.startswith("$\\omega_{4}") for t in fig["texts"])
     assert not any("incomplete" in t for t in fig["texts"])
-    assert "not steady (cap reached)" not in fig["legend"]  # nothing to mark
+    assert "not steady within the time limit" not in fig["legend"]  # nothing to mark
 
 
 def test_independent_with_gamma_and_halfrange(tmp_path, figures):
@@ -131,9 +142,10 @@ def test_independent_with_gamma_and_halfrange(tmp_path, figures):
     out = plot_sweep(h5, tmp_path / "sub" / "g-half.png", quantity="halfrange", title="My title")
     assert out == tmp_path / "sub" / "g-half.png" and _is_png(out)
     (fig,) = figures
-    assert [t for t in fig["legend"] if t.startswith("gamma")] == ["gamma = 0.5", "gamma = 1", "gamma = 2"]
+    assert [t for t in fig["legend"] if "gamma" in t] == ["$\\gamma$ = 0.5", "$\\gamma$ = 1", "$\\gamma$ = 2"]
     assert fig["title"].splitlines()[0] == "My title"
-    assert "3 gamma values" in fig["title"]
+    assert "gamma" not in fig["title"]  # the legend names the values
+    assert "o" in fig["markers"]  # 60 frequencies: each computed point marked
     assert "half range" in fig["ylabels"][0]
     rows = sweep_summary_rows(h5)
     assert len(rows) == 3 * 2
@@ -166,11 +178,12 @@ def test_both_directions_with_jump(tmp_path, figures):
     assert _is_png(out)
     (fig,) = figures
     legend = fig["legend"]
-    for label in ("up sweep", "down sweep", "not steady (cap reached)", "linear modal frequencies"):
+    for label in ("increasing frequency (from the previous state)", "decreasing frequency (from the previous state)",
+                  "not steady within the time limit", "linear modal frequencies"):
         assert label in legend
-    assert any(t.startswith("subharmonic response (period p >= 2)") for t in legend)
+    assert any(t.startswith("subharmonic response (period p > 1)") for t in legend)
     assert "1/2" in fig["texts"]
-    assert "up and down sweeps" in fig["title"]
+    assert "increasing and decreasing frequency" in fig["title"]
     rows = sweep_summary_rows(h5)
     assert [(r["direction"], r["channel"]) for r in rows] == [("up", "z2"), ("up", "z4"), ("down", "z2"), ("down", "z4")]
     up_z2, down_z2 = rows[0], rows[2]
@@ -190,7 +203,7 @@ def test_incomplete_sweep_note_and_summary(tmp_path, figures):
     assert _is_png(plot_sweep(h5))
     (fig,) = figures
     assert "incomplete sweep: 30 of 50 points" in fig["texts"]
-    assert "down sweep" in fig["legend"]
+    assert "decreasing frequency (from the previous state)" in fig["legend"]
     rows = sweep_summary_rows(h5)
     assert all(r["points_done"] == 30 and r["points"] == 50 for r in rows)
     assert all(np.isfinite(r["value"]) for r in rows)
@@ -237,21 +250,20 @@ def test_channel_selection_by_name(simple, tmp_path, figures, chosen):
     assert _is_png(out)
     (fig,) = figures
     assert fig["n_axes"] == 1
-    assert fig["ylabels"][0].startswith("z4 ")
-    assert "channels z4," in fig["title"]
+    assert fig["ylabels"][0].startswith("$z_{4}$: ")
 
 
 def test_fixed_length_byte_channel_names(tmp_path, figures):
     omega = np.linspace(1.0, 6.0, 20)
     h5 = write_sweep(tmp_path / "b.h5", omega, {None: _results(omega, two_channel(omega))}, channel_dtype="S")
     plot_sweep(h5, channels="z4")
-    assert figures[0]["ylabels"][0].startswith("z4 ")
+    assert figures[0]["ylabels"][0].startswith("$z_{4}$: ")
     assert [r["channel"] for r in sweep_summary_rows(h5)] == ["z2", "z4"]
 
 
 def test_channel_order_follows_the_request(simple, figures):
     plot_sweep(simple, channels=["z4", "z2"])
-    assert [y.split()[0] for y in figures[0]["ylabels"]] == ["z4", "z2"]
+    assert [y.split(":")[0] for y in figures[0]["ylabels"]] == ["$z_{4}$", "$z_{2}$"]
 
 
 def test_unknown_channel_is_a_clear_error(simple, tmp_path):
@@ -336,7 +348,7 @@ def test_summary_unsorted_omega_is_sorted(tmp_path):
     assert rows[0]["omega"] == pytest.approx(omega[np.argmax(amp[:, 0])])
 
 
-def test_failed_points_are_never_peaks_nor_part_of_a_curve(tmp_path):
+def test_failed_points_are_never_peaks_nor_part_of_a_curve(tmp_path, figures):
     """A point that stopped early (a segment went slack) keeps its partial amplitude in the file,
     but the summary never quotes it as a peak and the plot never joins it into the curve."""
     from cablesim import api
@@ -361,6 +373,13 @@ def test_failed_points_are_never_peaks_nor_part_of_a_curve(tmp_path):
     assert row["value"] == pytest.approx(0.7) and row["omega"] == pytest.approx(2.8)
     png = plot_sweep(path, tmp_path / "failed.png")
     assert png.stat().st_size > 10_000
+    # read back from the figure: the curve skips the failed point, a grey cross marks it
+    (fig,) = figures
+    curve = [(x, y) for m, x, y in fig["lines"] if m in ("o", "None", "none", "") and x.size >= 3]
+    assert curve and all(38.8 not in y for _, y in curve)
+    crosses = [(x, y) for m, x, y in fig["lines"] if m == "x"]
+    assert [list(y) for _, y in crosses] == [[38.8]]
+    assert "stopped early: a segment went slack\n(partial value, not a peak)" in fig["legend"]
 
 
 def test_points_that_went_slack_are_marked(tmp_path):
@@ -378,3 +397,33 @@ def test_points_that_went_slack_are_marked(tmp_path):
     assert list(curve.data["went_slack"]) == list((np.nan_to_num(frac) > 0).any(axis=1))
     assert curve.data["went_slack"][1] and not curve.data["went_slack"][0]
     assert plot_sweep(out, tmp_path / "slack.png").stat().st_size > 10_000
+
+
+def test_a_small_subharmonic_band_gets_an_inset(tmp_path, monkeypatch):
+    """A 1/2 subharmonic band at 5 rad/s a few percent of the main resonance, or as high as the
+    resonance but narrow, is drawn again in an inset on its own scale, with its edges to the
+    grid step; a band both high and wide needs none."""
+    from matplotlib.figure import Figure
+
+    from cablesim.case.sections import FigureSpec
+    from cablesim.plots.composite import draw_figure
+
+    seen = []
+    real = Figure.savefig
+
+    def spy(self, *args, **kwargs):
+        seen.append([(ax.get_xlim(), [c.get_title() for c in ax.child_axes])
+                     for ax in self.axes])
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(Figure, "savefig", spy)
+    omega = np.round(np.linspace(1.0, 6.0, 101), 10)  # 0.05 rad/s steps
+    narrow = (omega >= 4.95) & (omega <= 5.1)
+    for size, band, insets in ((0.02, narrow, 1), (2.0, narrow, 1), (2.0, (omega >= 4.0) & (omega <= 5.5), 0)):
+        amp = two_channel(omega)
+        amp[band] = size * amp.max(axis=0)
+        h5 = write_sweep(tmp_path / f"sub{len(seen)}.h5", omega, {None: _results(omega, amp, period=np.where(band, 2, 1))})
+        draw_figure(FigureSpec(kind="fdr", channels=["z2"]), [h5], tmp_path / f"sub{len(seen)}.png")
+        (row,) = seen[-1][:1]
+        assert len(row[1]) == insets
+    assert seen[0][0][1] == ["subharmonic band 4.95\u20135.10 rad/s (step 0.05)"]

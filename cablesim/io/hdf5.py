@@ -499,8 +499,10 @@ def read_static_drawing(path: Path, case):
         inext = None
         if "inextensible" in st and "x" in st["inextensible"]:
             inext = SimpleNamespace(x=np.asarray(st["inextensible/x"][()], dtype=float))
+        # the lowest shapes, which the drawing names (symmetric, antisymmetric)
+        shapes = np.asarray(f["modal/shapes"][:, :4], dtype=float) if "modal/shapes" in f else None
     return SimpleNamespace(cable=case.to_cable(), analysis=analysis, P=P, y0=y0, T0=T0, inextensible=inext,
-                           modes=SimpleNamespace(omega=omega))
+                           modes=SimpleNamespace(omega=omega, shapes=shapes))
 
 
 

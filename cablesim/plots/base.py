@@ -1,19 +1,33 @@
-"""What every plot shares: matplotlib (imported lazily, Agg backend), atomic saving, figure grids.
+"""What every plot shares: matplotlib (imported lazily, Agg backend), the figure grid at the
+journal width, atomic saving with provenance in the PNG, the preview stamp and true envelopes.
 
 Only :mod:`cablesim.plots` imports matplotlib, and only through :func:`pyplot`, so that
-commands that draw nothing never pay for it.
+commands that draw nothing never pay for it. The look (sizes, fonts, colours, wording) is
+defined in :mod:`cablesim.plots.style`.
 """
 
 from __future__ import annotations
 
+import contextlib
+import sys
+import textwrap
 from pathlib import Path
 
 import numpy as np
 
 from ..io.paths import part_path, remove_stale_parts, write_error
+from ..io.provenance import git_commit, invocation
+from ..version import __version__
+from .style import COLOURS, DPI, FIGURE_WIDTH, minmax_decimate
 
-#: Largest number of points drawn per line in the time-domain plots.
-MAX_LINE_POINTS = 20000
+#: Samples kept per drawn line of a time history: two (the minimum and the maximum) per bucket.
+ENVELOPE_BUCKETS = 2000
+#: Largest number of samples drawn per part of a phase plot or Lissajous figure.
+CURVE_POINTS = 20000
+#: Characters of a title line at the figure width.
+TITLE_CHARS = 85
+#: Text drawn in a corner of every figure saved inside :func:`stamp_figures` (None: none).
+_STAMP = {"text": None}
 
 
 def pyplot():
@@ -26,14 +40,55 @@ def pyplot():
     return plt
 
 
-def save_atomic(fig, path: str | Path, dpi: int = 130) -> Path:
-    """Save a figure through a temporary file so a failure never leaves a broken PNG."""
+@contextlib.contextmanager
+def stamp_figures(text: str | None):
+    """Draw ``text`` (e.g. ``"preview: coarse grid"``) in the top right corner of every figure
+    saved inside this context, and record it in the PNG metadata (key ``Stamp``)."""
+    before = _STAMP["text"]
+    _STAMP["text"] = text or None
+    try:
+        yield
+    finally:
+        _STAMP["text"] = before
+
+
+def add_stamp(fig, text: str):
+    """The stamp: ``text`` in the figure's top right corner, in the warning colour, on a line
+    added above the title (so that it covers nothing)."""
+    title = fig._suptitle
+    if title is None:
+        fig.suptitle(" ")
+    else:
+        title.set_text("\n" + title.get_text())
+    return fig.text(0.995, 0.995, text, ha="right", va="top", fontsize=8.5, fontweight="bold",
+                    color=COLOURS["failure"], zorder=100,
+                    bbox=dict(boxstyle="round,pad=0.15", fc="white", ec=COLOURS["failure"], lw=0.8))
+
+
+def png_metadata(stamp: str | None = None) -> dict:
+    """PNG text chunks of a figure: cablesim version, git commit, the command that drew it."""
+    line = invocation()["command_line"] or "python " + " ".join(sys.argv)  # not the command line: a script
+    meta = {"Software": f"cablesim {__version__}", "cablesim version": __version__,
+            "git commit": git_commit() or "unknown (not a git checkout)", "Command": line}
+    if stamp:
+        meta["Stamp"] = stamp
+    return meta
+
+
+def save_atomic(fig, path: str | Path, dpi: int = DPI) -> Path:
+    """Save a figure through a temporary file so a failure never leaves a broken PNG; the PNG
+    carries :func:`png_metadata` and, inside :func:`stamp_figures`, the stamp."""
     path = Path(path)
     remove_stale_parts(path)
     tmp = part_path(path)
+    stamp = _STAMP["text"]
+    if stamp:
+        add_stamp(fig, stamp)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(tmp, dpi=dpi, bbox_inches="tight", format="png")
+        # a figure laid out by matplotlib keeps its width; one placed by hand is cropped to its content
+        crop = None if fig.get_layout_engine() is not None else "tight"
+        fig.savefig(tmp, dpi=dpi, format="png", metadata=png_metadata(stamp), bbox_inches=crop)
         tmp.replace(path)
     except OSError as exc:
         raise write_error(path, exc) from None
@@ -43,30 +98,50 @@ def save_atomic(fig, path: str | Path, dpi: int = 130) -> Path:
     return path
 
 
-def stride(m: int, max_points: int = MAX_LINE_POINTS) -> int:
-    """Step between drawn samples so that a line has at most ``max_points`` points."""
-    return max(1, -(-m // max_points))
+def figure_grid(nrows, ncols, row_height, *, sharex=False, sharey=False, extra_height=0.6, width=FIGURE_WIDTH,
+                height_ratios=None):
+    """Figure ``width`` wide (the journal width) with an ``nrows`` x ``ncols`` grid of axes,
+    laid out by matplotlib's constrained layout (titles, labels and outside legends fit).
 
-def figure_grid(nrows, ncols, ax_w, ax_h, *, sharex=False, top=0.75, hspace=0.25, wspace=0.9, left=1.0):
-    """Figure with fixed margins in inches (no layout engine: log axes make those slow).
-
-    ``top`` leaves room for the two-line figure title (plus any axes titles); the saved file
-    is cropped to its content by ``save_atomic`` (``bbox_inches="tight"``).
+    Two-panel rows stack rather than shrink: callers pass ``ncols`` = 1 and twice the rows.
     """
     plt = pyplot()
-    right, bottom = 0.3, 0.65
-    width = left + ncols * ax_w + (ncols - 1) * wspace + right
-    height = top + nrows * ax_h + (nrows - 1) * hspace + bottom
-    fig, axes = plt.subplots(nrows, ncols, sharex=sharex, squeeze=False, figsize=(width, height))
-    fig.subplots_adjust(
-        left=left / width,
-        right=1 - right / width,
-        bottom=bottom / height,
-        top=1 - top / height,
-        hspace=hspace / ax_h,
-        wspace=wspace / ax_w,
-    )
+    fig, axes = plt.subplots(nrows, ncols, sharex=sharex, sharey=sharey, squeeze=False,
+                             figsize=(width, extra_height + nrows * row_height), layout="constrained",
+                             height_ratios=height_ratios)
+    fig.get_layout_engine().set(w_pad=0.04, h_pad=0.04, wspace=0.03, hspace=0.03)
     return fig, axes
+
+
+def title_line(fig, text: str, note: str | None = None) -> None:
+    """The figure's title line; an optional line of conditions under it (wrapped to the width)."""
+    if note:  # without the conditions the title states already
+        parts = [p for p in note.split("; ") if p.lower() not in text.lower()]
+        text += "\n" + "\n".join(textwrap.wrap("; ".join(parts), width=TITLE_CHARS)) if parts else ""
+    fig.suptitle(text, fontsize=9.5)
+
+
+def legend_below(fig, handles, ncol: int = 2) -> None:
+    """One legend for the whole figure, below the axes (within the figure width)."""
+    if handles:
+        fig.legend(handles=handles, loc="outside lower center", ncol=ncol, frameon=False)
+
+
+def bottom_notes(fig, lines, warn: bool = False) -> None:
+    """Notes under a figure (or subfigure), wrapped to its width: above the legend entries when
+    the figure has a legend below (the layout would put both in one place), else as its x label;
+    in the warning colour when ``warn`` (a run that stopped early, an incomplete sweep)."""
+    if not lines:
+        return
+    chars = int(TITLE_CHARS * 1.1 * fig.get_window_extent().width / (fig.get_figure(root=True).dpi * FIGURE_WIDTH))
+    text = "\n".join(w for line in lines for w in textwrap.wrap(line, width=max(30, chars)))
+    colour = COLOURS["failure"] if warn else "0.3"
+    below = [lg for lg in fig.legends if getattr(lg, "_outside_loc", None)]
+    if below:
+        below[0].set_title(text, prop={"size": 8.5, "weight": "bold" if warn else "normal"})
+        below[0].get_title().set_color(colour)
+    else:
+        fig.supxlabel(text, fontsize=8.5, color=colour, fontweight="bold" if warn else "normal")
 
 
 def steady_start(t: np.ndarray, steady_fraction: float = 0.5) -> int:
@@ -74,10 +149,19 @@ def steady_start(t: np.ndarray, steady_fraction: float = 0.5) -> int:
     return t.size - int(round(steady_fraction * t.size))
 
 
-def two_tone(ax, x, y, i0, label_early, label_late, color="C0"):
-    """Draw the early part of a curve light and the latter part dark."""
-    s = stride(x.size)
-    ax.plot(x[: i0 + 1 : s], y[: i0 + 1 : s], "-", color=color, alpha=0.3, lw=0.7, label=label_early)
-    ax.plot(x[i0::s], y[i0::s], "-", color="k", lw=0.9, label=label_late)
+def envelope_plot(ax, x, y, *args, **kwargs):
+    """``ax.plot`` of a long time history as its true envelope (:func:`minmax_decimate`)."""
+    xd, yd = minmax_decimate(x, y, ENVELOPE_BUCKETS)
+    return ax.plot(xd, yd, *args, **kwargs)
+
+
+def two_tone(ax, x, y, i0, label_early, label_late):
+    """Draw the early part of a parametric curve (phase plot, Lissajous figure) light and the
+    latter part dark, and mark its end. Every sample up to :data:`CURVE_POINTS` per part is
+    drawn (an envelope means nothing for a curve that is not a function of time)."""
+    s_early = max(1, -(-(i0 + 1) // CURVE_POINTS))
+    s_late = max(1, -(-(x.size - i0) // CURVE_POINTS))
+    ax.plot(x[: i0 + 1 : s_early], y[: i0 + 1 : s_early], "-", color=COLOURS["early"], lw=0.6, label=label_early)
+    ax.plot(x[i0::s_late], y[i0::s_late], "-", color=COLOURS["late"], lw=0.7, label=label_late)
     if x.size:
-        ax.plot(x[-1], y[-1], "o", color="C3", ms=4, zorder=3, label="end of run")
+        ax.plot(x[-1], y[-1], "o", color=COLOURS["annotation"], mfc="white", ms=4, zorder=3, label="end of run")

@@ -7,12 +7,16 @@ from pathlib import Path
 import numpy as np
 
 from ..cable import nodes_with_supports
-from .base import pyplot, save_atomic
+from .base import pyplot, save_atomic, title_line
+from .style import COLOURS, FIGURE_WIDTH, lowest_modes_text, styled
 
 #: Above this many nodes the loads are drawn as one quiver rather than an arrow per node.
 ARROW_NODES = 40
+#: Colour of the sustained loads.
+SERIES_LOADS = "#8c564b"
 
 
+@styled
 def plot_cable(result, path: str | Path, title: str) -> Path:
     """Draw the cable: natural and deformed shapes, supports, loads and tensions.
 
@@ -26,20 +30,23 @@ def plot_cable(result, path: str | Path, title: str) -> Path:
     """
     plt = pyplot()
     cable = result.cable
-    fig, ax = plt.subplots(figsize=(9, 5.5))
+    fig, ax = plt.subplots(figsize=(FIGURE_WIDTH, 4.8), layout="constrained")
+    loads = SERIES_LOADS
     y = result.y0
     pts = nodes_with_supports(cable, y)
     if result.inextensible is not None:
         nat = nodes_with_supports(cable, result.inextensible.x)
-        ax.plot(nat[:, 0], nat[:, 1], "--", color="0.55", lw=1.2, label="natural state x(F0) (inextensible)")
+        ax.plot(nat[:, 0], nat[:, 1], "--", color=COLOURS["reference"], lw=1.2,
+                label="natural state $x(F_0)$ (inextensible)")
         dmax = np.abs(y - result.inextensible.x).max()
-        deformed_label = f"deformed y ({result.analysis} analysis; max |y - x| = {dmax:.3g} m)"
+        deformed_label = f"deformed $y$ ({result.analysis} analysis; max $|y - x|$ = {dmax:.3g} m)"
     else:
-        deformed_label = f"deformed y ({result.analysis} analysis)"
-    ax.plot(pts[:, 0], pts[:, 1], "-", color="C0", lw=2, label=deformed_label)
+        deformed_label = f"deformed $y$ ({result.analysis} analysis)"
+    ax.plot(pts[:, 0], pts[:, 1], "-", color=COLOURS["response"], lw=2, label=deformed_label)
     masses = cable.masses
     sizes = (30 + 120 * masses / masses.max()) * min(1.0, ARROW_NODES / cable.n_nodes)
-    ax.scatter(pts[1:-1, 0], pts[1:-1, 1], s=sizes, color="C0", zorder=3, label="lumped masses (area ~ mass)")
+    ax.scatter(pts[1:-1, 0], pts[1:-1, 1], s=sizes, color=COLOURS["response"], zorder=3,
+               label="lumped masses (area ~ mass)")
     ax.plot([0, cable.L], [0, cable.H], "^", color="k", ms=11, zorder=4, label="supports A, B")
     ax.annotate("A", (0, 0), textcoords="offset points", xytext=(-12, -14))
     ax.annotate("B", (cable.L, cable.H), textcoords="offset points", xytext=(6, -14))
@@ -52,7 +59,7 @@ def plot_cable(result, path: str | Path, title: str) -> Path:
         scale = 0.15 * span / np.hypot(P[:, 0], P[:, 1]).max()
         if cable.n_nodes > ARROW_NODES:  # one quiver: thousands of annotations take many seconds
             ax.quiver(pts[1:-1, 0], pts[1:-1, 1], P[:, 0] * scale, P[:, 1] * scale, angles="xy",
-                      scale_units="xy", scale=1.0, color="C3", width=0.002)
+                      scale_units="xy", scale=1.0, color=loads, width=0.002)
         for k, (node, load) in enumerate(zip(pts[1:-1], P) if cable.n_nodes <= ARROW_NODES else ()):
             if np.hypot(*load) == 0:
                 continue
@@ -60,24 +67,24 @@ def plot_cable(result, path: str | Path, title: str) -> Path:
                 "",
                 xy=node + load * scale,
                 xytext=node,
-                arrowprops=dict(arrowstyle="-|>", color="C3", lw=1.5),
+                arrowprops=dict(arrowstyle="-|>", color=loads, lw=1.5),
             )
             if cable.n_nodes <= 10:
                 ax.annotate(
-                    f"F0 = ({load[0] / 1e3:.4g}, {load[1] / 1e3:.4g}) kN",
+                    f"$F_0$ = ({load[0] / 1e3:.4g}, {load[1] / 1e3:.4g}) kN",
                     node + load * scale,
                     textcoords="offset points",
                     xytext=(4, 4),
-                    color="C3",
+                    color=loads,
                     fontsize=8,
                 )
-        ax.plot([], [], color="C3", label="sustained loads F0")
+        ax.plot([], [], color=loads, label="sustained loads $F_0$")
     if cable.n_segments <= 12:
         T = result.T0
         mid = 0.5 * (pts[1:] + pts[:-1])
         for k in range(cable.n_segments):
             ax.annotate(
-                f"T{k + 1} = {T[k] / 1e3:.4g} kN",
+                f"$T_{{{k + 1}}}$ = {T[k] / 1e3:.4g} kN",
                 mid[k],
                 textcoords="offset points",
                 xytext=(0, -12),
@@ -89,12 +96,8 @@ def plot_cable(result, path: str | Path, title: str) -> Path:
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("horizontal coordinate (m)")
     ax.set_ylabel("vertical coordinate (m), pointing down")
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="lower left", fontsize=8, framealpha=0.9)
-    ax.set_title(
-        f"{title}: static equilibrium under F0\n"
-        f"n = {cable.n_nodes} nodes, L = {cable.L:g} m, H = {cable.H:g} m, EA = {cable.EA:.3g} N, "
-        f"lowest frequency {result.modes.omega[0]:.4g} rad/s",
-        fontsize=10,
-    )
+    fig.legend(loc="outside lower center", ncol=2, frameon=False)
+    title_line(fig, f"{title}: static equilibrium under $F_0$",
+               f"n = {cable.n_nodes} nodes, L = {cable.L:g} m, H = {cable.H:g} m, EA = {cable.EA:.3g} N; "
+               f"lowest frequencies {lowest_modes_text(cable, y, result.modes)}")
     return save_atomic(fig, path)

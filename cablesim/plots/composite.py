@@ -2,12 +2,18 @@
 
 Composite kinds (``figure.kind``):
 
-- ``fdr``: frequency response of every sweep file on shared axes, one row per channel;
+- ``fdr``: frequency response of every sweep file on shared axes, one row per channel
+  (:mod:`cablesim.plots.fdr`);
 - ``waveform``: z(t) of the channels, one row per channel;
 - ``waveform_phase``: z(t) of the first channel beside its phase plot z' against z;
-- ``waveform_fft``: z(t) of the first channel beside the amplitude spectrum of the last half;
-- ``split``: z with its configurational and elastic parts z_c, z_e, one row per channel;
+- ``waveform_fft``: z(t) of the first channel beside the amplitude spectrum of the last half
+  (of the whole record if the run stopped early), with its window and bin width;
+- ``split``: z with its configurational and elastic parts z_c, z_e, one row per channel (z_e
+  on a panel of its own when it is too small to read beside z);
 - ``lissajous_tension``: z_j against z_i above the tension changes T_r - T0_r (last quarter).
+
+Files side by side (or, for the two-panel kinds, stacked) share the scales of the panels that
+compare them; a stretch too small to read on a waveform gets an inset.
 """
 
 from __future__ import annotations
@@ -25,12 +31,14 @@ from ..channels import (
     resolve_columns,
     stored_names,
 )
-from ..dynamics.spectra import spectrum, spectrum_peaks
+from ..dynamics.spectra import amplitude_spectrum, spectral_peaks
 from ..errors import CablesimError
-from ..io.hdf5 import FAMILY_TEXT, ResultInfo, attr_text, inspect_result, read_history
-from ..io.sweeps import read_sweep, select_channels
-from .base import MAX_LINE_POINTS, pyplot, save_atomic, steady_start, two_tone
-from .sweep import DIRECTION_STYLE, channel_label, draw_curve, marker_handles
+from ..io.hdf5 import FAMILY_TEXT, ResultInfo, inspect_result, read_history
+from .base import FIGURE_WIDTH, bottom_notes, envelope_plot, pyplot, save_atomic, steady_start, two_tone
+from .fdr import draw_fdr
+from .history import draw_modal_lines, label_peaks, resolved_peaks, spectrum_window, time_text, window_text
+from .insets import add_time_inset
+from .style import COLOURS, SERIES, channel_tex, force_unit, styled, symbols
 
 #: Kinds drawing time histories (history or free-vibration files).
 HISTORY_KINDS = ("waveform", "waveform_phase", "waveform_fft", "split", "lissajous_tension")
@@ -47,8 +55,8 @@ MAX_ROWS = 8
 #: lissajous_tension without a time window: the tension panel shows the last quarter of the
 #: run, but no more than this many forcing periods (so that the waveform stays readable).
 TENSION_PERIODS = 12
-#: Colours of the files (or gamma curves) in an fdr figure; red marks non-steady points.
-_COLORS = ["C0", "C1", "C2", "C4", "C5", "C6", "C8", "C9", "C7"]
+#: Kinds drawing two panels per file side by side (several files stack as rows).
+PAIRED_KINDS = ("waveform_phase", "waveform_fft")
 
 
 # --------------------------------------------------------------------------------------------
@@ -56,6 +64,7 @@ _COLORS = ["C0", "C1", "C2", "C4", "C5", "C6", "C8", "C9", "C7"]
 # --------------------------------------------------------------------------------------------
 
 
+@styled
 def draw_figure(fig_spec, infos, png: Path, case_name: str = "case") -> Path:
     """Draw the composite figure ``fig_spec`` (a :class:`~cablesim.case.FigureSpec`) as one PNG.
 
@@ -83,25 +92,22 @@ def draw_figure(fig_spec, infos, png: Path, case_name: str = "case") -> Path:
             raise CablesimError(
                 f"figure.kind {kind!r} draws {needs}, but {info.path} is {FAMILY_TEXT[info.family]}."
             )
-    title = fig_spec.title if fig_spec.title else f"{case_name}: {_KIND_TEXT[kind]}"
+    title = symbols(fig_spec.title) if fig_spec.title else f"{case_name}: {_KIND_TEXT[kind]}"
     if kind == "fdr":
-        return _draw_fdr(fig_spec, infos, png, title)
+        return draw_fdr(fig_spec, infos, png, title)
     hists = [read_history(i.path) for i in infos]
     for info, h in zip(infos, hists):
         if h.t.size < 2:
             raise CablesimError(f"The history in {info.path} holds a single instant; there is nothing to plot.")
-    captions = list(labels) if labels is not None else [_caption(h) for h in hists]
+    captions = [symbols(c) for c in labels] if labels is not None else [_caption(h, title) for h in hists]
     return _draw_history_figure(fig_spec, infos, hists, captions, png, title)
 
 
-def _caption(h) -> str:
+def _caption(h, title: str) -> str:
+    """A file's caption: its forcing, unless the figure's title states it already."""
     if h.omega is None:
-        return "free vibration"
-    return f"forcing omega = {h.omega:.4g} rad/s"
-
-
-def _stride(m: int) -> int:
-    return max(1, -(-m // MAX_LINE_POINTS))
+        return "" if "free vibration" in title else "free vibration"
+    return "" if f"{h.omega:.4g}" in title else f"forcing frequency $\\omega$ = {h.omega:.4g} rad/s"
 
 
 def _xlim(ax, t, win, tw=None):
@@ -151,64 +157,101 @@ def _channel_columns(fig_spec, hist, path: Path, single: bool) -> tuple[list[int
     return cols, notes
 
 
+def _plan(fig_spec, info, h) -> dict:
+    """What to draw from one file, resolved before drawing so that bad input writes no file."""
+    kind = fig_spec.kind
+    plan = {"notes": []}
+    if kind in ("waveform", "split"):
+        plan["cols"], plan["notes"] = _channel_columns(fig_spec, h, info.path, single=False)
+    elif kind in PAIRED_KINDS:
+        plan["cols"], plan["notes"] = _channel_columns(fig_spec, h, info.path, single=True)
+    if kind == "split" and (h.zc is None or h.ze is None):
+        raise CablesimError(
+            f"figure.kind 'split' needs the configurational and elastic parts z_c and z_e, but {info.path} "
+            "has none (they were not computed); run the scene with outputs.split: true."
+        )
+    if kind == "lissajous_tension":
+        plan["pair"] = _pair_columns(fig_spec, h, info.path)
+        plan["segments"] = _segments(fig_spec, h, info.path)
+        plan["window"] = _tension_window(h, fig_spec.time_window, info.path)
+    else:
+        plan["window"] = _window(np.asarray(h.t, dtype=float), fig_spec.time_window, info.path)
+    return plan
+
+
+def _split_rows(h, cols, win) -> list[bool]:
+    """Per channel of a split figure: whether z_e gets its own panel (too small beside z)."""
+    i0, i1 = win
+    out = []
+    for c in cols:
+        z_max = float(np.nanmax(np.abs(h.z[i0:i1, c]))) if i1 > i0 else 0.0
+        ze_max = float(np.nanmax(np.abs(h.ze[i0:i1, c]))) if i1 > i0 else 0.0
+        out.append(bool(z_max > 0 and ze_max < 0.1 * z_max))
+    return out
+
+
+def _figure_size(kind: str, n: int, plans, hists) -> tuple[float, int, int]:
+    """(height in inches, subfigure rows, subfigure columns) of a composite history figure."""
+    rows = max(len(p.get("cols", [0])) for p in plans)
+    if kind == "waveform":
+        return 0.9 + 1.5 * rows, 1, n
+    if kind == "split":
+        panels = max(len(p["cols"]) + sum(_split_rows(h, p["cols"], p["window"])) for p, h in zip(plans, hists))
+        return 1.0 + 1.6 * panels, 1, n
+    if kind in PAIRED_KINDS:
+        return 0.4 + 3.0 * n, n, 1
+    return 6.4, 1, n  # lissajous_tension
+
+
 def _draw_history_figure(fig_spec, infos, hists, captions, png: Path, title: str) -> Path:
     kind = fig_spec.kind
     n = len(hists)
-    # Resolve everything first, so that a bad channel or segment writes no file.
-    plans = []
-    for info, h in zip(infos, hists):
-        plan = {"notes": []}
-        if kind in ("waveform", "split"):
-            plan["cols"], plan["notes"] = _channel_columns(fig_spec, h, info.path, single=False)
-        elif kind in ("waveform_phase", "waveform_fft"):
-            plan["cols"], plan["notes"] = _channel_columns(fig_spec, h, info.path, single=True)
-        if kind == "split" and (h.zc is None or h.ze is None):
-            raise CablesimError(
-                f"figure.kind 'split' needs the configurational and elastic parts z_c and z_e, but {info.path} "
-                "has none (they were not computed); run the scene with outputs.split: true."
-            )
-        if kind == "lissajous_tension":
-            plan["pair"] = _pair_columns(fig_spec, h, info.path)
-            plan["segments"] = _segments(fig_spec, h, info.path)
-        if kind != "lissajous_tension":
-            plan["window"] = _window(np.asarray(h.t, dtype=float), fig_spec.time_window, info.path)
-        else:
-            plan["window"] = _tension_window(h, fig_spec.time_window, info.path)
-        plans.append(plan)
-
-    rows = max(len(p.get("cols", [0])) for p in plans)
-    if kind == "waveform":
-        col_w, height = 5.2, 1.2 + 2.0 * rows
-    elif kind == "split":
-        col_w, height = 5.6, 1.3 + 2.3 * rows
-    elif kind in ("waveform_phase", "waveform_fft"):
-        col_w, height = 9.0, 4.8
-    else:  # lissajous_tension
-        col_w, height = 4.8, 8.6
+    plans = [_plan(fig_spec, info, h) for info, h in zip(infos, hists)]
+    height, sub_rows, sub_cols = _figure_size(kind, n, plans, hists)
     plt = pyplot()
-    fig = plt.figure(figsize=(col_w * n, height), layout="constrained")
-    fig.get_layout_engine().set(w_pad=0.06, h_pad=0.06, wspace=0.04, hspace=0.04)
-    subs = fig.subfigures(1, n, squeeze=False, wspace=0.03)[0]
-    for sf, info, h, cap, plan in zip(subs, infos, hists, captions, plans):
+    fig = plt.figure(figsize=(FIGURE_WIDTH, height), layout="constrained")
+    fig.get_layout_engine().set(w_pad=0.04, h_pad=0.04, wspace=0.03, hspace=0.03)
+    subs = fig.subfigures(sub_rows, sub_cols, squeeze=False).ravel()
+    roles: dict = {}  # panels compared across files share their scales
+    tw = fig_spec.time_window
+    for sf, h, cap, plan in zip(subs, hists, captions, plans):
         stopped = not h.completed
         if stopped:  # wrapped to the column width
-            cap += "\n" + textwrap.fill(f"run stopped early: {h.message}", width=int(11 * col_w))
-        sf.suptitle(cap, fontsize=11 if not stopped else 9.5, color="C3" if stopped else "black",
-                    fontweight="bold")
+            cap += "\n" + textwrap.fill(f"run stopped early: {h.message}", width=int(13 * FIGURE_WIDTH / sub_cols))
+        if cap:
+            sf.suptitle(cap.strip(), fontsize=9, color=COLOURS["failure"] if stopped else "black", fontweight="bold")
         if kind == "waveform":
-            _draw_waveforms(sf, h, plan["cols"], plan["window"], rows, fig_spec.time_window)
+            drawn = _draw_waveforms(sf, h, plan["cols"], plan["window"], tw)
         elif kind == "split":
-            _draw_split(sf, h, plan["cols"], plan["window"], rows, fig_spec.time_window)
+            drawn = _draw_split(sf, h, plan["cols"], plan["window"], tw)
         elif kind == "waveform_phase":
-            _draw_waveform_phase(sf, h, plan["cols"][0], plan["window"], fig_spec.time_window)
+            drawn = _draw_waveform_phase(sf, h, plan["cols"][0], plan["window"], tw)
         elif kind == "waveform_fft":
-            _draw_waveform_fft(sf, h, plan["cols"][0], plan["window"], fig_spec.time_window)
+            drawn = _draw_waveform_fft(sf, h, plan["cols"][0], plan["window"], tw)
         else:
-            _draw_lissajous_tension(sf, h, plan["pair"], plan["segments"], plan["window"], fig_spec.time_window)
+            drawn = _draw_lissajous_tension(sf, h, plan["pair"], plan["segments"], plan["window"], tw)
+        for role, ax in drawn.items():
+            roles.setdefault(role, []).append(ax)
         if plan["notes"]:
-            sf.supxlabel("; ".join(plan["notes"]), fontsize=8, color="0.3")
-    fig.suptitle(title, fontsize=13)
+            bottom_notes(sf, ["; ".join(plan["notes"])])
+    if n > 1:
+        share_scales(roles)
+    fig.suptitle(title, fontsize=10)
     return save_atomic(fig, png)
+
+
+def share_scales(roles: dict) -> None:
+    """Give the panels of one role (e.g. the tension panel of each file) common limits: the
+    ``y`` axis, and the ``x`` axis too for roles named ``"xy:..."`` (Lissajous, phase plots)."""
+    for role, axes in roles.items():
+        if len(axes) < 2:
+            continue
+        which = ("x", "y") if role.startswith("xy:") else ("y",)
+        for name in which:
+            lims = np.array([getattr(ax, f"get_{name}lim")() for ax in axes])
+            both = (lims[:, 0].min(), lims[:, 1].max())
+            for ax in axes:
+                getattr(ax, f"set_{name}lim")(*both)
 
 
 def _pair_columns(fig_spec, h, path: Path):
@@ -250,246 +293,165 @@ def _tension_window(h, tw, path: Path):
     return max(0, i0), t.size
 
 
+
 def _label_axes(ax, h, col, xlabel: bool, name_suffix: str = ""):
-    ax.set_ylabel(f"{column_name(h, col)}{name_suffix} (m)\n{column_description(h, col)}", fontsize=9)
+    ax.set_ylabel(f"{channel_tex(column_name(h, col))}{name_suffix} (m)\n{column_description(h, col)}")
     if xlabel:
-        ax.set_xlabel("time t (s)")
-    ax.grid(True, alpha=0.3)
+        ax.set_xlabel("time $t$ (s)")
 
 
-def _draw_waveforms(sf, h, cols, win, rows, tw=None):
+def _legend_above(ax, ncol: int) -> None:
+    ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.0), ncol=ncol, frameon=False, handlelength=1.6,
+              columnspacing=0.8, borderaxespad=0.2)
+
+
+def _draw_waveforms(sf, h, cols, win, tw=None) -> dict:
     t = np.asarray(h.t, dtype=float)
     i0, i1 = win
-    s = _stride(i1 - i0)
-    axes = sf.subplots(rows, 1, sharex=True, squeeze=False)[:, 0]
-    for r, ax in enumerate(axes):
-        if r >= len(cols):
-            ax.set_visible(False)
-            continue
-        c = cols[r]
-        ax.plot(t[i0:i1:s], h.z[i0:i1:s, c], "-", color="C0", lw=1.0, label=f"{column_name(h, c)}(t)")
-        ax.axhline(0.0, color="0.5", lw=0.7, ls="--", label="static equilibrium")
+    axes = sf.subplots(len(cols), 1, sharex=True, squeeze=False)[:, 0]
+    drawn = {}
+    for r, (ax, c) in enumerate(zip(axes, cols)):
+        envelope_plot(ax, t[i0:i1], h.z[i0:i1, c], "-", color=COLOURS["response"], lw=0.9,
+                      label=f"{channel_tex(column_name(h, c))}$(t)$")
+        ax.axhline(0.0, color=COLOURS["reference"], lw=0.7, ls="--", label="static equilibrium")
         _label_axes(ax, h, c, xlabel=(r == len(cols) - 1))
         _xlim(ax, t, win, tw)
-        ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.0), ncol=2, fontsize=7, frameon=False,
-                  handlelength=1.6, columnspacing=0.8, borderaxespad=0.2)
-        if r < len(cols) - 1:
-            ax.tick_params(labelbottom=False)
+        add_time_inset(ax, t[i0:i1], h.z[i0:i1, c])
+        if r == 0:
+            _legend_above(ax, 2)
+        drawn[f"y:z{r}"] = ax
+    return drawn
 
 
-def _draw_split(sf, h, cols, win, rows, tw=None):
+def _draw_split(sf, h, cols, win, tw=None) -> dict:
     t = np.asarray(h.t, dtype=float)
     i0, i1 = win
-    s = _stride(i1 - i0)
-    axes = sf.subplots(rows, 1, sharex=True, squeeze=False)[:, 0]
-    for r, ax in enumerate(axes):
-        if r >= len(cols):
-            ax.set_visible(False)
-            continue
-        c = cols[r]
-        ax.plot(t[i0:i1:s], h.z[i0:i1:s, c], "-", color="k", lw=1.4, label="z = z_c + z_e")
-        ax.plot(t[i0:i1:s], h.zc[i0:i1:s, c], "--", color="C1", lw=1.1, label="configurational part z_c")
-        ze_max = float(np.max(np.abs(h.ze[i0:i1, c])))
-        ax.plot(t[i0:i1:s], h.ze[i0:i1:s, c], "-", color="C2", lw=1.0, label=f"elastic part z_e (max |z_e| {ze_max:.3g} m)")
-        _label_axes(ax, h, c, xlabel=(r == len(cols) - 1))
+    own = _split_rows(h, cols, win)
+    axes = sf.subplots(len(cols) + sum(own), 1, sharex=True, squeeze=False)[:, 0]
+    drawn, k = {}, 0
+    for r, c in enumerate(cols):
+        ax = axes[k]
+        # z wide and light beneath its parts, so that it shows where it coincides with one of them
+        envelope_plot(ax, t[i0:i1], h.z[i0:i1, c], "-", color=COLOURS["response"], lw=2.4, alpha=0.45,
+                      label="$z = z_c + z_e$")
+        envelope_plot(ax, t[i0:i1], h.zc[i0:i1, c], "--", color=COLOURS["configurational"], lw=0.9,
+                      label="configurational $z_c$")
+        ze_ax = axes[k + 1] if own[r] else ax
+        envelope_plot(ze_ax, t[i0:i1], h.ze[i0:i1, c], "-", color=COLOURS["elastic"], lw=0.9, label="elastic $z_e$")
+        _label_axes(ax, h, c, xlabel=False)
+        drawn[f"y:z{r}"] = ax
+        if own[r]:
+            ze_ax.set_ylabel(f"{channel_tex('z_e')} of {channel_tex(column_name(h, c))} (m),\nenlarged")
+            ze_ax.axhline(0.0, color=COLOURS["reference"], lw=0.6, ls="--")
+            drawn[f"y:ze{r}"] = ze_ax
+        if r == 0:
+            handles = ax.get_legend_handles_labels()[0] + (ze_ax.get_legend_handles_labels()[0] if own[r] else [])
+            sf.legend(handles=handles, loc="outside lower center", ncol=3, frameon=False, handlelength=1.6,
+                      columnspacing=0.8)
+        k += 2 if own[r] else 1
+    for ax in axes:
         _xlim(ax, t, win, tw)
-        ax.legend(loc="lower left", bbox_to_anchor=(0.0, 1.0), ncol=3, fontsize=7, frameon=False,
-                  handlelength=1.6, columnspacing=0.8, borderaxespad=0.2)
-        if r < len(cols) - 1:
-            ax.tick_params(labelbottom=False)
+    axes[-1].set_xlabel("time $t$ (s)")
+    return drawn
 
 
 def _draw_waveform_left(ax, h, c, win, tw=None):
     t = np.asarray(h.t, dtype=float)
     i0, i1 = win
-    s = _stride(i1 - i0)
-    ax.plot(t[i0:i1:s], h.z[i0:i1:s, c], "-", color="C0", lw=0.9, label=f"{column_name(h, c)}(t)")
-    ax.axhline(0.0, color="0.5", lw=0.7, ls="--", label="static equilibrium")
+    name = channel_tex(column_name(h, c))
+    envelope_plot(ax, t[i0:i1], h.z[i0:i1, c], "-", color=COLOURS["response"], lw=0.8, label=f"{name}$(t)$")
+    ax.axhline(0.0, color=COLOURS["reference"], lw=0.7, ls="--", label="static equilibrium")
     _label_axes(ax, h, c, xlabel=True)
     _xlim(ax, t, win, tw)
-    ax.set_title(f"waveform of {column_name(h, c)}", fontsize=10)
-    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, fontsize=7.5, frameon=False)
+    add_time_inset(ax, t[i0:i1], h.z[i0:i1, c])
+    ax.set_title(f"waveform of {name}")
 
 
-def _draw_waveform_phase(sf, h, c, win, tw=None):
+def _draw_waveform_phase(sf, h, c, win, tw=None) -> dict:
     ax1, ax2 = sf.subplots(1, 2)
     _draw_waveform_left(ax1, h, c, win, tw)
     t = np.asarray(h.t, dtype=float)
     i_half = steady_start(t)
-    t_s = t[min(i_half, t.size - 1)]
-    name = column_name(h, c)
-    two_tone(ax2, h.z[:, c], h.v[:, c], i_half, f"t < {t_s:.4g} s", f"t >= {t_s:.4g} s (last half)")
+    t_s = time_text(t, t[min(i_half, t.size - 1)])
+    name = channel_tex(column_name(h, c))
+    two_tone(ax2, h.z[:, c], h.v[:, c], i_half, f"$t$ < {t_s}", f"$t \\geq$ {t_s} (last half)")
     ax2.set_xlabel(f"{name} (m)")
     ax2.set_ylabel(f"{name}' (m/s)")
-    ax2.set_title(f"phase plot of {name} (whole run)", fontsize=10)
-    ax2.grid(True, alpha=0.3)
-    ax2.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=3, fontsize=7.5, frameon=False)
+    ax2.set_title(f"phase plot of {name} (whole run)")
+    sf.legend(handles=ax2.get_legend_handles_labels()[0], loc="outside lower center", ncol=3, frameon=False)
+    return {"y:waveform": ax1, "xy:phase": ax2}
 
 
-def _draw_waveform_fft(sf, h, c, win, tw=None):
+def _draw_waveform_fft(sf, h, c, win, tw=None) -> dict:
     from matplotlib.ticker import NullLocator  # matplotlib loads only when drawing
 
     ax1, ax2 = sf.subplots(1, 2)
     _draw_waveform_left(ax1, h, c, win, tw)
     t = np.asarray(h.t, dtype=float)
-    name = column_name(h, c)
-    ax2.set_title(f"amplitude spectrum of {name}, t >= {t[t.size - int(round(0.5 * t.size))]:.4g} s (last half)",
-                  fontsize=10)
-    ax2.set_xlabel("circular frequency omega (rad/s)")
+    name = channel_tex(column_name(h, c))
+    ax2.set_xlabel("circular frequency $\\omega$ (rad/s)")
     ax2.set_ylabel(f"amplitude of {name} (m)")
-    ax2.grid(True, alpha=0.3)
+    fraction, how = spectrum_window(h)
     try:
-        omega, amp = spectrum(t, h.z[:, c], 0.5)
-        peaks = spectrum_peaks(t, h.z[:, c], 0.5, max_peaks=4, rel_height=0.05)
+        omega, amp, n, dt = amplitude_spectrum(t, h.z[:, c], fraction)
     except CablesimError as exc:
         ax2.text(0.5, 0.5, f"no spectrum:\n{exc}", transform=ax2.transAxes, ha="center", va="center",
-                 color="C3", fontsize=9, wrap=True)
-        return
+                 color=COLOURS["failure"], wrap=True)
+        return {"y:waveform": ax1}
+    bin_width = 2 * np.pi / (n * dt)
+    ax2.set_title(f"amplitude spectrum of {name}\n" + window_text(t[-n], t[-1], t, how, bin_width, "\n"), fontsize=8)
+    w_pk, a_pk = spectral_peaks(omega, amp, 4, 0.05)
     modal = np.sort(np.asarray(h.modal_omega, dtype=float).ravel())
     modal = modal[np.isfinite(modal) & (modal > 0)]
     # Frequency range: 1.5 x the largest of the peaks and the forcing frequency (free vibration:
     # and the four lowest modal frequencies), capped at the Nyquist frequency.
-    refs = list(peaks) + ([h.omega] if h.omega is not None else list(modal[:4])) + list(modal[:1])
+    refs = list(w_pk) + ([h.omega] if h.omega is not None else list(modal[:4])) + list(modal[:1])
     x_max = min(float(omega[-1]), 1.5 * max(refs)) if refs else float(omega[-1])
     sel = omega <= x_max
-    ax2.semilogy(omega[sel], np.maximum(amp[sel], 1e-300), "-", color="C0", lw=1.0, label="amplitude spectrum")
+    ax2.semilogy(omega[sel], np.maximum(amp[sel], 1e-300), "-", color=COLOURS["response"], lw=0.9,
+                 label="amplitude spectrum")
     ax2.yaxis.set_minor_locator(NullLocator())
     top = amp[sel][1:].max() if sel.sum() > 1 else 0.0
     if top > 0:
         ax2.set_ylim(top * 1e-5, top * 30.0)
-    peaks = peaks[peaks <= x_max]
-    if peaks.size:
-        a_pk = np.interp(peaks, omega, amp)
-        ax2.plot(peaks, a_pk, "v", color="C3", ms=6, zorder=4, label="spectral peaks")
-        for r, (w, a) in enumerate(sorted(zip(peaks, a_pk))):
-            ax2.annotate(f"{w:#.4g}", (w, a), textcoords="offset points", xytext=(4, 3 + 9 * (r % 2)),
-                         fontsize=8, color="C3")
+    label_peaks(ax2, *resolved_peaks(w_pk, a_pk, bin_width, x_max), bin_width, x_max)
     if h.omega is not None and h.omega <= x_max:
-        ax2.axvline(h.omega, color="C1", ls="--", lw=1.0, alpha=0.7, label=f"forcing omega = {h.omega:.4g} rad/s")
-    shown = modal[modal <= x_max]
-    if shown.size:
-        for r, w in enumerate(shown):
-            ax2.axvline(w, color="0.45", ls=":", lw=1.0, alpha=0.7,
-                        label=("linear modal frequencies" if r == 0 else None))
+        ax2.axvline(h.omega, color=COLOURS["forcing"], ls="--", lw=1.0, label="forcing frequency")
+    draw_modal_lines(ax2, modal, x_max)
     ax2.set_xlim(0.0, x_max)
-    ax2.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, fontsize=7.5, frameon=False)
+    handles = ax2.get_legend_handles_labels()[0]  # the response's colour is the same on both
+    sf.legend(handles=handles, loc="outside lower center", ncol=3, frameon=False)
+    return {"y:waveform": ax1, "xy:spectrum": ax2}
 
 
-def _draw_lissajous_tension(sf, h, pair, segs, win, tw=None):
+def _draw_lissajous_tension(sf, h, pair, segs, win, tw=None) -> dict:
     ax1, ax2 = sf.subplots(2, 1, height_ratios=[1.25, 1.0])
     t = np.asarray(h.t, dtype=float)
     i, j = pair
     i_half = steady_start(t)
-    t_s = t[min(i_half, t.size - 1)]
-    x, y = h.z[:, i], h.z[:, j]
-    two_tone(ax1, x, y, i_half, f"t < {t_s:.4g} s", f"t >= {t_s:.4g} s (last half)")
-    ax1.set_xlabel(f"{column_name(h, i)} (m): {column_description(h, i)}", fontsize=9)
-    ax1.set_ylabel(f"{column_name(h, j)} (m): {column_description(h, j)}", fontsize=9)
-    ax1.set_title(f"Lissajous figure {column_name(h, j)} against {column_name(h, i)}", fontsize=10)
-    ax1.grid(True, alpha=0.3)
-    ax1.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=3, fontsize=7, frameon=False)
-
+    t_s = time_text(t, t[min(i_half, t.size - 1)])
+    two_tone(ax1, h.z[:, i], h.z[:, j], i_half, f"$t$ < {t_s}", f"$t \\geq$ {t_s} (last half)")
+    ax1.set_xlabel(f"{channel_tex(column_name(h, i))} (m): {column_description(h, i)}")
+    ax1.set_ylabel(f"{channel_tex(column_name(h, j))} (m): {column_description(h, j)}")
+    ax1.set_title(f"Lissajous figure {channel_tex(column_name(h, j))} against {channel_tex(column_name(h, i))}")
+    ax1.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=2, frameon=False)
     i0, i1 = win
-    s = _stride(i1 - i0)
     T = np.asarray(h.T, dtype=float)
     T0 = np.asarray(h.T0, dtype=float)
+    div, unit = force_unit(T0)
     for k, r in enumerate(segs):
-        ax2.plot(t[i0:i1:s], (T[i0:i1:s, r] - T0[r]) / 1e3, "-", color=f"C{k % 10}", lw=1.1,
-                 label=f"T{r + 1} - T0 (T0 = {T0[r] / 1e3:.4g} kN)")
-    ax2.axhline(0.0, color="0.5", lw=0.7, ls="--")
+        envelope_plot(ax2, t[i0:i1], (T[i0:i1, r] - T0[r]) / 1e3, "-", color=SERIES[k % len(SERIES)], lw=0.9,
+                      label=f"$T_{{{r + 1}}} - T_{{0}}$ ($T_0$ = {T0[r] / div:.4g} {unit})")
+    ax2.axhline(0.0, color=COLOURS["reference"], lw=0.7, ls="--")
     _xlim(ax2, t, win, tw)
-    ax2.set_xlabel("time t (s)")
-    ax2.set_ylabel("tension change T - T0 (kN)")
+    ax2.set_xlabel("time $t$ (s)")
+    ax2.set_ylabel("tension change $T - T_0$ (kN)")
     if tw is not None:
-        span = f"t = {t[i0]:.4g} to {t[i1 - 1]:.4g} s"
+        span = f"$t$ = {time_text(t, t[i0])} to {time_text(t, t[i1 - 1])}"
     elif h.omega is not None and TENSION_PERIODS and t[-1] - t[i0] < 0.24 * (t[-1] - t[0]):
         span = f"last {TENSION_PERIODS} forcing periods"
     else:
         span = "last quarter of the run"
-    ax2.set_title(f"segment tension changes ({span})", fontsize=10)
-    ax2.grid(True, alpha=0.3)
-    ax2.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, fontsize=7, frameon=False)
-
-
-# --------------------------------------------------------------------------------------------
-# fdr: several sweep files on shared axes
-# --------------------------------------------------------------------------------------------
-
-
-def _draw_fdr(fig_spec, infos, png: Path, title: str) -> Path:
-    from matplotlib.lines import Line2D
-
-    sweeps = [read_sweep(i.path) for i in infos]
-    if fig_spec.labels is not None:
-        names = list(fig_spec.labels)
-    else:
-        names = [attr_text(sw.attrs.get("case_name", sw.path.stem)) for sw in sweeps]
-        if len(set(names)) < len(names):
-            names = [sw.path.name for sw in sweeps]
-    # Channels: the figure's (each must be in every file), else the first file's.
-    if fig_spec.channels is not None:
-        chans = []
-        for sw in sweeps:
-            idx = select_channels(sw, fig_spec.channels)
-            chans = [sw.channels[k] for k in idx]
-    else:
-        chans = list(sweeps[0].channels)
-    notes = []
-    if len(chans) > MAX_ROWS:
-        notes.append(f"showing the first {MAX_ROWS} of {len(chans)} channels")
-        chans = chans[:MAX_ROWS]
-
-    # One colour per (file, gamma); line style per direction.
-    series = []
-    for k, (sw, name) in enumerate(zip(sweeps, names)):
-        gammas = [None] if sw.gamma is None else list(sw.gamma)
-        for g in gammas:
-            label = name if g is None else f"{name}, gamma = {g:g}"
-            series.append((k, g, label))
-    colors = {(k, g): _COLORS[r % len(_COLORS)] for r, (k, g, _) in enumerate(series)}
-
-    lo = min(float(sw.omega[0]) for sw in sweeps)
-    hi = max(float(sw.omega[-1]) for sw in sweeps)
-    pad = 0.02 * (hi - lo) if hi > lo else max(0.05 * abs(lo), 0.1)
-    x_lo, x_hi = lo - pad, hi + pad
-    modal = [w for w in sweeps[0].modal if np.isfinite(w) and x_lo <= w <= x_hi]
-
-    plt = pyplot()
-    n = len(chans)
-    fig = plt.figure(figsize=(10.5, 1.3 + 2.8 * n), layout="constrained")
-    axes = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
-    markers = np.zeros(4, dtype=bool)  # not steady, subharmonic, stopped early, went slack
-    for ax, name in zip(axes, chans):
-        for k, sw in enumerate(sweeps):
-            if name not in sw.channels:
-                continue
-            c = sw.channels.index(name)
-            markevery = max(1, sw.omega.size // 80)
-            for curve in sw.curves:
-                markers |= draw_curve(ax, sw.omega, curve, c, "amplitude", colors[(k, curve.gamma)], markevery, 1.3)
-        for w in modal:
-            ax.axvline(w, color="0.5", ls=":", lw=1.0, alpha=0.7, zorder=1)
-        ax.set_ylim(bottom=0.0)
-        ax.set_ylabel(channel_label(name), fontsize=9)
-        ax.grid(True, alpha=0.3)
-    axes[-1].set_xlim(x_lo, x_hi)
-    axes[-1].set_xlabel("forcing frequency omega (rad/s)")
-    handles = [Line2D([], [], color=colors[(k, g)], lw=2.5, label=label) for k, g, label in series]
-    for d in dict.fromkeys(cv.direction for sw in sweeps for cv in sw.curves):
-        st = DIRECTION_STYLE[d]
-        handles.append(Line2D([], [], ls=st["ls"], marker=st["marker"], ms=st["ms"] + 1, color="0.3", lw=1.2,
-                              label=st["label"]))
-    handles += marker_handles(*markers)
-    if modal:
-        handles.append(Line2D([], [], ls=":", color="0.5", lw=1.0,
-                              label="linear modal frequencies\n(" + ", ".join(f"{w:.4g}" for w in modal) + " rad/s)"))
-    axes[0].legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, framealpha=0.9)
-    incomplete = [f"{nm}: {sum(int(cv.data['done'].sum()) for cv in sw.curves)} of {sw.omega.size * len(sw.curves)} points"
-                  for sw, nm in zip(sweeps, names)
-                  if sum(int(cv.data["done"].sum()) for cv in sw.curves) < sw.omega.size * len(sw.curves)]
-    if incomplete:
-        notes.insert(0, "incomplete sweep(s): " + "; ".join(incomplete))
-    if notes:
-        fig.supxlabel("\n".join(notes), fontsize=9, color="C3" if incomplete else "0.3")
-    fig.suptitle(title, fontsize=13)
-    return save_atomic(fig, png)
+    ax2.set_title(f"segment tension changes\n({span})")
+    ax2.legend(loc="upper center", bbox_to_anchor=(0.5, -0.28), ncol=1, frameon=False)
+    return {"xy:lissajous": ax1, "y:tension": ax2}

@@ -14,11 +14,12 @@ import numpy as np
 
 from ..io.continuation import read_continuation
 from ..io.sweeps import read_sweep
-from .base import figure_grid, save_atomic
+from .base import figure_grid, legend_below, save_atomic, title_line
+from .style import COLOURS, SERIES, WORDS, styled
 from .sweep import channel_label
 
 #: Colour of each response period (period 1 first).
-PERIOD_COLOURS = ("C0", "C1", "C2", "C4", "C5", "C6", "C8", "C9")
+PERIOD_COLOURS = SERIES
 #: Marker and short label of each bifurcation kind.
 BIFURCATION_STYLE = {
     "fold": ("^", "F", "fold (multiplier +1)"),
@@ -54,7 +55,7 @@ def _draw_branch(ax, b: dict, c: int, colour) -> None:
         ax.plot(x[lo:hi], y[lo:hi], "--", color=colour, lw=1.1, zorder=2)
     bad = ~b["trusted"].astype(bool)
     if bad.any():
-        ax.plot(x[bad], y[bad], "x", color="0.45", ms=4, zorder=4)
+        ax.plot(x[bad], y[bad], "x", color=COLOURS["failed_point"], ms=4, zorder=4)
 
 
 def _draw_overlay(ax, sweep, c_name: str) -> set:
@@ -66,14 +67,15 @@ def _draw_overlay(ax, sweep, c_name: str) -> set:
     for curve in sweep.curves:
         ok = curve.valid
         y = curve.data["amplitude"][:, c]
-        for kind, mask, colour in (("steady", ok & curve.data["steady"], "k"),
-                                   ("not steady", ok & ~curve.data["steady"], "red")):
+        for kind, mask, colour in (("steady", ok & curve.data["steady"], COLOURS["annotation"]),
+                                   ("not steady", ok & ~curve.data["steady"], COLOURS["failure"])):
             if mask.any():
                 drawn.add(kind)
                 ax.plot(sweep.omega[mask], y[mask], "o", ms=3.2, mfc="none", mec=colour, mew=0.7, zorder=5)
     return drawn
 
 
+@styled
 def plot_continuation(h5_path, png_path=None, overlay=None, title: str | None = None) -> Path:
     """Draw a continuation file as a PNG.
 
@@ -86,7 +88,8 @@ def plot_continuation(h5_path, png_path=None, overlay=None, title: str | None = 
     overlay : str or Path, optional
         A sweep file whose points are drawn on top (open circles: steady; red: not steady).
     title : str, optional
-        First title line.
+        Title; default ``"<case name>: periodic responses"`` (the conditions follow on a
+        second, smaller line).
 
     Returns
     -------
@@ -104,7 +107,7 @@ def plot_continuation(h5_path, png_path=None, overlay=None, title: str | None = 
     pad = 0.02 * (hi - lo)
     is_omega = d["parameter"] == "omega"
     modal = [(k + 1, w) for k, w in enumerate(d["modal"]) if is_omega and lo - pad <= w <= hi + pad]
-    fig, axes = figure_grid(len(chans), 1, 8.6, 2.8, sharex=True, top=0.8, hspace=0.3, left=1.4)
+    fig, axes = figure_grid(len(chans), 1, 2.1, sharex=True, extra_height=1.7)
     bif = d["bifurcations"]
     overlaid = set()
     for c, (ax, name) in enumerate(zip(axes[:, 0], chans)):
@@ -113,42 +116,46 @@ def plot_continuation(h5_path, png_path=None, overlay=None, title: str | None = 
         for k, kind in enumerate(bif["kind"]):
             marker, short, _ = BIFURCATION_STYLE.get(kind, ("o", kind, kind))
             x, y = float(bif["parameter"][k]), float(bif["amplitude"][k, c])
-            ax.plot(x, y, marker, color="k", mfc="white", ms=6, zorder=6)
-            ax.annotate(short, (x, y), textcoords="offset points", xytext=(5, 6 if k % 2 == 0 else -12), fontsize=7,
+            ax.plot(x, y, marker, color=COLOURS["annotation"], mfc="white", ms=5, zorder=6)
+            ax.annotate(short, (x, y), textcoords="offset points", xytext=(5, 6 if k % 2 == 0 else -12), fontsize=8,
                         zorder=7)
         if sweep is not None and is_omega:
             overlaid |= _draw_overlay(ax, sweep, name)
         for _, w in modal:
-            ax.axvline(w, color="0.5", ls=":", lw=1.0, alpha=0.7, zorder=1)
+            ax.axvline(w, color=COLOURS["reference"], ls=":", lw=0.9, alpha=0.8, zorder=1)
         ax.set_ylim(bottom=0.0)
-        ax.set_ylabel(channel_label(name), fontsize=9)
-        ax.grid(True, alpha=0.3)
+        ax.set_ylabel(channel_label(name))
     axes[-1, 0].set_xlim(lo - pad, hi + pad)
-    axes[-1, 0].set_xlabel("forcing frequency \u03c9 (rad/s)" if is_omega else "load factor \u03b3 (multiplies FL)")
-    handles = [Line2D([], [], color=colour[p], lw=2.0, label=f"period {p} (response 1/{p})" if p > 1 else "period 1")
+    axes[-1, 0].set_xlabel("forcing frequency $\\omega$ (rad/s)" if is_omega else "load factor $\\gamma$ (multiplies $F_L$)")
+    handles = [Line2D([], [], color=colour[p], lw=2.0,
+                      label=f"period ${p}T$ (subharmonic 1/{p})" if p > 1 else "period $T$ of the forcing")
                for p in periods]
     handles += [Line2D([], [], color="0.3", lw=1.6, label="stable"), Line2D([], [], color="0.3", ls="--", lw=1.1,
                                                                              label="unstable")]
     for kind in dict.fromkeys(bif["kind"]):
         marker, short, text = BIFURCATION_STYLE.get(kind, ("o", kind, kind))
-        handles.append(Line2D([], [], ls="none", marker=marker, color="k", mfc="white", label=f"{short}: {text}"))
+        handles.append(Line2D([], [], ls="none", marker=marker, color=COLOURS["annotation"], mfc="white",
+                              label=f"{short}: {text}"))
     if any((~b["trusted"].astype(bool)).any() for b in d["branches"]):
-        handles.append(Line2D([], [], ls="none", marker="x", color="0.45", label="multipliers not trusted"))
+        handles.append(Line2D([], [], ls="none", marker="x", color=COLOURS["failed_point"],
+                              label="multipliers not trusted"))
     if "steady" in overlaid:
-        handles.append(Line2D([], [], ls="none", marker="o", mfc="none", mec="k", label="sweep: steady point"))
+        handles.append(Line2D([], [], ls="none", marker="o", mfc="none", mec=COLOURS["annotation"],
+                              label="time integration: steady response"))
     if "not steady" in overlaid:
-        handles.append(Line2D([], [], ls="none", marker="o", mfc="none", mec="red", label="sweep: not steady (cap)"))
+        handles.append(Line2D([], [], ls="none", marker="o", mfc="none", mec=COLOURS["failure"],
+                              label=f"time integration: {WORDS['not steady']}"))
     if modal:
-        handles.append(Line2D([], [], ls=":", color="0.5", label="linear modal frequencies"))
-    axes[0, 0].legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, framealpha=0.9)
+        handles.append(Line2D([], [], ls=":", color=COLOURS["reference"], label="linear modal frequencies"))
+    legend_below(fig, handles, ncol=2)
     counts = {}
     for kind in bif["kind"]:
         counts[kind] = counts.get(kind, 0) + 1
     found = ", ".join(f"{n} {BIFURCATION_STYLE.get(k, ('', k, ''))[1]}" for k, n in counts.items()) or "none"
-    fixed = f"\u03b3 = {float(d['fixed']):g}" if is_omega else f"\u03c9 = {float(d['fixed']):g} rad/s"
-    first = title or f"{d['case_name']}: periodic responses ({d['analysis']} analysis)"
-    symbol = "\u03c9" if is_omega else "\u03b3"
-    sub = (f"continuation in {symbol}, {fixed}; {len(d['branches'])} branches, "
+    fixed = f"$\\gamma$ = {float(d['fixed']):g}" if is_omega else f"$\\omega$ = {float(d['fixed']):g} rad/s"
+    first = title or f"{d['case_name']}: periodic responses"
+    symbol = "$\\omega$" if is_omega else "$\\gamma$"
+    sub = (f"{d['analysis']} analysis; continuation in {symbol}, {fixed}; {len(d['branches'])} branch{'es' if len(d['branches']) != 1 else ''}, "
            f"{sum(b['parameter'].size for b in d['branches'])} orbits; bifurcations: {found}")
-    fig.suptitle(f"{first}\n{sub}", fontsize=10, y=1 - 0.08 / fig.get_figheight(), va="top")
+    title_line(fig, first, sub)
     return save_atomic(fig, png_path)

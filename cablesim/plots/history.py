@@ -1,7 +1,8 @@
 """Time-history plots: waveforms, phase plots, Lissajous figure, tensions and spectra.
 
 Plots a :class:`cablesim.dynamics.result.HistoryResult`; channels are named as in
-:mod:`cablesim.channels`.
+:mod:`cablesim.channels`. Long records are drawn as their true envelopes, numbers are printed
+to their resolution (times to the output step, spectral peaks to the bin width).
 """
 
 from __future__ import annotations
@@ -14,7 +15,9 @@ import numpy as np
 from ..channels import column_description, column_name, column_of, default_pair, resolve_columns
 from ..dynamics.spectra import amplitude_spectrum, spectral_peaks
 from ..errors import CablesimError
-from .base import figure_grid, save_atomic, steady_start, stride, two_tone
+from .base import bottom_notes, envelope_plot, figure_grid, legend_below, save_atomic, steady_start, title_line, two_tone
+from .insets import add_time_inset
+from .style import COLOURS, SERIES, channel_tex, force_unit, styled, to_resolution
 
 #: Largest number of channels drawn in the waveform and spectrum figures.
 MAX_CHANNELS = 8
@@ -27,38 +30,38 @@ MAX_PHASE_CHANNELS = 3
 # --------------------------------------------------------------------------------------------
 
 
+def output_step(t: np.ndarray) -> float:
+    """The output step of a record (its smallest sample spacing), s; NaN for one sample."""
+    t = np.asarray(t, dtype=float)
+    return float(np.diff(t).min()) if t.size > 1 else float("nan")
+
+
+def time_text(t: np.ndarray, value: float) -> str:
+    """A time of the record ``t``, printed to its output step, with the unit."""
+    return to_resolution(value, output_step(t), "s")
+
 
 def _describe(result) -> str:
-    if result.omega is None:
-        forcing = "free vibration"
-    else:
-        forcing = f"forcing omega = {result.omega:.4g} rad/s"
+    """The conditions of a run, in one line."""
     t = np.asarray(result.t)
-    span = f"t = {t[0]:.4g} to {t[-1]:.4g} s" if t.size else "no samples"
-    return f"{forcing}, {result.analysis} analysis, {result.integrator}, {span}"
-
+    forcing = "free vibration" if result.omega is None else f"$\\omega$ = {result.omega:.4g} rad/s"
+    span = f"$t$ = {time_text(t, t[0])} to {time_text(t, t[-1])}" if t.size else "no samples"
+    return f"{forcing}; {result.analysis} analysis ({result.integrator}); {span}"
 
 
 def _finish(fig, result, title: str, what: str, path: Path, notes: list[str] = ()) -> Path:
-    height = fig.get_figheight()
-    fig.suptitle(f"{title}: {what}\n{_describe(result)}", fontsize=10, y=1 - 0.08 / height, va="top")
+    title_line(fig, f"{title}: {what}", _describe(result))
     lines = []
     if not result.completed:
         lines.append(f"run stopped early: {result.message}")
     lines += list(notes)
-    if lines:
-        fig.text(
-            0.5,
-            0.0,
-            "\n".join(lines),
-            ha="center",
-            va="top",
-            color="red" if not result.completed else "0.3",
-            fontsize=9,
-            fontweight="bold" if not result.completed else "normal",
-        )
+    bottom_notes(fig, lines, warn=not result.completed)
     return save_atomic(fig, path)
 
+
+def _ylabel(result, i: int, what: str = "") -> str:
+    name = channel_tex(column_name(result, i))
+    return f"{name}{what} (m)\n{column_description(result, i)}"
 
 
 # --------------------------------------------------------------------------------------------
@@ -67,21 +70,27 @@ def _finish(fig, result, title: str, what: str, path: Path, notes: list[str] = (
 
 
 def _plot_waveforms(result, chans, title, path, notes):
+    from matplotlib.lines import Line2D  # matplotlib loads only when drawing
+
     t = np.asarray(result.t, dtype=float)
-    s = stride(t.size)
-    k = len(chans)
-    fig, axes = figure_grid(k, 1, 8.6, 2.0, sharex=True, top=0.95, hspace=0.2, left=1.3)
+    fig, axes = figure_grid(len(chans), 1, 1.45, sharex=True, extra_height=1.0)
     split = result.zc is not None or result.ze is not None
     for ax, i in zip(axes[:, 0], chans):
-        ax.plot(t[::s], result.z[::s, i], "-", color="C0", lw=1.2, label="z = z_c + z_e" if split else "z")
+        envelope_plot(ax, t, result.z[:, i], "-", color=COLOURS["response"], lw=0.9)
         if result.zc is not None:
-            ax.plot(t[::s], result.zc[::s, i], "--", color="C1", lw=0.9, label="configurational part z_c")
+            envelope_plot(ax, t, result.zc[:, i], "--", color=COLOURS["configurational"], lw=0.8)
         if result.ze is not None:
-            ax.plot(t[::s], result.ze[::s, i], "-", color="C2", lw=0.8, alpha=0.8, label="elastic part z_e")
-        ax.set_ylabel(f"{column_name(result, i)} (m)\n{column_description(result, i)}", fontsize=9)
-        ax.grid(True, alpha=0.3)
-    axes[0, 0].legend(loc="lower right", bbox_to_anchor=(1.0, 1.0), ncol=3, fontsize=8, frameon=False)
-    axes[-1, 0].set_xlabel("time t (s)")
+            envelope_plot(ax, t, result.ze[:, i], "-", color=COLOURS["elastic"], lw=0.7, alpha=0.8)
+        ax.set_ylabel(_ylabel(result, i))
+        add_time_inset(ax, t, result.z[:, i])
+    handles = [Line2D([], [], color=COLOURS["response"], label="$z = z_c + z_e$" if split else "displacement $z$")]
+    if result.zc is not None:
+        handles.append(Line2D([], [], color=COLOURS["configurational"], ls="--", label="configurational part $z_c$"))
+    if result.ze is not None:
+        handles.append(Line2D([], [], color=COLOURS["elastic"], label="elastic part $z_e$"))
+    if len(handles) > 1:
+        legend_below(fig, handles, ncol=3)
+    axes[-1, 0].set_xlabel("time $t$ (s)")
     return _finish(fig, result, title, "displacements from the static equilibrium", path, notes)
 
 
@@ -89,17 +98,16 @@ def _plot_phase(result, chans, title, path, notes):
     t = np.asarray(result.t, dtype=float)
     chans = chans[:MAX_PHASE_CHANNELS]
     i0 = steady_start(t)
-    t_s = t[min(i0, t.size - 1)] if t.size else 0.0
+    t_s = time_text(t, t[min(i0, t.size - 1)]) if t.size else "0 s"
     k = len(chans)
-    fig, axes = figure_grid(1, k, 3.8, 3.8, top=1.0, wspace=0.95)
+    fig, axes = figure_grid(1, k, min(3.4, 6.8 / k + 0.3), extra_height=1.2)
     for ax, i in zip(axes[0], chans):
-        name = column_name(result, i)
-        two_tone(ax, result.z[:, i], result.v[:, i], i0, f"t < {t_s:.4g} s", f"t >= {t_s:.4g} s (last half)")
+        name = channel_tex(column_name(result, i))
+        two_tone(ax, result.z[:, i], result.v[:, i], i0, f"$t$ < {t_s}", f"$t \\geq$ {t_s} (last half)")
         ax.set_xlabel(f"{name} (m)")
         ax.set_ylabel(f"{name}' (m/s)")
-        ax.set_title(f"{name}: {column_description(result, i)}", fontsize=9)
-        ax.grid(True, alpha=0.3)
-    axes[0, -1].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, framealpha=0.9)
+        ax.set_title(f"{name}: {column_description(result, i)}")
+    legend_below(fig, axes[0, 0].get_legend_handles_labels()[0], ncol=3)
     return _finish(fig, result, title, "phase plots (velocity against displacement)", path, notes)
 
 
@@ -107,22 +115,19 @@ def _plot_lissajous(result, pair, title, path, notes):
     t = np.asarray(result.t, dtype=float)
     i, j = pair
     i0 = steady_start(t)
-    t_s = t[min(i0, t.size - 1)] if t.size else 0.0
-    fig, axes = figure_grid(1, 1, 5.2, 5.2, left=0.9)
+    t_s = time_text(t, t[min(i0, t.size - 1)]) if t.size else "0 s"
+    fig, axes = figure_grid(1, 1, 5.0, extra_height=1.0)
     ax = axes[0, 0]
     x, y = result.z[:, i], result.z[:, j]
-    two_tone(ax, x, y, i0, f"t < {t_s:.4g} s", f"t >= {t_s:.4g} s (last half)")
-    ax.set_xlabel(f"{column_name(result, i)} (m): {column_description(result, i)}")
-    ax.set_ylabel(f"{column_name(result, j)} (m): {column_description(result, j)}")
+    two_tone(ax, x, y, i0, f"$t$ < {t_s}", f"$t \\geq$ {t_s} (last half)")
+    ax.set_xlabel(f"{channel_tex(column_name(result, i))} (m): {column_description(result, i)}")
+    ax.set_ylabel(f"{channel_tex(column_name(result, j))} (m): {column_description(result, j)}")
     rx = np.ptp(x[np.isfinite(x)]) if np.isfinite(x).any() else 0.0
     ry = np.ptp(y[np.isfinite(y)]) if np.isfinite(y).any() else 0.0
     if rx > 0 and ry > 0 and 0.2 <= rx / ry <= 5.0:
         ax.set_aspect("equal", adjustable="datalim")
-    else:
-        ax.set_box_aspect(1.0)
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, framealpha=0.9)
-    what = f"Lissajous figure {column_name(result, j)} against {column_name(result, i)}"
+    legend_below(fig, ax.get_legend_handles_labels()[0], ncol=3)
+    what = f"Lissajous figure {channel_tex(column_name(result, j))} against {channel_tex(column_name(result, i))}"
     return _finish(fig, result, title, what, path, notes)
 
 
@@ -132,20 +137,20 @@ def _plot_tensions(result, title, path, notes):
     T0 = np.asarray(result.T0, dtype=float)
     nseg = T.shape[1]
     segs = list(range(nseg)) if nseg <= 6 else sorted({0, nseg // 2, nseg - 1})
-    s = stride(t.size)
-    fig, axes = figure_grid(1, 1, 7.4, 4.2)
+    fig, axes = figure_grid(1, 1, 3.2, extra_height=1.4)
     ax = axes[0, 0]
+    div, unit = force_unit(T0)
     for c, r in enumerate(segs):
-        color = f"C{c % 10}"
-        ax.plot(t[::s], T[::s, r] / 1e3, "-", color=color, lw=1.0, label=f"T{r + 1}(t)")
-        ax.axhline(T0[r] / 1e3, ls="--", color=color, lw=1.0, alpha=0.8, label=f"static T{r + 1} = {T0[r] / 1e3:.4g} kN")
+        color = SERIES[c % len(SERIES)]
+        envelope_plot(ax, t, T[:, r] / div, "-", color=color, lw=0.9, label=f"$T_{{{r + 1}}}(t)$")
+        ax.axhline(T0[r] / div, ls="--", color=color, lw=0.9, alpha=0.8,
+                   label=f"static $T_{{{r + 1}}}$ = {T0[r] / div:.4g} {unit}")
     rec = getattr(result, "slack", None)
     if rec is not None:
-        _mark_slack(ax, rec, segs, float(t[-1]))
-    ax.set_xlabel("time t (s)")
-    ax.set_ylabel("segment tension T (kN)")
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, framealpha=0.9)
+        _mark_slack(ax, rec, segs, float(t[-1]), t, (div, unit))
+    ax.set_xlabel("time $t$ (s)")
+    ax.set_ylabel(f"segment tension $T$ ({unit})")
+    legend_below(fig, ax.get_legend_handles_labels()[0], ncol=3)
     which = "all segments" if nseg <= 6 else f"segments {', '.join(str(r + 1) for r in segs)} of {nseg}"
     return _finish(fig, result, title, f"segment tensions ({which})", path, notes)
 
@@ -165,16 +170,90 @@ def slack_intervals(rec, segment: int, t_end: float) -> list[tuple[float, float]
     return out
 
 
-def _mark_slack(ax, rec, segs, t_end):
+def _mark_slack(ax, rec, segs, t_end, t, unit=(1e3, "kN")):
     """Shade each shown segment's slack episodes and mark its peak tension (the snap load)."""
     for c, r in enumerate(segs):
-        color = f"C{c % 10}"
+        color = SERIES[c % len(SERIES)]
         spans = slack_intervals(rec, r + 1, t_end)
         for i, (a, b) in enumerate(spans):
-            ax.axvspan(a, b, color=color, alpha=0.15, lw=0, label=f"segment {r + 1} slack" if i == 0 else None)
+            ax.axvspan(a, b, color=COLOURS["failure"], alpha=0.12, lw=0,
+                       label=f"segment {r + 1} slack" if i == 0 else None)
         if spans:
-            ax.plot(rec.peak_time[r], rec.peak_tension[r] / 1e3, "v", color=color, ms=7,
-                    label=f"snap load T{r + 1} = {rec.peak_tension[r] / 1e3:.4g} kN at {rec.peak_time[r]:.4g} s")
+            ax.plot(rec.peak_time[r], rec.peak_tension[r] / unit[0], "v", color=color, mec=COLOURS["annotation"], ms=6,
+                    label=f"snap load $T_{{{r + 1}}}$ = {rec.peak_tension[r] / unit[0]:.4g} {unit[1]} "
+                          f"at {time_text(t, rec.peak_time[r])}")
+
+
+# --------------------------------------------------------------------------------------------
+# Spectra
+# --------------------------------------------------------------------------------------------
+
+
+def spectrum_window(result) -> tuple[float, str]:
+    """The part of a record a spectrum analyses, as ``(fraction from the end, description)``:
+    the last half (the steady part) of a completed run; the whole of a run that stopped early,
+    whose steady part never came (the longest stretch available, for the finest bins)."""
+    if getattr(result, "completed", True):
+        return 0.5, "last half"
+    return 1.0, "whole run, stopped early"
+
+
+def resolved_peaks(w_pk, a_pk, bin_width: float, x_max: float):
+    """The spectral peaks below ``x_max`` at least two bins from every stronger one (closer
+    peaks are not resolved by the window), strongest first."""
+    kept_w, kept_a = [], []
+    for w, a in zip(w_pk, a_pk):
+        if w <= x_max and all(abs(w - k) >= 2.0 * bin_width for k in kept_w):
+            kept_w.append(w)
+            kept_a.append(a)
+    return np.array(kept_w), np.array(kept_a)
+
+
+def window_text(t0: float, t1: float, t, how: str, bin_width: float, sep: str = "; ") -> str:
+    """``"window t = 300.00 s to 600.00 s (last half); bins 2 pi/T = 0.021 rad/s"``."""
+    return (f"window $t$ = {time_text(t, t0)} to {time_text(t, t1)} ({how}){sep}"
+            f"bins $2\\pi/T$ = {bin_width:.2g} rad/s")
+
+
+def label_peaks(ax, w_pk, a_pk, bin_width: float, span: float) -> None:
+    """Mark the peaks and write each frequency to the bin width (``span``: the axis range)."""
+    if not w_pk.size:
+        return
+    ax.plot(w_pk, a_pk, "v", color=COLOURS["annotation"], ms=5, zorder=4, label="spectral peaks")
+    peaks = sorted(zip(w_pk, a_pk))
+    for r, (w, a) in enumerate(peaks):
+        # a label whose right neighbour is close goes to the left of its peak
+        crowded = r + 1 < len(peaks) and peaks[r + 1][0] - w < 0.1 * span
+        ax.annotate(to_resolution(w, bin_width), (w, a), textcoords="offset points",
+                    xytext=(-4 if crowded else 4, 3), ha="right" if crowded else "left",
+                    fontsize=8, color=COLOURS["annotation"])
+
+
+def _fft_range(result, spectra, refs) -> float:
+    """Common frequency range: 1.5 x the largest of the forcing and the 4 lowest modal
+    frequencies, widened to show each channel's strongest peak, capped at the Nyquist frequency."""
+    x_max = 0.0
+    for item in spectra.values():
+        if isinstance(item, CablesimError):
+            continue
+        omega, amp, n, dt, w_pk, a_pk = item
+        top = 1.5 * max(refs) if refs else np.pi / dt
+        if w_pk.size:
+            top = max(top, 1.15 * w_pk[0])
+        x_max = max(x_max, min(top, np.pi / dt))
+    return x_max
+
+
+def draw_modal_lines(ax, modal, x_max: float) -> None:
+    """Linear modal frequencies as dotted reference lines, the ones with room named."""
+    last_text = -np.inf
+    for r, w in enumerate(modal[modal <= x_max]):
+        ax.axvline(w, color=COLOURS["reference"], ls=":", lw=0.9, alpha=0.8,
+                   label="linear modal frequencies" if r == 0 else None)
+        if w - last_text >= 0.08 * x_max and w < 0.93 * x_max:
+            last_text = w
+            ax.text(w, 0.98, f" mode {r + 1}", transform=ax.get_xaxis_transform(), fontsize=8,
+                    color=COLOURS["reference"], ha="left", va="top", clip_on=True)
 
 
 def _plot_fft(result, chans, title, path, notes):
@@ -185,78 +264,47 @@ def _plot_fft(result, chans, title, path, notes):
     modal = modal[np.isfinite(modal) & (modal > 0)]
     forcing = result.omega if result.omega is not None and np.isfinite(result.omega) and result.omega > 0 else None
     refs = list(modal[:4]) + ([float(forcing)] if forcing is not None else [])
-
-    # First pass: the spectra, their peaks and a common frequency range: 1.5 x the largest of
-    # the forcing and the 4 lowest modal frequencies, widened to show the strongest peak of
-    # every channel, and capped at the Nyquist frequency.
+    fraction, how = spectrum_window(result)
     spectra = {}
-    x_max = 0.0
     for i in chans:
         try:
-            omega, amp, n, dt = amplitude_spectrum(t, result.z[:, i], 0.5)
+            omega, amp, n, dt = amplitude_spectrum(t, result.z[:, i], fraction)
         except CablesimError as exc:
             spectra[i] = exc
             continue
-        w_pk, a_pk = spectral_peaks(omega, amp, 4, 0.05)
-        spectra[i] = (omega, amp, n, dt, w_pk, a_pk)
-        nyq = np.pi / dt
-        top = 1.5 * max(refs) if refs else nyq
-        if w_pk.size:
-            top = max(top, 1.15 * w_pk[0])
-        x_max = max(x_max, min(top, nyq))
-
-    k = len(chans)
-    fig, axes = figure_grid(k, 1, 8.6, 2.4, sharex=True, top=1.0, hspace=0.45, left=0.9)
+        spectra[i] = (omega, amp, n, dt, *spectral_peaks(omega, amp, 4, 0.05))
+    x_max = _fft_range(result, spectra, refs)
+    fig, axes = figure_grid(len(chans), 1, 1.8, sharex=True, extra_height=1.4)
+    window = ""
     for ax, i in zip(axes[:, 0], chans):
-        name = column_name(result, i)
-        ax.set_ylabel(f"amplitude of {name} (m)", fontsize=9)
-        ax.set_title(f"{name}: {column_description(result, i)}", fontsize=9, loc="left")
-        ax.grid(True, alpha=0.25)
+        ax.set_ylabel(f"amplitude of {channel_tex(column_name(result, i))} (m)\n{column_description(result, i)}")
         if isinstance(spectra[i], CablesimError):
             ax.text(0.5, 0.5, f"no spectrum: {spectra[i]}", transform=ax.transAxes, ha="center", va="center",
-                    color="C3", fontsize=9)
+                    color=COLOURS["failure"], wrap=True)
             continue
         omega, amp, n, dt, w_pk, a_pk = spectra[i]
+        bin_width = 2 * np.pi / (n * dt)
+        window = window_text(t[-n], t[-1], t, how, bin_width)
         sel = omega <= x_max
-        ax.semilogy(omega[sel], np.maximum(amp[sel], 1e-300), "-", color="C0", lw=1.0, label="amplitude spectrum")
+        ax.semilogy(omega[sel], np.maximum(amp[sel], 1e-300), "-", color=COLOURS["response"], lw=0.9,
+                    label="amplitude spectrum")
         ax.yaxis.set_minor_locator(NullLocator())  # log minor ticks are slow to lay out
         a_top = amp[sel][1:].max() if sel.sum() > 1 else 0.0
         if a_top > 0:
             ax.set_ylim(a_top * 1e-6, a_top * 20.0)  # headroom for the labels
-        inside = w_pk <= x_max
-        w_pk, a_pk = w_pk[inside], a_pk[inside]
-        if w_pk.size:
-            ax.plot(w_pk, a_pk, "v", color="C3", ms=6, zorder=4, label="spectral peaks")
-            for r, (w, a) in enumerate(sorted(zip(w_pk, a_pk))):
-                ax.annotate(
-                    f"{w:#.4g} rad/s",
-                    (w, a),
-                    textcoords="offset points",
-                    xytext=(5, 4 + 10 * (r % 2)),
-                    fontsize=8,
-                    color="C3",
-                )
+        label_peaks(ax, *resolved_peaks(w_pk, a_pk, bin_width, x_max), bin_width, x_max)
         if forcing is not None and forcing <= x_max:
-            ax.axvline(forcing, color="C1", ls="--", lw=1.0, alpha=0.6, label=f"forcing omega = {forcing:.4g} rad/s")
-        shown = modal[modal <= x_max]
-        listed = ", ".join(f"{w:.4g}" for w in shown[:4]) + (", ..." if shown.size > 4 else "")
-        last_text = -np.inf
-        for r, w in enumerate(shown):
-            label = f"modal frequencies ({listed} rad/s)" if r == 0 else None
-            ax.axvline(w, color="0.45", ls=":", lw=1.0, alpha=0.7, label=label)
-            if w - last_text >= 0.08 * x_max and w < 0.93 * x_max:  # name the lines that have room
-                last_text = w
-                ax.text(w, 0.98, f" mode {r + 1}", transform=ax.get_xaxis_transform(), fontsize=7,
-                        color="0.4", ha="left", va="top", clip_on=True)
-        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, framealpha=0.9)
-        info = f"{n} samples, dt = {dt:.3g} s, resolution 2 pi / T = {2 * np.pi / (n * dt):.3g} rad/s"
-        ax.set_title(info, fontsize=7, loc="right", color="0.35")
+            ax.axvline(forcing, color=COLOURS["forcing"], ls="--", lw=1.0, label="forcing frequency")
+        draw_modal_lines(ax, modal, x_max)
     if x_max > 0:
         axes[-1, 0].set_xlim(0.0, x_max)
-    axes[-1, 0].set_xlabel("circular frequency omega (rad/s)")
-    return _finish(fig, result, title, "amplitude spectra of the steady part (last half, Hann window)", path, notes)
+    axes[-1, 0].set_xlabel("circular frequency $\\omega$ (rad/s)")
+    legend_below(fig, axes[0, 0].get_legend_handles_labels()[0], ncol=4)
+    axes[0, 0].set_title(window, loc="right", fontsize=8, color="0.3")
+    return _finish(fig, result, title, "amplitude spectra (Hann window)", path, notes)
 
 
+@styled
 def plot_history(result, prefix, title: str, channels=None, pair=None) -> list[Path]:
     """Write the time-history figures of a run as PNG files.
 
@@ -270,7 +318,7 @@ def plot_history(result, prefix, title: str, channels=None, pair=None) -> list[P
         ``{prefix}-phase.png``, ``{prefix}-lissajous.png``, ``{prefix}-tensions.png`` and
         ``{prefix}-fft.png``.
     title : str
-        First title line of every figure (the case name).
+        Start of the title of every figure (the case name).
     channels : sequence of str or int, optional
         Channels for the waveform, phase (first 3) and spectrum figures, e.g. ``["z2", "z4"]``.
         Default: the vertical DOF of every node if n <= 3, else of 3 nodes spread along the

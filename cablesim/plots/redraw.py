@@ -4,7 +4,8 @@
 ``history``, ``free-vibration``, ``sweep`` or ``continue``. If the case stored in the first
 file (root attribute ``case_yaml``) has a ``figure:`` section, or ``--figure FILE.yaml`` gives
 one, one composite PNG is drawn from all the files (one column per file); otherwise each file
-gets the standard plots of its command.
+gets the standard plots of its command. A continuation file given with a sweep file is drawn
+with the sweep's points on top, as ``cablesim continue --overlay`` draws it.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from ..case import parse_case, read_figure
 from ..channels import normalise_channel
 from ..errors import CablesimError
 from ..io.hdf5 import FAMILY_TEXT, ResultInfo, inspect_result, read_history, read_static_drawing
+from .base import stamp_figures
 from .cable import plot_cable
 from .composite import draw_figure
 from .continuation import plot_continuation
@@ -22,14 +24,15 @@ from .history import plot_history
 from .sweep import plot_sweep
 
 
-def redraw(paths, output=None, figure=None) -> list[Path]:
+def redraw(paths, output=None, figure=None, stamp: str | None = None) -> list[Path]:
     """Redraw figures from stored result files; nothing is recomputed.
 
     Parameters
     ----------
     paths : list of Path
-        Result files of cablesim static, history, free-vibration or sweep; all of one type
-        (history and free-vibration files count as one type: time histories).
+        Result files of cablesim static, history, free-vibration, sweep or continue; all of one
+        type (history and free-vibration files count as one type: time histories), except one
+        continuation file with one sweep file, whose points are drawn on the continuation.
     output : Path, optional
         With a ``figure:`` section: the PNG (default: the first file with suffix ``.png``).
         Without one (one file only): the PNG of a static or sweep file, or the prefix of the
@@ -37,6 +40,9 @@ def redraw(paths, output=None, figure=None) -> list[Path]:
     figure : Path or FigureSpec, optional
         A composite figure to draw instead of the stored case's ``figure:`` section: a YAML
         file with a ``figure:`` section (see :func:`read_figure`), or the spec itself.
+    stamp : str, optional
+        Text drawn in a corner of every figure and recorded in the PNG metadata, e.g.
+        ``"preview: coarse grid"``.
 
     Returns
     -------
@@ -50,11 +56,17 @@ def redraw(paths, output=None, figure=None) -> list[Path]:
         figure does not fit the files (e.g. ``fdr`` from time histories, ``split`` without
         z_c/z_e), or a channel, segment or label list does not fit.
     """
-    paths = [Path(p) for p in paths]
+    with stamp_figures(stamp):
+        return _redraw([Path(p) for p in paths], output, figure)
+
+
+def _redraw(paths: list[Path], output, figure) -> list[Path]:
     if not paths:
         raise CablesimError("Give at least one result file (.h5) to plot.")
     infos = [inspect_result(p) for p in paths]
     families = {i.family for i in infos}
+    if families == {"continuation", "sweep"} and figure is None:
+        return [_continuation_with_sweep(infos, output)]
     if len(families) > 1:
         listing = "; ".join(f"{i.path} is {FAMILY_TEXT[i.family]}" for i in infos)
         raise CablesimError(
@@ -84,6 +96,19 @@ def redraw(paths, output=None, figure=None) -> list[Path]:
     return written
 
 
+def _continuation_with_sweep(infos, output) -> Path:
+    """One continuation file drawn with one sweep file's points on top (as ``continue --overlay``)."""
+    conts = [i for i in infos if i.family == "continuation"]
+    sweeps = [i for i in infos if i.family == "sweep"]
+    if len(conts) != 1 or len(sweeps) != 1:
+        raise CablesimError(
+            f"A continuation file is drawn with at most one sweep file on top; got {len(conts)} continuation "
+            f"and {len(sweeps)} sweep files. Plot one continuation file and the sweep of the same case."
+        )
+    png = Path(output) if output is not None else conts[0].path.with_suffix(".png")
+    return plot_continuation(conts[0].path, png, overlay=sweeps[0].path)
+
+
 def _standard(info: ResultInfo, output: Path | None) -> list[Path]:
     """The plots the command that wrote the file draws."""
     case = parse_case(info.case_text, source=f"(the case stored in {info.path})", default_name=info.path.stem)
@@ -104,7 +129,6 @@ def _standard(info: ResultInfo, output: Path | None) -> list[Path]:
     if wanted:  # the case's plotted channels, among those the file kept
         channels = [c for c in wanted if normalise_channel(c) in stored] or None
     prefix = output.with_suffix("") if output is not None else info.path.with_suffix("")
-    what = f"{case.name} ({hist.analysis} analysis, {hist.integrator})"
-    return plot_history(hist, prefix, what, channels=channels)
+    return plot_history(hist, prefix, case.name, channels=channels)
 
 

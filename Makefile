@@ -46,8 +46,8 @@ clean:
 #
 # FAST=1 runs the same scenes into runs/paper-fast/ on coarse grids that keep every frequency
 # docs/paper-reproduction.md names (peaks, band points), with histories long enough for the
-# jumps (`make figures FAST=1`: 3.9 minutes of CPU in all; -j2 runs two scenes at a time); with
-# PREVIEW_STAMP=1 each FAST figure is stamped as a preview.
+# jumps (`make figures FAST=1`: 3.9 minutes of CPU in all; -j2 runs two scenes at a time); each
+# FAST figure is stamped as a preview (PREVIEW_STAMP= leaves the stamp off).
 # ---------------------------------------------------------------------------------------------
 FIGS := fig2 fig3a fig3b fig4 fig5a fig5b fig6 fig7a fig7b fig7c fig8a fig8b fig8c
 # Frequency-response figures also get their continuation: every periodic response, stable and
@@ -74,8 +74,8 @@ CMD_fig8c := history
 CMD_fig4-peak := sweep
 CMD_fig5a-updown := sweep
 
-# `cablesim plot --stamp TEXT` draws TEXT on a figure; set PREVIEW_STAMP=1 once the option exists.
-PREVIEW_STAMP ?=
+# `cablesim plot --stamp TEXT` draws TEXT on a figure.
+PREVIEW_STAMP ?= 1
 ifdef FAST
 OUTD := runs/paper-fast
 # The FAST grids: a coarse grid plus the frequencies the document quotes (the test
@@ -131,7 +131,8 @@ $(FIGS): %: $(OUTD)/%.png
 $(CONTS:%=%-continuation): %-continuation: $(OUTD)/%-continuation.h5
 
 $(OUTD)/%-continuation.h5: $(CFG)/%.yaml $(OUTD)/%.h5 $(OUTD)/.code-sim $(OUTD)/.code-plot $(OUTD)/.args-%-continuation | $(STAMP)
-	$(RUN) continue $< -o $@ --overlay $(OUTD)/$*.h5 $(ARGS_$*-continuation)
+	$(RUN) continue $< -o $@ --no-plot $(ARGS_$*-continuation)
+	$(RUN) plot $@ $(OUTD)/$*.h5 -o $(@:.h5=.png) $(STAMP_OPT)
 
 $(OUTD)/%.png: $(OUTD)/%.h5 $(OUTD)/.code-plot
 	$(RUN) plot $< -o $@ $(STAMP_OPT)

@@ -130,9 +130,9 @@ def test_fast_histories_outlast_the_jumps():
 
 @needs_make
 def test_fast_figures_are_stamped_as_previews():
-    stdout = dry_run("fig3a", "fig7b", "FAST=1", "PREVIEW_STAMP=1")
+    stdout = dry_run("fig3a", "fig7b", "fig3a-continuation", "FAST=1")
     plots = [line for line in stdout.splitlines() if line.startswith("CABLESIM plot")]
-    assert len(plots) == 2 and all('--stamp "preview: coarse grid, short runs"' in p for p in plots), stdout
+    assert len(plots) == 3 and all('--stamp "preview: coarse grid, short runs"' in p for p in plots), stdout
 
 
 FAKE_CLI = """\

@@ -49,7 +49,7 @@ clean:
 # jumps (`make figures FAST=1`: 3.9 minutes of CPU in all; -j2 runs two scenes at a time); each
 # FAST figure is stamped as a preview (PREVIEW_STAMP= leaves the stamp off).
 # ---------------------------------------------------------------------------------------------
-FIGS := fig2 fig3a fig3b fig4 fig5a fig5b fig6 fig7a fig7b fig7c fig8a fig8b fig8c
+FIGS := fig2 fig3a fig3b fig4 fig5a fig5b fig6 fig7a fig6-7a fig7b fig7c fig8a fig8b fig8c
 # Frequency-response figures also get their continuation: every periodic response, stable and
 # unstable, with its bifurcations, drawn over the brute-force points (runs/paper/<fig>-continuation.png).
 CONTS := fig3a fig4 fig5a fig6 fig7a fig8a
@@ -143,10 +143,14 @@ $(OUTD)/%.h5: $(CFG)/%.yaml $(OUTD)/.code-sim $(OUTD)/.args-% | $(STAMP)
 $(OUTD)/fig7b.png $(OUTD)/fig7c.png: $(OUTD)/fig%.png: $(OUTD)/fig7-mode1.h5 $(OUTD)/fig7-mode2.h5 $(CFG)/fig%.figure.yaml $(OUTD)/.code-plot
 	$(RUN) plot $(OUTD)/fig7-mode1.h5 $(OUTD)/fig7-mode2.h5 --figure $(CFG)/fig$*.figure.yaml -o $@ $(STAMP_OPT)
 
+# Figs. 6 and 7(a) on shared axes: the approximate and the exact analysis compared directly.
+$(OUTD)/fig6-7a.png: $(OUTD)/fig6.h5 $(OUTD)/fig7a.h5 $(CFG)/fig6-7a.figure.yaml $(OUTD)/.code-plot
+	$(RUN) plot $(OUTD)/fig6.h5 $(OUTD)/fig7a.h5 --figure $(CFG)/fig6-7a.figure.yaml -o $@ $(STAMP_OPT)
+
 # Every number docs/paper-reproduction.md quotes, computed from the stored results (building
 # those that are missing or out of date) and checked against docs/paper-numbers.json, which the
 # tests compare with the document; WRITE=1 rewrites the file instead of checking it.
-PAPER_H5 := $(filter-out fig7b fig7c,$(FIGS)) fig7-mode1 fig7-mode2 $(CONTS:%=%-continuation) $(REFINE)
+PAPER_H5 := $(filter-out fig6-7a fig7b fig7c,$(FIGS)) fig7-mode1 fig7-mode2 $(CONTS:%=%-continuation) $(REFINE)
 ifdef FAST
 paper-numbers:
 	@echo "the document quotes the full results: run make paper-numbers without FAST" >&2; exit 2

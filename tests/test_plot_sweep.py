@@ -427,3 +427,50 @@ def test_a_small_subharmonic_band_gets_an_inset(tmp_path, monkeypatch):
         (row,) = seen[-1][:1]
         assert len(row[1]) == insets
     assert seen[0][0][1] == ["subharmonic band 4.95\u20135.10 rad/s (step 0.05)"]
+
+
+def test_fdr_of_two_cables_draws_each_files_modal_frequencies(tmp_path, monkeypatch):
+    """Files of different cables (an approximate and an exact analysis) have different linear
+    frequencies: each file's modal lines are drawn in its curve's colour, at its own frequencies,
+    and named in the legend; files of one cable share one grey set."""
+    from matplotlib.colors import to_hex
+    from matplotlib.figure import Figure
+
+    from cablesim.case.sections import FigureSpec
+    from cablesim.plots.composite import draw_figure
+
+    seen = []
+    real = Figure.savefig
+
+    def spy(self, *args, **kwargs):
+        ax = self.axes[0]
+        vlines = [(float(ln.get_xdata()[0]), to_hex(ln.get_color())) for ln in ax.lines
+                  if ln.get_linestyle() == ":" and np.ptp(ln.get_xdata()) == 0]
+        curves = {to_hex(ln.get_color()) for ln in ax.lines if ln.get_linestyle() == "-"}
+        texts = [t.get_text() for lg in self.legends for t in lg.get_texts()]
+        seen.append((vlines, curves, texts))
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(Figure, "savefig", spy)
+    omega = np.round(np.linspace(1.0, 6.0, 101), 10)
+    a = write_sweep(tmp_path / "a.h5", omega, {None: _results(omega, two_channel(omega))})
+    b = write_sweep(tmp_path / "b.h5", omega, {None: _results(omega, two_channel(omega))})
+    spec = FigureSpec(kind="fdr", channels=["z2"], labels=["approximate", "exact"])
+    draw_figure(spec, [a, b], tmp_path / "same.png")
+    vlines, curves, texts = seen[-1]
+    in_range = [w for w in MODAL if 0.9 <= w <= 6.1]
+    assert sorted(w for w, _ in vlines) == pytest.approx(sorted(in_range))
+    assert not {c for _, c in vlines} & curves
+    assert sum("linear modal frequencies" in t for t in texts) == 1
+
+    with h5py.File(b, "a") as f:
+        f["modal/omega"][...] = 1.1 * np.asarray(MODAL)
+    draw_figure(spec, [a, b], tmp_path / "two.png")
+    vlines, curves, texts = seen[-1]
+    shifted = [1.1 * w for w in MODAL if 0.9 <= 1.1 * w <= 6.1]
+    assert sorted(w for w, _ in vlines) == pytest.approx(sorted(in_range + shifted))
+    colours = {c for _, c in vlines}
+    assert len(colours) == 2 and colours <= curves
+    assert [t for t in texts if "linear modal" in t] == [
+        "linear modal frequencies of approximate (" + ", ".join(f"{w:.4g}" for w in in_range) + " rad/s)",
+        "linear modal frequencies of exact (" + ", ".join(f"{w:.4g}" for w in shifted) + " rad/s)"]

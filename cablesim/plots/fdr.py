@@ -55,6 +55,19 @@ def _channels(fig_spec, sweeps) -> list[str]:
     return chans
 
 
+def _modal_lines(sweeps, names, colors, x_lo: float, x_hi: float) -> list[tuple[str, list[float], str]]:
+    """``(whose, frequencies, colour)`` of the modal lines: one grey set when every file has the
+    same cable, else one set per file in its curve's colour (files of different cables, such as
+    an approximate and an exact analysis, have different linear frequencies)."""
+    per_file = [[float(w) for w in sw.modal if np.isfinite(w) and x_lo <= w <= x_hi] for sw in sweeps]
+    if all(len(ws) == len(per_file[0]) and np.allclose(ws, per_file[0], rtol=1e-9, atol=0.0) for ws in per_file):
+        return [("", per_file[0], COLOURS["reference"])] if per_file[0] else []
+    first_colour = {}
+    for (k, _), colour in colors.items():
+        first_colour.setdefault(k, colour)
+    return [(f" of {names[k]}", ws, first_colour[k]) for k, ws in enumerate(per_file) if ws]
+
+
 def draw_fdr(fig_spec, infos, png: Path, title: str) -> Path:
     """Draw the ``fdr`` figure of the sweep files ``infos`` as ``png`` (see the module)."""
     from matplotlib.lines import Line2D  # matplotlib loads only when drawing
@@ -71,7 +84,7 @@ def draw_fdr(fig_spec, infos, png: Path, title: str) -> Path:
     hi = max(float(sw.omega[-1]) for sw in sweeps)
     pad = 0.02 * (hi - lo) if hi > lo else max(0.05 * abs(lo), 0.1)
     x_lo, x_hi = lo - pad, hi + pad
-    modal = [w for w in sweeps[0].modal if np.isfinite(w) and x_lo <= w <= x_hi]
+    modal = _modal_lines(sweeps, names, colors, x_lo, x_hi)
 
     plt = pyplot()
     fig = plt.figure(figsize=(FIGURE_WIDTH, 1.6 + 2.1 * len(chans)), layout="constrained")
@@ -80,8 +93,9 @@ def draw_fdr(fig_spec, infos, png: Path, title: str) -> Path:
     marked = all(point_markers(sw.omega.size) for sw in sweeps)
     for ax, name in zip(axes, chans):
         markers |= _draw_row(ax, sweeps, name, colors, marked)
-        for w in modal:
-            ax.axvline(w, color=COLOURS["reference"], ls=":", lw=0.9, alpha=0.8, zorder=1)
+        for _, ws, colour in modal:
+            for w in ws:
+                ax.axvline(w, color=colour, ls=":", lw=0.9, alpha=0.8, zorder=1)
         ax.set_ylim(bottom=0.0)
         ax.set_ylabel(channel_label(name))
         subharmonic_inset(ax, sweeps, name, colors)
@@ -95,9 +109,9 @@ def draw_fdr(fig_spec, infos, png: Path, title: str) -> Path:
         handles.append(Line2D([], [], ls=st["ls"], marker=st["marker"] if marked else "none", ms=st["ms"] + 1,
                               color="0.3", lw=1.2, label=st["label"]))
     handles += marker_handles(*markers)
-    if modal:
-        handles.append(Line2D([], [], ls=":", color=COLOURS["reference"], lw=1.0,
-                              label="linear modal frequencies (" + ", ".join(f"{w:.4g}" for w in modal) + " rad/s)"))
+    for whose, ws, colour in modal:
+        handles.append(Line2D([], [], ls=":", color=colour, lw=1.0,
+                              label=f"linear modal frequencies{whose} (" + ", ".join(f"{w:.4g}" for w in ws) + " rad/s)"))
     legend_below(fig, handles, ncol=2)
     incomplete = [f"{nm}: {sum(int(cv.data['done'].sum()) for cv in sw.curves)} of {sw.omega.size * len(sw.curves)} points"
                   for sw, nm in zip(sweeps, names)

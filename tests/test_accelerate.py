@@ -23,6 +23,7 @@ from cablesim.dynamics.steady import SteadyCriterion, steady_response
 from cablesim.orbits.accelerate import Orbit, accelerated_steady_response, in_linear_neighbourhood, strobe_noise
 from cablesim.orbits.shooting import Shooting, solve_orbit
 from cablesim.orbits.systems import cable_system
+from helpers_sweep import do_sweep
 
 CONFIG = Path(__file__).resolve().parents[1] / "configs" / "paper-example.yaml"
 CHANNELS = np.array([1, 3])
@@ -224,3 +225,46 @@ def test_transient_outside_the_neighbourhood_is_not_accepted(paper):
     fast = accelerated_steady_response(eom, integ, CHANNELS, SteadyCriterion())
     assert fast.decided == "shooting"
     assert fast.t_end > (entered - 10) * 2 * np.pi / 2.48
+
+
+# ----------------------------------------------------------------------------------------------
+# Whole sweeps on reduced grids: chains (up/down), gamma axes, the subharmonic band's edges
+# ----------------------------------------------------------------------------------------------
+def _plain_and_fast(tmp_path, sweep):
+    plain = do_sweep(tmp_path / "plain.h5", dict(sweep, accelerate=False))[2]
+    fast = do_sweep(tmp_path / "fast.h5", dict(sweep, accelerate=True))[2]
+    return plain, fast
+
+
+def _assert_same_answers(plain, fast):
+    assert len(plain.curves) == len(fast.curves)
+    for c in plain.data:
+        a, b = plain.data[c], fast.data[c]
+        np.testing.assert_array_equal(b["period"], a["period"])
+        np.testing.assert_array_equal(b["steady"], a["steady"])
+        np.testing.assert_array_equal(b["failed"], a["failed"])
+        both = a["steady"] & b["steady"]
+        np.testing.assert_allclose(b["amplitude"][both], a["amplitude"][both], rtol=1e-3)
+
+
+def test_up_and_down_sweeps_agree_across_the_jump(tmp_path):
+    """gamma = 5: up and down sweeps differ at 2.2 rad/s (|z2| 4.3 m up, 30.1 m down); each
+    point starts from the previous one's final state, and both chains give the same answers
+    accelerated or not."""
+    sweep = {"omega": [2.1, 2.2, 2.3, 2.4], "duration": 1500.0, "direction": "both", "channels": ["z2", "z4"],
+             "gamma": [5.0]}
+    plain, fast = _plain_and_fast(tmp_path, sweep)
+    _assert_same_answers(plain, fast)
+    up, down = fast.data[0], fast.data[1]
+    assert down["amplitude"][1, 0] > 3.0 * up["amplitude"][1, 0]  # the two branches at 2.2 rad/s
+    assert np.sum(np.concatenate([up["decided"], down["decided"]]) == "shooting") >= 6
+
+
+def test_gamma_sweep_agrees_at_the_edges_of_the_subharmonic_band(tmp_path):
+    """Just outside the period-doubling band (5.0212-5.0744 rad/s at gamma = 1, from the
+    continuation), where the harmonic orbit is stable but its transient decays slowly (a
+    multiplier of modulus 0.98-0.99), and at half the load, where there is no band."""
+    sweep = {"omega": [4.95, 5.0, 5.1, 5.15], "duration": 3000.0, "channels": ["z2", "z4"], "gamma": [0.5, 1.0]}
+    plain, fast = _plain_and_fast(tmp_path, sweep)
+    _assert_same_answers(plain, fast)
+    assert np.all(fast.data[1]["period"] == 1) and np.all(fast.data[1]["steady"])

@@ -54,7 +54,9 @@ from .kernels import OK
 from .shooting import Evaluation, Shooting
 from .systems import cable_system
 
-#: Shooting is tried at a period p once the last strobes repeat at lag p to this fraction.
+#: Shooting is tried at a period p once the last strobes repeat at lag p to this fraction (a
+#: cost rule only: Newton from farther away rarely converges, and acceptance does not depend
+#: on it).
 REPEATS = 0.5
 #: Newton iterations per shooting attempt (an orbit within reach converges in a few).
 MAX_NEWTON = 8
@@ -77,9 +79,10 @@ STEP_RATE = 2.5
 #: Consecutive orbit periods the linearisation must describe the trajectory over (three, so
 #: that one period that happens to fit, e.g. while two slow modes cancel, is not enough).
 LINEAR_PERIODS = 3
-#: Largest unexplained part of a period's step, as a fraction of the contraction margin
-#: ``(1 - rho) |e|``: one half keeps the deviation shrinking by at least ``(1 + rho) / 2`` of
-#: its linear prediction's rate.
+#: Largest unexplained part of an orbit period's step, as a fraction of the contraction margin
+#: ``(1 - rho) |e|``. One half: where ``M`` shrinks a deviation by ``rho``, the step then
+#: shrinks it by at least ``rho + (1 - rho) / 2 = (1 + rho) / 2``, i.e. at no less than half the
+#: predicted rate, every period.
 NONLINEAR = 0.5
 #: The linearisation's prediction is only as good as the strobes: their integration leaves a
 #: residual of about the integrator's local error per period even on the orbit. That is
@@ -91,7 +94,9 @@ NOISE_FACTOR = 4.0
 #: Checks per slowest free decay time ``1 / sigma``: the deviation shrinks by at most
 #: ``exp(-1/8)`` (12 %) between two checks, so acceptance comes at most that late.
 CHECKS_PER_DECAY = 8
-#: Scaled distance within which a state is "at" a known orbit (no new Newton attempt from it).
+#: Scaled distance within which a state is "at" a known orbit, stable or not: no new Newton
+#: attempt from it (it would find the same orbit again). A cost rule only, like
+#: :data:`REPEATS`: acceptance does not depend on it.
 NEAR = 0.2
 
 

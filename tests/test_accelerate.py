@@ -20,7 +20,14 @@ from cablesim.analyses.setup import build_equations, make_integrator
 from cablesim.analyses.static import run_static
 from cablesim.dynamics.integrators import DOPRI5
 from cablesim.dynamics.steady import SteadyCriterion, steady_response
-from cablesim.orbits.accelerate import Orbit, accelerated_steady_response, in_linear_neighbourhood, strobe_noise
+from cablesim.orbits.accelerate import (
+    Orbit,
+    accelerated_steady_response,
+    check_interval,
+    in_linear_neighbourhood,
+    slowest_decay_rate,
+    strobe_noise,
+)
 from cablesim.orbits.shooting import Shooting, solve_orbit
 from cablesim.orbits.systems import cable_system
 from helpers_sweep import do_sweep
@@ -268,3 +275,16 @@ def test_gamma_sweep_agrees_at_the_edges_of_the_subharmonic_band(tmp_path):
     plain, fast = _plain_and_fast(tmp_path, sweep)
     _assert_same_answers(plain, fast)
     assert np.all(fast.data[1]["period"] == 1) and np.all(fast.data[1]["steady"])
+
+
+def test_slowest_decay_rate_is_that_of_the_rayleigh_damped_modes(paper):
+    """With Rayleigh damping ``a0 M + a1 K0`` mode i decays at ``xi_i w_i = (a0 + a1 w_i^2) / 2``
+    (underdamped modes); the acceptance checks come every eighth of the slowest such time."""
+    case, static = paper
+    eom = build_equations(case, static, omega=2.0)
+    w = np.asarray(eom.frequencies, dtype=float)
+    rates = 0.5 * (eom.a0 + eom.a1 * w**2)
+    assert np.all(rates < w)  # all underdamped here
+    assert slowest_decay_rate(eom) == pytest.approx(rates.min(), rel=1e-9)
+    T = 2 * np.pi / 2.0
+    assert check_interval(eom) == max(1, min(10, round(1.0 / (8 * rates.min() * T))))

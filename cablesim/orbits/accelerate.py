@@ -22,9 +22,9 @@ for periods ``p = 1 .. max_period``) and **accepted only when**
    between the sweep integrator's flow map and the shooting scheme's at the orbit, measured once
    per orbit by integrating it over one period). The left side is what the
    linearisation leaves unexplained, quadratic in ``|e|``; bounding it by a fraction of the
-   contraction margin ``1 - rho`` per orbit period means the deviation shrinks every period
-   at nearly the predicted rate, so the trajectory converges to this orbit rather than passing
-   by on its way to another attractor. The test adapts itself: far from resonance the response
+   contraction margin ``1 - rho`` per orbit period means the deviation keeps shrinking every
+   orbit period, at no less than half the rate the linearisation predicts, so the trajectory
+   converges to this orbit rather than passing by on its way to another attractor. The test adapts itself: far from resonance the response
    is linear from the start and is accepted at the first attempt; next to a fold or a period
    doubling (``rho`` near 1) it waits until the deviation is small. A deviation that grows for a
    while (two slow modes beating) passes when ``M`` predicts the growth.
@@ -32,7 +32,9 @@ for periods ``p = 1 .. max_period``) and **accepted only when**
 The integration itself is that of :func:`cablesim.dynamics.steady.steady_response` (same
 periodicity and Floquet rules, same cap); the shooting is a hook it calls every few forcing
 periods, so a point that would be found steady, not steady or failed without acceleration is
-found so with it, only sooner when an orbit is accepted. The amplitudes of an accepted orbit are
+found so with it, only sooner when an orbit is accepted; the exception is a point integration
+alone leaves at the cap because its transient decays too slowly for the periodicity test (a
+multiplier near -1 next to a period doubling), which shooting may decide. The amplitudes of an accepted orbit are
 measured exactly as for an integrated one (:func:`~cablesim.dynamics.steady.periodic_response`).
 
 Cost: an orbit found once is remembered (stable or not), so later checks against it need no

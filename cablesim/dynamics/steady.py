@@ -35,7 +35,8 @@ from .simulate import advance_in_chunks, failure_text
 from .result import SlackRecord
 from .status import Status
 
-#: Most forcing periods between two calls of a ``decide`` hook of :func:`steady_response`.
+#: Default forcing periods between two calls of a ``decide`` hook of :func:`steady_response`
+#: (:mod:`cablesim.orbits.accelerate` uses it as its longest interval).
 DECIDE_EVERY = 10
 #: Floquet multipliers above this modulus mark an unstable periodic orbit.
 UNSTABLE_MULTIPLIER = 1.0 + 1e-3

@@ -67,7 +67,11 @@ MAX_NEWTON = 8
 #: converges quadratically, so a step that does not halve the residual means the trajectory is
 #: not there yet, and damping the step would only buy an orbit that cannot be accepted.
 NEWTON_SHRINK = 0.5
-#: Relative tolerance of an adaptive integrator while the transient is integrated.
+#: Relative tolerance of an adaptive integrator while the transient is integrated (atol
+#: loosened alike): the strobes only have to show the approach to the orbit, and their error
+#: enters the acceptance test through its measured noise term. On the paper example it halves
+#: the cost of a simulated second against the default 1e-8; 1e-5 is no cheaper, the step being
+#: set by stability there (``bench_accelerate.py --integration``).
 TRANSIENT_RTOL = 1e-6
 #: Newton's tolerance (relative to the orbit's extent): the orbit only seeds the measurement,
 #: which integrates it with the sweep's own integrator.

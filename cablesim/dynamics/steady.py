@@ -338,11 +338,14 @@ def _steady(eom, integrator, channels, criterion, s0, decide, track, decide_ever
                 continue
         return _finish_steady(eom, integrator, prm, state, channels, p, k, T, spp, floquet)
 
-    return _cap_reached(eom, channels, state, fine, spp, floquet)
+    # the state at the last forcing phase 0 (the integrator's own state may have stepped past it)
+    return _cap_reached(eom, channels, state, fine, spp, floquet, out[-1].copy(), float(t_out[-1]))
 
 
-def _cap_reached(eom, channels, state, fine, spp, floquet) -> PointResult:
-    """No steady state before the cap: amplitudes over the last window."""
+def _cap_reached(eom, channels, state, fine, spp, floquet, s_end, t_end) -> PointResult:
+    """No steady state before the cap: amplitudes over the last window; ``s_end`` the state at
+    ``t_end``, the last whole forcing period (the start state a chained sweep hands on, which
+    must be at forcing phase 0: ``y''`` there is consistent with ``F = F0`` only)."""
     nd = eom.n_dof
     T = 2.0 * np.pi / eom.omega
     rec = np.concatenate(fine) if fine else state.s[None, :]
@@ -356,9 +359,9 @@ def _cap_reached(eom, channels, state, fine, spp, floquet) -> PointResult:
         period=0,
         steady=False,
         response_frequency=freq,
-        t_end=state.t,
+        t_end=t_end,
         floquet=floquet,
-        final_state=state.s.copy(),
+        final_state=s_end,
         status=Status.COMPLETED,
         message="cap reached",
         decided="cap",

@@ -35,7 +35,8 @@ from .simulate import advance_in_chunks, failure_text
 from .result import SlackRecord
 from .status import Status
 
-#: Most forcing periods between two calls of a ``decide`` hook of :func:`steady_response`.
+#: Default forcing periods between two calls of a ``decide`` hook of :func:`steady_response`
+#: (:mod:`cablesim.orbits.accelerate` uses it as its longest interval).
 DECIDE_EVERY = 10
 #: Floquet multipliers above this modulus mark an unstable periodic orbit.
 UNSTABLE_MULTIPLIER = 1.0 + 1e-3
@@ -226,6 +227,7 @@ def steady_response(
     criterion: SteadyCriterion,
     s0: np.ndarray | None = None,
     decide: Callable[[int, np.ndarray, np.ndarray], PointResult | None] | None = None,
+    decide_every: int = DECIDE_EVERY,
 ) -> PointResult:
     """Integrate from ``s0`` until the response is steady (see module docstring) or the cap.
 
@@ -240,18 +242,20 @@ def steady_response(
     s0 : ndarray, optional
         Initial ``(z, y', y'')`` at forcing phase 0 (default: the equilibrium at rest).
     decide : callable, optional
-        Called as ``decide(k, s, strobes)`` after every chunk of at most :data:`DECIDE_EVERY`
-        forcing periods (``k`` periods done, ``s`` the state at forcing phase 0, ``strobes`` the
+        Called as ``decide(k, s, strobes)`` after every chunk of ``decide_every`` forcing
+        periods (``k`` periods done, ``s`` the state at forcing phase 0, ``strobes`` the
         ``k + 1`` stroboscopic samples ``(z, y'/w)`` so far); a
         :class:`PointResult` it returns ends the point (how
         :mod:`cablesim.orbits.accelerate` decides by shooting).
+    decide_every : int
+        Forcing periods between two calls of ``decide``.
 
     Returns
     -------
     PointResult
     """
     track: dict = {}
-    r = _steady(eom, integrator, channels, criterion, s0, decide, track)
+    r = _steady(eom, integrator, channels, criterion, s0, decide, track, max(1, int(decide_every)))
     return _with_slack_stats(r, eom, track.get("state"), track.get("t0", 0.0))
 
 
@@ -268,7 +272,7 @@ def _with_slack_stats(r: PointResult, eom: EquationsOfMotion, state, t0: float) 
     return replace(r, peak_tension=rec.peak_tension.copy(), slack_fraction=rec.fraction_of(span))
 
 
-def _steady(eom, integrator, channels, criterion, s0, decide, track) -> PointResult:
+def _steady(eom, integrator, channels, criterion, s0, decide, track, decide_every) -> PointResult:
     nd = eom.n_dof
     w = eom.omega
     T = 2.0 * np.pi / w
@@ -285,7 +289,7 @@ def _steady(eom, integrator, channels, criterion, s0, decide, track) -> PointRes
     strobes[0, nd:] = s0[nd : 2 * nd] / w
     fine: list[np.ndarray] = []
     k = 0
-    chunk = 20
+    chunk = 20 if decide is None else decide_every
     floquet = np.nan
     recheck_after = 0
     hold = max(crit.hold, 3)
@@ -317,7 +321,7 @@ def _steady(eom, integrator, channels, criterion, s0, decide, track) -> PointRes
         strobes[k + 1 : kk + 1, :nd] = sel[:, :nd]
         strobes[k + 1 : kk + 1, nd:] = sel[:, nd : 2 * nd] / w
         k = kk
-        chunk = min(chunk * 2, 200 if decide is None else DECIDE_EVERY)
+        chunk = min(chunk * 2, 200) if decide is None else decide_every
         if decide is not None and k < n_cap:
             decided = decide(k, out[-1].copy(), strobes[: k + 1])  # out[-1]: at phase 0
             if decided is not None:
@@ -334,11 +338,14 @@ def _steady(eom, integrator, channels, criterion, s0, decide, track) -> PointRes
                 continue
         return _finish_steady(eom, integrator, prm, state, channels, p, k, T, spp, floquet)
 
-    return _cap_reached(eom, channels, state, fine, spp, floquet)
+    # the state at the last forcing phase 0 (the integrator's own state may have stepped past it)
+    return _cap_reached(eom, channels, state, fine, spp, floquet, out[-1].copy(), float(t_out[-1]))
 
 
-def _cap_reached(eom, channels, state, fine, spp, floquet) -> PointResult:
-    """No steady state before the cap: amplitudes over the last window."""
+def _cap_reached(eom, channels, state, fine, spp, floquet, s_end, t_end) -> PointResult:
+    """No steady state before the cap: amplitudes over the last window; ``s_end`` the state at
+    ``t_end``, the last whole forcing period (the start state a chained sweep hands on, which
+    must be at forcing phase 0: ``y''`` there is consistent with ``F = F0`` only)."""
     nd = eom.n_dof
     T = 2.0 * np.pi / eom.omega
     rec = np.concatenate(fine) if fine else state.s[None, :]
@@ -352,9 +359,9 @@ def _cap_reached(eom, channels, state, fine, spp, floquet) -> PointResult:
         period=0,
         steady=False,
         response_frequency=freq,
-        t_end=state.t,
+        t_end=t_end,
         floquet=floquet,
-        final_state=state.s.copy(),
+        final_state=s_end,
         status=Status.COMPLETED,
         message="cap reached",
         decided="cap",

@@ -90,6 +90,43 @@ FLOW_SIG = _i8(
 )
 
 
+class FieldAddress(types.WrapperAddressProtocol):
+    """A compiled vector field handed to :func:`flow_segment` by the address of its C wrapper,
+    looked up once. Given the dispatcher itself, numba looks the address up again at every call
+    of :func:`flow_segment`: measured (CPU, a one-step segment of the paper's cable) 0.14 ms a
+    call with the dispatcher against 0.04 ms with this, where a one-period evaluation with its
+    Jacobian costs about 0.6 ms. The flow map is the same function either way (bitwise
+    identical results).
+
+    Parameters
+    ----------
+    field : numba dispatcher
+        Compiled with :data:`FIELD_SIG`.
+    """
+
+    def __init__(self, field):
+        self.field = field
+        cres = field.get_compile_result(FIELD_SIG)
+        self._address = cres.library.get_pointer_to_function(cres.fndesc.llvm_cfunc_wrapper_name)
+
+    def __wrapper_address__(self) -> int:
+        return self._address
+
+    def signature(self):
+        return FIELD_SIG
+
+
+_ADDRESSES: dict = {}
+
+
+def field_address(field) -> FieldAddress:
+    """The :class:`FieldAddress` of ``field``, made once per field and process."""
+    found = _ADDRESSES.get(field)
+    if found is None:
+        found = _ADDRESSES[field] = FieldAddress(field)
+    return found
+
+
 @njit(cache=True)
 def _hermite_extremes(xa, xb, da, db, h, i, xmax, xmin):
     """Update ``xmax[i]``, ``xmin[i]`` with the interior extremes of the cubic Hermite

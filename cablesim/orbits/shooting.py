@@ -184,6 +184,7 @@ class Shooting:
         self._A = np.ascontiguousarray(self.tableau.A)
         self._b = np.ascontiguousarray(self.tableau.b)
         self._c = np.ascontiguousarray(self.tableau.c)
+        self._field = ok.field_address(system.field)
         self._ipar = -1 if parameter == "omega" else int(system.parameters[parameter])
         self._pmode = ok.PARAM_OMEGA if parameter == "omega" else ok.PARAM_PRM
         #: Counters: flow-segment integrations and Runge-Kutta steps taken.
@@ -240,7 +241,7 @@ class Shooting:
         rec = np.empty((ns + 1, 2 * n)) if record else _EMPTY_REC
         work = self.system.work.copy()
         code = ok.flow_segment(
-            self.system.field, self._prm(lam), work, np.ascontiguousarray(x0, dtype=float), theta0, omega, dur,
+            self._field, self._prm(lam), work, np.ascontiguousarray(x0, dtype=float), theta0, omega, dur,
             ns, self._A, self._b, self._c, self._ipar, self._pmode, jac, xend, G, dp, xmax, xmin, rec, info,
         )
         self.calls += 1

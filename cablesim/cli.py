@@ -264,22 +264,27 @@ def static(
     all_models: Optional[bool] = typer.Option(None, "--all-models/--chosen-model", help="Compute the inextensible and approximate models too (default: up to n = 300 nodes)."),
 ):
     """Static equilibrium under F0 (inextensible, approximate and exact), modes and damping."""
-    from . import api
+    # Only the static machinery (not cablesim.api's dynamics and orbits): a second of start-up.
+    from .analyses.static import run_static
+    from .case import load_case
+    from .io.hdf5 import write_static
     from .io.report import static_summary
 
     _begin(ctx)
-    case = api.load_case(case_file, overrides)
+    case = load_case(case_file, overrides)[0]
     out = output if output is not None else Path("runs") / case.name / "static.h5"
     _check_outputs(out, case_file, (lambda o: [o.with_suffix(".png")]) if plot else [])
     _effective(ctx, output=out)
     with compiling(_note, "kernels.closure_solve-*.nbi"):
-        run = api.static(case, analysis.value if analysis else None, all_models=all_models)
-    say_warnings(run.result.warnings)
-    _echo(static_summary(case, run.result, full=full))
-    run.to_hdf5(out, matrices=matrices)
+        result = run_static(case, analysis.value if analysis else None, all_models=all_models)
+    say_warnings(result.warnings)
+    _echo(static_summary(case, result, full=full))
+    write_static(out, result, case.text, matrices=matrices)
     msg = f"\nWrote {out}"
     if plot:
-        msg += f" and {run.plot(out.with_suffix('.png'))}"
+        from .plots.cable import plot_cable
+
+        msg += f" and {plot_cable(result, out.with_suffix('.png'), case.name)}"
     _echo(msg)
 
 

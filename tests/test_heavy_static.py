@@ -104,3 +104,62 @@ def test_free_vibration_along_a_mode_beyond_the_kept_shapes(monkeypatch):
     assert kept.modes.shapes.shape[1] == 20
     v = mode_velocity(kept, 25, 1.0)
     np.testing.assert_allclose(v, mode_velocity(full, 25, 1.0), atol=1e-7)
+
+
+def test_the_default_static_path_builds_no_dense_matrix(tmp_path, monkeypatch):
+    """n = 400 (above the sizes that store matrices and compute every model): neither the dense
+    tangent stiffness nor a dense eigensolver nor the O(n^2) slack test of the closure runs."""
+    import cablesim.analyses.static
+    import cablesim.closure
+    import cablesim.statics
+
+    def dense(*args, **kwargs):
+        raise AssertionError("a dense O(n^2) computation ran")
+
+    monkeypatch.setattr(cablesim.statics, "tangent_stiffness", dense)
+    monkeypatch.setattr(cablesim.analyses.static, "modal_analysis", dense)
+    monkeypatch.setattr(cablesim.closure, "_check_slack", dense)
+    case = heavy(400)
+    run = cablesim.static(case)
+    static_summary(case, run.result)
+    with h5py.File(run.to_hdf5(tmp_path / "heavy.h5"), "r") as f:
+        assert "K" not in f["static/exact"] and f["static/exact/K_band"].shape == (4, 800)
+    assert "K" not in vars(run.result.exact)  # the lazy dense stiffness was never asked for
+    assert run.result.K0_band.shape == (4, 800) and run.result.exact.T.min() > 0
+
+
+def test_banded_and_dense_static_results_agree():
+    """The dense stiffness built on request equals the banded one the analysis used, and the
+    modes of the dense eigensolver equal the banded ones."""
+    from cablesim.analyses.static import run_static
+
+    case = heavy(40)
+    r = run_static(case, all_models=False)
+    K = r.K0  # built now, from the equilibrium
+    np.testing.assert_allclose(band_to_dense(r.K0_band), K, rtol=0, atol=1e-12 * abs(K).max())
+    np.testing.assert_allclose(K, tangent_stiffness(r.cable, r.exact.y), rtol=0, atol=1e-12 * abs(K).max())
+    dense = modal_analysis(K, r.cable.mass_diagonal)
+    np.testing.assert_allclose(r.modes.omega, dense.omega, rtol=1e-9)
+    np.testing.assert_allclose(r.modes.shapes, dense.shapes, atol=1e-7 * abs(dense.shapes).max())
+
+
+def test_a_slack_segment_is_still_found_when_newton_runs_first():
+    """The slack test now runs only after Newton fails or ends next to a kink. Segment 11 made
+    400 m long, nodes 10 and 11 loaded with 1 MN down: with it removed, both halves hang nearly
+    straight down from their supports, about 320 m apart, closer than 400 m (slack)."""
+    from cablesim.cable import Cable
+    from cablesim.errors import SlackSegmentError
+    from cablesim.statics import inextensible_equilibrium
+
+    case = heavy(30)
+    c = case.to_cable()
+    S = c.S.copy()
+    S[10] = 400.0
+    cable = Cable(c.L, c.H, S, c.EA, c.masses)
+    P = case.F0.copy()
+    P[2 * 9 + 1] += 1e6
+    P[2 * 10 + 1] += 1e6
+    for solve in (inextensible_equilibrium, exact_equilibrium):
+        with pytest.raises(SlackSegmentError) as err:
+            solve(cable, P)
+        assert err.value.segment == 11

@@ -26,7 +26,6 @@ from ..statics import (
     approximate_equilibrium,
     exact_equilibrium,
     inextensible_equilibrium,
-    tangent_stiffness_band,
 )
 
 #: Above this many nodes `cablesim static` computes only the chosen analysis by default: the
@@ -55,8 +54,6 @@ class StaticResult:
         None when the approximate analysis was asked for and the exact one was not needed.
     modes : Modes
         Linear modes from the tangent stiffness ``K0`` of the chosen analysis.
-    K0 : ndarray
-        That tangent stiffness, N/m.
     a0, a1 : float
         Rayleigh coefficients (1/s and s).
     damping_ratios : ndarray
@@ -70,6 +67,10 @@ class StaticResult:
     K0_band : ndarray or None
         ``K0`` in symmetric lower band form, shape (4, 2n) (exact analysis; see
         :func:`cablesim.statics.tangent_stiffness_band`).
+    K0 : ndarray
+        The tangent stiffness of the chosen analysis, dense (2n, 2n), N/m: in the exact
+        analysis built on first use, so that a heavy cable's statics stay O(n) in memory
+        unless something asks for it (``--matrices``, the dense checks of small cables).
     """
 
     cable: Cable
@@ -79,7 +80,6 @@ class StaticResult:
     approximate: ApproximateEquilibrium | None
     exact: ExactEquilibrium | None
     modes: Modes
-    K0: np.ndarray
     a0: float
     a1: float
     damping_ratios: np.ndarray
@@ -87,6 +87,11 @@ class StaticResult:
     sole_inextensible_omega: float | None
     warnings: tuple[str, ...] = ()
     K0_band: np.ndarray | None = None
+
+    @property
+    def K0(self) -> np.ndarray:
+        """Dense tangent stiffness of the chosen analysis, N/m (see the class docstring)."""
+        return self.exact.K if self.analysis == "exact" else self.approximate.K
 
     @property
     def y0(self) -> np.ndarray:
@@ -110,7 +115,7 @@ def damping_coefficients(case: Case, omega: np.ndarray) -> tuple[float, float]:
     return rayleigh_coefficients(omega[i - 1], omega[j - 1], d.ratio)
 
 
-def _modes(case: Case, cable: Cable, K0: np.ndarray, K0_band: np.ndarray | None) -> Modes:
+def _modes(case: Case, cable: Cable, K0: np.ndarray | None, K0_band: np.ndarray | None) -> Modes:
     if K0_band is None:
         return modal_analysis(K0, cable.mass_diagonal)
     wanted = max(SHAPES_KEPT, case.free_vibration.mode or 0, *case.damping.modes)
@@ -167,9 +172,8 @@ def run_static(case: Case, analysis: str | None = None, all_models: bool | None 
         exact = exact_equilibrium(cable, P)
         if taut:
             check_resolvable(cable, exact.T)
-    K0 = exact.K if analysis == "exact" else approx.K
-    K0_band = tangent_stiffness_band(cable, exact.y) if analysis == "exact" else None
-    modes = _modes(case, cable, K0, K0_band)
+    K0_band = exact.K_band if analysis == "exact" else None
+    modes = _modes(case, cable, None if K0_band is not None else approx.K, K0_band)
     a0, a1 = damping_coefficients(case, modes.omega)
     inext_omega = np.array([])
     sole = None
@@ -185,7 +189,6 @@ def run_static(case: Case, analysis: str | None = None, all_models: bool | None 
         approximate=approx,
         exact=exact,
         modes=modes,
-        K0=K0,
         a0=a0,
         a1=a1,
         damping_ratios=modal_damping_ratios(modes.omega, a0, a1),

@@ -132,14 +132,17 @@ class Planned:
         return HistoryRun(self.case, self.command, st, hist, integ)
 
 
-def static(case: Case, analysis: str | None = None, all_models: bool | None = None) -> StaticRun:
+def static(case: Case, analysis: str | None = None, all_models: bool | None = None,
+           n_modes: int | None = None) -> StaticRun:
     """Static equilibrium under F0 (inextensible, approximate, exact), modes and damping.
 
     ``analysis`` (``"exact"`` or ``"approximate"``) overrides the case's. ``all_models``: every
     model (True), the chosen one (False), or every model up to
-    :data:`~cablesim.analyses.static.ALL_MODELS_NODES` nodes (None).
+    :data:`~cablesim.analyses.static.ALL_MODELS_NODES` nodes (None). ``n_modes``: only the
+    lowest this many modes and the highest frequency (overrides ``modal.modes``; default:
+    every mode up to n = 300 nodes, else the lowest 100).
     """
-    return StaticRun(case, run_static(case, analysis, all_models=all_models))
+    return StaticRun(case, run_static(case, analysis, all_models=all_models, n_modes=n_modes))
 
 
 def history(

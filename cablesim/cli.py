@@ -23,7 +23,7 @@ from typing import Optional
 import typer
 
 from .errors import CablesimError
-from .io.terminal import (ANALYSIS_OPT, CASE_ARG, FORCE_OPT, INTEGRATOR_OPT, SET_OPT, SLACK_OPTION, Analysis,
+from .io.terminal import (ANALYSIS_OPT, CASE_ARG, FORCE_OPT, INTEGRATOR_OPT, MODES_OPT, SET_OPT, SLACK_OPTION, Analysis,
                            CommandGroup, IntegratorName, LazyBar, SlackPolicy, StatusLine, compiling, say_error,
                            say_warnings)
 from .version import __version__
@@ -262,6 +262,7 @@ def static(
     full: bool = typer.Option(False, "--full", help="Print every node, segment and mode (default: a cable of over 20 nodes shows the first and last)."),
     matrices: Optional[bool] = typer.Option(None, "--matrices/--no-matrices", help="Store the dense 2n x 2n matrices (default: up to n = 200 nodes)."),
     all_models: Optional[bool] = typer.Option(None, "--all-models/--chosen-model", help="Compute the inextensible and approximate models too (default: up to n = 300 nodes)."),
+    modes: Optional[int] = MODES_OPT,
 ):
     """Static equilibrium under F0 (inextensible, approximate and exact), modes and damping."""
     # Only the static machinery (not cablesim.api's dynamics and orbits): a second of start-up.
@@ -271,7 +272,7 @@ def static(
     from .io.report import static_summary
 
     _begin(ctx)
-    case = load_case(case_file, overrides)[0]
+    case = load_case(case_file, [*(overrides or ()), *([f"modal.modes={modes}"] if modes else [])])[0]
     out = output if output is not None else Path("runs") / case.name / "static.h5"
     _check_outputs(out, case_file, (lambda o: [o.with_suffix(".png")]) if plot else [])
     _effective(ctx, output=out)

@@ -8,6 +8,7 @@ import numpy as np
 
 from ..cable import Cable
 from ..case import Case
+from ..case.sections import ALL_MODES_DOF, DEFAULT_MODES
 from ..errors import CablesimError
 from ..modal import (
     ALL_SHAPES_DOF,
@@ -115,15 +116,35 @@ def damping_coefficients(case: Case, omega: np.ndarray) -> tuple[float, float]:
     return rayleigh_coefficients(omega[i - 1], omega[j - 1], d.ratio)
 
 
-def _modes(case: Case, cable: Cable, K0: np.ndarray | None, K0_band: np.ndarray | None) -> Modes:
+def modes_to_compute(case: Case, n_dof: int, n_modes: int | None = None) -> int | None:
+    """How many of the lowest modes to compute (None: all).
+
+    ``n_modes`` (``static --modes``), else ``modal.modes`` of the case, else every mode up to
+    :data:`~cablesim.case.sections.ALL_MODES_DOF` DOF and the lowest
+    :data:`~cablesim.case.sections.DEFAULT_MODES` beyond; never fewer than the modes the
+    damping or a free vibration names.
+    """
+    k = n_modes if n_modes is not None else case.modal.modes
+    if k is None and n_dof > ALL_MODES_DOF:
+        k = DEFAULT_MODES
+    if k is None:
+        return None
+    k = max(int(k), case.free_vibration.mode or 0, *case.damping.modes)
+    return None if k >= n_dof else k
+
+
+def _modes(case: Case, cable: Cable, K0: np.ndarray | None, K0_band: np.ndarray | None,
+           n_modes: int | None) -> Modes:
+    k = modes_to_compute(case, cable.n_dof, n_modes)
     if K0_band is None:
-        return modal_analysis(K0, cable.mass_diagonal)
+        return modal_analysis(K0, cable.mass_diagonal, n_modes=k)
     wanted = max(SHAPES_KEPT, case.free_vibration.mode or 0, *case.damping.modes)
     n_shapes = None if 2 * cable.n_nodes <= ALL_SHAPES_DOF else wanted
-    return modal_analysis_banded(K0_band, cable.mass_diagonal, n_shapes=n_shapes)
+    return modal_analysis_banded(K0_band, cable.mass_diagonal, n_modes=k, n_shapes=n_shapes)
 
 
-def run_static(case: Case, analysis: str | None = None, all_models: bool | None = True) -> StaticResult:
+def run_static(case: Case, analysis: str | None = None, all_models: bool | None = True,
+               n_modes: int | None = None) -> StaticResult:
     """Solve the statics of a case under its sustained loads F0.
 
     Parameters
@@ -134,6 +155,9 @@ def run_static(case: Case, analysis: str | None = None, all_models: bool | None 
     all_models : bool or None
         Compute every model (for the ``static`` command); ``False`` computes only what the
         chosen analysis needs; None: every model up to ALL_MODELS_NODES nodes.
+    n_modes : int, optional
+        Compute only the lowest this many modes (and the highest frequency); overrides the
+        case's ``modal.modes`` (see :func:`modes_to_compute` for the default).
 
     Returns
     -------
@@ -173,7 +197,7 @@ def run_static(case: Case, analysis: str | None = None, all_models: bool | None 
         if taut:
             check_resolvable(cable, exact.T)
     K0_band = exact.K_band if analysis == "exact" else None
-    modes = _modes(case, cable, None if K0_band is not None else approx.K, K0_band)
+    modes = _modes(case, cable, None if K0_band is not None else approx.K, K0_band, n_modes)
     a0, a1 = damping_coefficients(case, modes.omega)
     inext_omega = np.array([])
     sole = None

@@ -178,3 +178,5 @@ INTEGRATOR_OPT = typer.Option(None, "--integrator", help="Time-integration schem
                               "the case file, else dopri5, or generalized-alpha for a stiff cable).")
 FORCE_OPT = typer.Option(False, "--force", help="Run even when the cost estimate is above the limits (1e8 time "
                          "steps, a sweep 1e9, or 4 GB of memory).")
+MODES_OPT = typer.Option(None, "--modes", min=1, metavar="K", help="Compute only the lowest K modes and the highest "
+                         "frequency (sets modal.modes; default: every mode up to n = 300 nodes, else the lowest 100).")

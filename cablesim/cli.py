@@ -23,9 +23,9 @@ from typing import Optional
 import typer
 
 from .errors import CablesimError
-from .io.terminal import (ANALYSIS_OPT, CASE_ARG, FORCE_OPT, INTEGRATOR_OPT, MODES_OPT, SET_OPT, SLACK_OPTION, Analysis,
-                           CommandGroup, IntegratorName, LazyBar, SlackPolicy, StatusLine, compiling, say_error,
-                           say_warnings)
+from .io.terminal import (ANALYSIS_OPT, CASE_ARG, FORCE_OPT, INTEGRATOR_OPT, MODES_OPT, SET_OPT, SLACK_OPTION,
+                           SNAPSHOTS_OPT, Analysis, CommandGroup, IntegratorName, LazyBar, SlackPolicy, StatusLine,
+                           compiling, say_error, say_warnings)
 from .version import __version__
 
 app = typer.Typer(
@@ -530,6 +530,7 @@ def plot(
                                           help="PNG file (default: the first file with suffix .png)."),
     figure: Optional[Path] = typer.Option(None, "--figure", metavar="FIGURE.yaml",
                                           help="YAML file with a figure: section to draw instead of the stored case's."),
+    snapshots: Optional[int] = SNAPSHOTS_OPT,
 ):
     """Redraw figures from stored results, recomputing nothing: the figure: section of the stored
     case (or of --figure) as one PNG from all the files, or else each file's standard plots."""
@@ -538,7 +539,7 @@ def plot(
 
     if output is not None:
         check_output(output, inputs=[*results, figure], suffixes=(".png", ""))
-    paths = redraw(results, output, figure=figure)
+    paths = redraw(results, output, figure=figure, snapshots=snapshots)
     _echo("Wrote " + ", ".join(str(p) for p in paths))
 
 

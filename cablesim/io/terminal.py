@@ -180,3 +180,5 @@ FORCE_OPT = typer.Option(False, "--force", help="Run even when the cost estimate
                          "steps, a sweep 1e9, or 4 GB of memory).")
 MODES_OPT = typer.Option(None, "--modes", min=1, metavar="K", help="Compute only the lowest K modes and the highest "
                          "frequency (sets modal.modes; default: every mode up to n = 300 nodes, else the lowest 100).")
+SNAPSHOTS_OPT = typer.Option(None, "--snapshots", min=1, max=24, metavar="K", help="Time histories: draw the cable "
+                             "at K instants spread over the record instead (<file>-snapshots.png).")

@@ -19,10 +19,11 @@ from .cable import plot_cable
 from .composite import draw_figure
 from .continuation import plot_continuation
 from .history import plot_history
+from .snapshots import plot_snapshots
 from .sweep import plot_sweep
 
 
-def redraw(paths, output=None, figure=None) -> list[Path]:
+def redraw(paths, output=None, figure=None, snapshots: int | None = None) -> list[Path]:
     """Redraw figures from stored result files; nothing is recomputed.
 
     Parameters
@@ -37,6 +38,9 @@ def redraw(paths, output=None, figure=None) -> list[Path]:
     figure : Path or FigureSpec, optional
         A composite figure to draw instead of the stored case's ``figure:`` section: a YAML
         file with a ``figure:`` section (see :func:`read_figure`), or the spec itself.
+    snapshots : int, optional
+        Instead: the cable drawn at this many instants of each time history
+        (:func:`~cablesim.plots.snapshots.plot_snapshots`), as ``<file>-snapshots.png`` or ``output``.
 
     Returns
     -------
@@ -62,6 +66,8 @@ def redraw(paths, output=None, figure=None) -> list[Path]:
             "free-vibration files count as one)."
         )
     family = infos[0].family
+    if snapshots is not None:
+        return _snapshots(infos, output, snapshots)
     case = parse_case(infos[0].case_text, source=f"(the case stored in {paths[0]})", default_name=paths[0].stem)
     output = None if output is None else Path(output)
 
@@ -108,3 +114,19 @@ def _standard(info: ResultInfo, output: Path | None) -> list[Path]:
     return plot_history(hist, prefix, what, channels=channels)
 
 
+
+
+def _snapshots(infos: list[ResultInfo], output, count: int) -> list[Path]:
+    """The snapshot figure of each time history."""
+    if infos[0].family != "history":
+        raise CablesimError(f"--snapshots draws time histories, but {infos[0].path} is {FAMILY_TEXT[infos[0].family]}.",
+                            field="snapshots")
+    if output is not None and len(infos) > 1:
+        raise CablesimError("-o names one output, but --snapshots was given several files; drop -o "
+                            "(each figure goes beside its file as <file>-snapshots.png).")
+    written = []
+    for info in infos:
+        case = parse_case(info.case_text, source=f"(the case stored in {info.path})", default_name=info.path.stem)
+        png = Path(output) if output is not None else info.path.with_name(info.path.stem + "-snapshots.png")
+        written.append(plot_snapshots(read_history(info.path), case.to_cable(), png, case.name, count))
+    return written

@@ -28,7 +28,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_sweep.py
 	$(PY) benchmarks/bench_continuation.py
 	$(PY) benchmarks/bench_accelerate.py
-	$(PY) benchmarks/bench_heavy.py --error
+	$(PY) benchmarks/bench_heavy.py
 
 paper-numbers: $(STAMP)
 	$(PY) benchmarks/paper_numbers.py $(OUTD)

@@ -45,7 +45,7 @@ class Modes:
         """Whether ``omega`` holds every mode."""
         return self.omega_max is None
 
-    def spectrum_ends(self) -> np.ndarray:
+    def omega_with_highest(self) -> np.ndarray:
         """``omega``, followed by the highest frequency when it is not among them, rad/s."""
         return self.omega if self.complete else np.append(self.omega, self.omega_max)
 

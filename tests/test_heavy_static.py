@@ -181,7 +181,7 @@ def test_lowest_modes_are_those_of_the_full_eigendecomposition(analysis):
     k = part.modes.shapes.shape[1]
     np.testing.assert_allclose(part.modes.shapes, full.shapes[:, :k], atol=1e-7 * abs(full.shapes).max())
     assert part.modes.highest == pytest.approx(full.omega[-1], rel=1e-9)
-    np.testing.assert_allclose(part.modes.spectrum_ends(), np.append(full.omega[:10], full.omega[-1]), rtol=1e-9)
+    np.testing.assert_allclose(part.modes.omega_with_highest(), np.append(full.omega[:10], full.omega[-1]), rtol=1e-9)
 
 
 def test_lowest_modes_keep_the_damping_and_the_dynamics_right():

@@ -80,7 +80,7 @@ def fastest_rate(static) -> float:
     ``w (xi + sqrt(xi^2 - 1)) ~ a1 w^2``, which can exceed ``omega_max`` several times. An explicit
     scheme's step must resolve this rate, not only ``omega_max``.
     """
-    return damped_fastest_rate(static.modes.spectrum_ends(), static.a0, static.a1)
+    return damped_fastest_rate(static.modes.omega_with_highest(), static.a0, static.a1)
 
 
 def _reference(kind: str, prep: _Prepared, duration: float):

@@ -17,7 +17,7 @@ For each n, in one process, with numba's compilation excluded by a warm-up run:
 - **scipy**: ``solve_ivp(method="DOP853")`` with a plain Python/numpy right-hand side of the same
   form (sparse C product, ~30-80 us a call) over the same window, at rtol 1e-3 and 1e-6
   (atol 1e-3 rtol, m and m/s; above n = 200 only 1e-3): it is explicit, so its step is held by
-  the fastest damped root whatever the tolerance (the two cost within 25 %), both errors reported;
+  the fastest damped root whatever the tolerance (the two cost about the same), both errors reported;
 - cablesim's **default** integrator (``make_integrator``), its **rk4** at the stable step it
   chooses and its **dopri5** at the default tolerances (rtol 1e-8), each over the same window
   for the error (rk4 and dopri5 only up to ``--error-max`` nodes: they are stability-bound too),

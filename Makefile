@@ -28,7 +28,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_sweep.py
 	$(PY) benchmarks/bench_continuation.py
 	$(PY) benchmarks/bench_accelerate.py
-	$(PY) benchmarks/bench_heavy.py --error
+	$(PY) benchmarks/bench_heavy.py
 
 # numba caches compiled kernels beside the sources but does not notice when a kernel called
 # from another module changes: after editing cablesim/dynamics/, clear the cache.

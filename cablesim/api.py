@@ -132,14 +132,17 @@ class Planned:
         return HistoryRun(self.case, self.command, st, hist, integ)
 
 
-def static(case: Case, analysis: str | None = None, all_models: bool | None = None) -> StaticRun:
+def static(case: Case, analysis: str | None = None, all_models: bool | None = None,
+           n_modes: int | None = None) -> StaticRun:
     """Static equilibrium under F0 (inextensible, approximate, exact), modes and damping.
 
     ``analysis`` (``"exact"`` or ``"approximate"``) overrides the case's. ``all_models``: every
     model (True), the chosen one (False), or every model up to
-    :data:`~cablesim.analyses.static.ALL_MODELS_NODES` nodes (None).
+    :data:`~cablesim.analyses.static.ALL_MODELS_NODES` nodes (None). ``n_modes``: only the
+    lowest this many modes and the highest frequency (overrides ``modal.modes``; default:
+    every mode up to n = 300 nodes, else the lowest 100).
     """
-    return StaticRun(case, run_static(case, analysis, all_models=all_models))
+    return StaticRun(case, run_static(case, analysis, all_models=all_models, n_modes=n_modes))
 
 
 def history(
@@ -306,7 +309,7 @@ def estimates(case: Case, analysis: str | None = None, integrator: str | None = 
 
 
 def plot(results, output: str | Path | None = None, figure: str | Path | None = None,
-         stamp: str | None = None) -> list[Path]:
+         stamp: str | None = None, snapshots: int | None = None) -> list[Path]:
     """Redraw figures from stored result files, as ``cablesim plot`` does (nothing is
     recomputed): the ``figure:`` section of the stored case (or of ``figure``) as one PNG, or
     else each file's standard plots.
@@ -322,10 +325,13 @@ def plot(results, output: str | Path | None = None, figure: str | Path | None = 
     stamp : str, optional
         Text drawn in a corner of every figure and kept in the PNG metadata, e.g.
         ``"preview: coarse grid"``.
+    snapshots : int, optional
+        Time histories: draw the cable at this many instants of each record instead
+        (``<file>-snapshots.png``).
 
     Returns
     -------
     list of Path
         The PNGs written.
     """
-    return redraw(results, output, figure=figure, stamp=stamp)
+    return redraw(results, output, figure=figure, stamp=stamp, snapshots=snapshots)

@@ -2,8 +2,11 @@
 
 ``"z1"``, ``"z2"``, ... are the degrees of freedom 1, 2, ... (1-based) in the order
 ``[x1, x2, x3, x4, ...]`` = (horizontal, vertical) of node 1, then node 2, ...; so ``"z2k"`` is
-the vertical displacement (pointing down) of node k. A history may keep only some DOF
-(``result.dof``); the column functions map channel names to its columns.
+the vertical displacement (pointing down) of node k. The same by node and direction:
+``"node20.v"`` is node 20 vertical (down +, = ``z40``) and ``"node20.h"`` horizontal (= ``z39``).
+Every place that takes channel names (case file, ``--channels``, plots, sweeps) reads them here
+and works with the ``z`` names. A history may keep only some DOF (``result.dof``); the column
+functions map channel names to its columns.
 """
 
 from __future__ import annotations
@@ -17,21 +20,45 @@ from .errors import CablesimError
 
 #: ``"z2"``, ``"Z2"``, ``" 2"``: a channel name.
 CHANNEL_PATTERN = re.compile(r"^\s*[zZ]?\s*(\d+)\s*$")
+#: ``"node20.v"``, ``"Node 20.H"``: a channel by node and direction.
+NODE_CHANNEL_PATTERN = re.compile(r"^\s*node\s*(\d+)\s*\.\s*(\w*)\s*$", re.IGNORECASE)
+#: Directions of a node channel and the DOF of node k they stand for (2k - 1 + offset).
+NODE_DIRECTIONS = {"h": 0, "v": 1}
+
+
+def _parse(name) -> tuple[int, int | None, str | None]:
+    """``(DOF number, node, problem)`` of a channel name; ``problem`` says what is wrong."""
+    if isinstance(name, bytes):
+        name = name.decode("utf-8", "replace")
+    if isinstance(name, bool) or not isinstance(name, (str, numbers.Integral)):
+        return 0, None, "is not a channel name"
+    if isinstance(name, numbers.Integral):
+        return int(name), None, None
+    match = CHANNEL_PATTERN.match(name)
+    if match is not None:
+        return int(match.group(1)), None, None
+    match = NODE_CHANNEL_PATTERN.match(name)
+    if match is None:
+        return 0, None, "is malformed"
+    node, direction = int(match.group(1)), match.group(2).lower()
+    if direction not in NODE_DIRECTIONS:
+        return 0, node, (f"has direction {match.group(2)!r}; a node channel ends in .h (horizontal) or .v "
+                         f"(vertical, down +), e.g. node{node}.v")
+    if node < 1:
+        return 0, node, "names node 0, but nodes are numbered from 1 (next to support A)"
+    return 2 * node - 1 + NODE_DIRECTIONS[direction], node, None
 
 
 def normalise_channel(name) -> str | None:
-    """``"z2"``, ``"Z2"``, ``" 2"`` or ``2`` -> ``"z2"``; None if malformed."""
-    if isinstance(name, bytes):
-        name = name.decode("utf-8", "replace")
-    if isinstance(name, bool):
-        return None
-    if isinstance(name, numbers.Integral):
-        return f"z{int(name)}"
-    if isinstance(name, str):
-        match = CHANNEL_PATTERN.match(name)
-        if match is not None:
-            return f"z{int(match.group(1))}"
-    return None
+    """``"z2"``, ``"Z2"``, ``" 2"``, ``2`` or ``"node1.v"`` -> ``"z2"``; None if malformed."""
+    k, _, problem = _parse(name)
+    return None if problem else f"z{k}"
+
+
+def node_channel_name(i: int) -> str:
+    """The node-and-direction name of DOF ``i`` (0-based), e.g. ``"node20.v"`` for 39."""
+    node, comp = divmod(i, 2)
+    return f"node{node + 1}.{'hv'[comp]}"
 
 
 # --------------------------------------------------------------------------------------------
@@ -45,8 +72,8 @@ def channel_index(name_or_int, n_dof: int) -> int:
     Parameters
     ----------
     name_or_int : str or int
-        ``"z2"``, ``"2"`` or ``2``: degree of freedom 2 (1-based), i.e. the vertical
-        displacement of node 1.
+        ``"z2"``, ``"2"``, ``2`` or ``"node1.v"``: degree of freedom 2 (1-based), i.e. the
+        vertical displacement of node 1 (``"node1.h"``: its horizontal one, z1).
     n_dof : int
         Number of degrees of freedom of the cable (``2 n``).
 
@@ -60,24 +87,21 @@ def channel_index(name_or_int, n_dof: int) -> int:
     CablesimError
         If the name is malformed or the channel does not exist.
     """
+    n = n_dof // 2
     hint = f"use z1 to z{n_dof} (z2k is the vertical displacement of node k)"
-    if isinstance(name_or_int, bool):
-        raise CablesimError(f"Channel {name_or_int!r} is not a channel name; {hint}.")
-    if isinstance(name_or_int, numbers.Integral):
-        k = int(name_or_int)
-    elif isinstance(name_or_int, str):
-        match = CHANNEL_PATTERN.match(name_or_int)
-        if match is None:
-            raise CablesimError(f"Channel name {name_or_int!r} is malformed; {hint}.")
-        k = int(match.group(1))
-    else:
-        raise CablesimError(f"Channel {name_or_int!r} is not a channel name or number; {hint}.")
+    if isinstance(name_or_int, str) and name_or_int.strip().lower().startswith("node"):
+        hint = f"use node1.h to node{n}.v (h horizontal, v vertical, down +) or z1 to z{n_dof}"
+    k, node, problem = _parse(name_or_int)
+    if problem:
+        raise CablesimError(f"Channel {name_or_int!r} {problem}; {hint}.")
+    if node is not None and node > n:
+        raise CablesimError(f"Channel {name_or_int!r} names node {node}, but this cable has n = {n} interior "
+                            f"nodes; {hint}.")
     if not 1 <= k <= n_dof:
         raise CablesimError(
             f"Channel {name_or_int!r} is out of range for a cable with {n_dof} degrees of freedom; {hint}."
         )
     return k - 1
-
 
 
 def channel_description(i: int) -> str:
@@ -194,7 +218,7 @@ def parse_channels(spec: str | None, fallback, n_dof: int, flag: str = "--channe
     """
     names = [c.strip() for c in spec.split(",") if c.strip()] if spec else (list(fallback) if fallback else None)
     if spec is not None and not names:
-        raise CablesimError(f"{flag} is empty; give DOF names such as z2,z4.", field="channels")
+        raise CablesimError(f"{flag} is empty; give DOF names such as z2,z4 or node20.v.", field="channels")
     for name in names or ():
         try:
             channel_index(name, n_dof)

@@ -23,9 +23,9 @@ from typing import Optional
 import typer
 
 from .errors import CablesimError
-from .io.terminal import (ANALYSIS_OPT, CASE_ARG, FORCE_OPT, INTEGRATOR_OPT, SET_OPT, SLACK_OPTION, Analysis,
-                           CommandGroup, IntegratorName, LazyBar, SlackPolicy, StatusLine, compiling, say_error,
-                           say_warnings)
+from .io.terminal import (ANALYSIS_OPT, CASE_ARG, FORCE_OPT, INTEGRATOR_OPT, MODES_OPT, SET_OPT, SLACK_OPTION,
+                           SNAPSHOTS_OPT, STAMP_OPT, Analysis, CommandGroup, IntegratorName, LazyBar, SlackPolicy, StatusLine,
+                           compiling, say_error, say_warnings)
 from .version import __version__
 
 app = typer.Typer(
@@ -262,24 +262,30 @@ def static(
     full: bool = typer.Option(False, "--full", help="Print every node, segment and mode (default: a cable of over 20 nodes shows the first and last)."),
     matrices: Optional[bool] = typer.Option(None, "--matrices/--no-matrices", help="Store the dense 2n x 2n matrices (default: up to n = 200 nodes)."),
     all_models: Optional[bool] = typer.Option(None, "--all-models/--chosen-model", help="Compute the inextensible and approximate models too (default: up to n = 300 nodes)."),
+    modes: Optional[int] = MODES_OPT,
 ):
     """Static equilibrium under F0 (inextensible, approximate and exact), modes and damping."""
-    from . import api
+    # Only the static machinery (not cablesim.api's dynamics and orbits): a second of start-up.
+    from .analyses.static import run_static
+    from .case import load_case
+    from .io.hdf5 import write_static
     from .io.report import static_summary
 
     _begin(ctx)
-    case = api.load_case(case_file, overrides)
+    case = load_case(case_file, [*(overrides or ()), *([f"modal.modes={modes}"] if modes else [])])[0]
     out = output if output is not None else Path("runs") / case.name / "static.h5"
     _check_outputs(out, case_file, (lambda o: [o.with_suffix(".png")]) if plot else [])
     _effective(ctx, output=out)
     with compiling(_note, "kernels.closure_solve-*.nbi"):
-        run = api.static(case, analysis.value if analysis else None, all_models=all_models)
-    say_warnings(run.result.warnings)
-    _echo(static_summary(case, run.result, full=full))
-    run.to_hdf5(out, matrices=matrices)
+        result = run_static(case, analysis.value if analysis else None, all_models=all_models)
+    say_warnings(result.warnings)
+    _echo(static_summary(case, result, full=full))
+    write_static(out, result, case.text, matrices=matrices)
     msg = f"\nWrote {out}"
     if plot:
-        msg += f" and {run.plot(out.with_suffix('.png'))}"
+        from .plots.cable import plot_cable
+
+        msg += f" and {plot_cable(result, out.with_suffix('.png'), case.name)}"
     _echo(msg)
 
 
@@ -525,8 +531,8 @@ def plot(
                                           help="PNG file (default: the first file with suffix .png)."),
     figure: Optional[Path] = typer.Option(None, "--figure", metavar="FIGURE.yaml",
                                           help="YAML file with a figure: section to draw instead of the stored case's."),
-    stamp: Optional[str] = typer.Option(None, "--stamp", metavar="TEXT",
-                                        help="Text drawn in a corner of every figure and kept in the PNG, e.g. 'preview: coarse grid'."),
+    stamp: Optional[str] = STAMP_OPT,
+    snapshots: Optional[int] = SNAPSHOTS_OPT,
 ):
     """Redraw figures from stored results, recomputing nothing: the figure: section of the stored
     case (or of --figure) as one PNG from all the files, or else each file's standard plots."""
@@ -536,7 +542,7 @@ def plot(
     _begin(ctx)
     if output is not None:
         check_output(output, inputs=[*results, figure], suffixes=(".png", ""))
-    paths = redraw(results, output, figure=figure, stamp=stamp)
+    paths = redraw(results, output, figure=figure, stamp=stamp, snapshots=snapshots)
     _echo("Wrote " + ", ".join(str(p) for p in paths))
 
 

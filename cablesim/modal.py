@@ -26,10 +26,28 @@ class Modes:
         Circular frequencies, rad/s, ascending.
     shapes : ndarray, shape (2n, m)
         Mass-normalised mode shapes as columns, in DOF order.
+    omega_max : float or None
+        The highest frequency of the system, rad/s, when ``omega`` holds only the lowest modes
+        (None when ``omega`` is complete): the explicit steps and the stiff-cable rule need it.
     """
 
     omega: np.ndarray
     shapes: np.ndarray
+    omega_max: float | None = None
+
+    @property
+    def highest(self) -> float:
+        """The highest frequency of the system, rad/s (computed or not among ``omega``)."""
+        return float(self.omega[-1] if self.omega_max is None else self.omega_max)
+
+    @property
+    def complete(self) -> bool:
+        """Whether ``omega`` holds every mode."""
+        return self.omega_max is None
+
+    def omega_with_highest(self) -> np.ndarray:
+        """``omega``, followed by the highest frequency when it is not among them, rad/s."""
+        return self.omega if self.complete else np.append(self.omega, self.omega_max)
 
     @property
     def frequency_hz(self) -> np.ndarray:
@@ -42,7 +60,7 @@ class Modes:
         return 2.0 * np.pi / self.omega
 
 
-def modal_analysis(K: np.ndarray, mass_diagonal: np.ndarray) -> Modes:
+def modal_analysis(K: np.ndarray, mass_diagonal: np.ndarray, n_modes: int | None = None) -> Modes:
     """Frequencies and mass-normalised mode shapes of ``M q'' + K q = 0``.
 
     Parameters
@@ -51,6 +69,9 @@ def modal_analysis(K: np.ndarray, mass_diagonal: np.ndarray) -> Modes:
         Symmetric tangent stiffness, N/m.
     mass_diagonal : ndarray, shape (2n,)
         Diagonal of the lumped mass matrix, kg.
+    n_modes : int, optional
+        Only the lowest ``n_modes`` modes (and the highest frequency, ``Modes.omega_max``);
+        default all.
 
     Returns
     -------
@@ -61,11 +82,15 @@ def modal_analysis(K: np.ndarray, mass_diagonal: np.ndarray) -> Modes:
     CablesimError
         If ``K`` is not positive definite (the equilibrium is unstable or a segment is slack).
     """
-    lam, phi = eigh(0.5 * (K + K.T), np.diag(mass_diagonal))
+    N = mass_diagonal.size
+    Ks, Md = 0.5 * (K + K.T), np.diag(mass_diagonal)
+    m = N if n_modes is None else max(1, min(int(n_modes), N))
+    lam, phi = eigh(Ks, Md, subset_by_index=[0, m - 1])
     if lam[0] <= 0.0:
         raise _not_positive(lam[0])
+    top = None if m == N else float(np.sqrt(eigh(Ks, Md, eigvals_only=True, subset_by_index=[N - 1, N - 1])[0]))
     # Fix the sign of each shape: its largest component is positive, for reproducible output.
-    return Modes(omega=np.sqrt(lam), shapes=_fix_signs(phi))
+    return Modes(omega=np.sqrt(lam), shapes=_fix_signs(phi), omega_max=top)
 
 
 def _fix_signs(phi: np.ndarray) -> np.ndarray:
@@ -96,7 +121,8 @@ def modal_analysis_banded(K_band: np.ndarray, mass_diagonal: np.ndarray, n_modes
     mass_diagonal : ndarray, shape (2n,)
         kg.
     n_modes : int, optional
-        Only the lowest ``n_modes`` frequencies (default: all).
+        Only the lowest ``n_modes`` frequencies (default: all), and the highest one
+        (``Modes.omega_max``), each by bisection on the band, O(n) per eigenvalue.
     n_shapes : int, optional
         Mode shapes of the lowest ``n_shapes`` modes only (default: every computed mode when
         2n <= ALL_SHAPES_DOF, else 0). Beyond ALL_SHAPES_DOF the shapes come from inverse
@@ -112,7 +138,7 @@ def modal_analysis_banded(K_band: np.ndarray, mass_diagonal: np.ndarray, n_modes
     A = np.array(K_band[:N], dtype=float)  # a band wider than the matrix holds only zeros beyond it
     for d in range(A.shape[0]):
         A[d, : N - d] *= r[d:] * r[: N - d]
-    m = N if n_modes is None else min(int(n_modes), N)
+    m = N if n_modes is None else max(1, min(int(n_modes), N))
     if n_shapes is None:
         n_shapes = m if N <= ALL_SHAPES_DOF else 0
     n_shapes = min(n_shapes, m)
@@ -125,8 +151,11 @@ def modal_analysis_banded(K_band: np.ndarray, mass_diagonal: np.ndarray, n_modes
         x = _inverse_iteration(A, lam[:n_shapes])
     if lam[0] <= 0.0:
         raise _not_positive(lam[0])
+    top = None
+    if m < N:
+        top = float(np.sqrt(eig_banded(A, lower=True, eigvals_only=True, select="i", select_range=(N - 1, N - 1))[0]))
     phi = _fix_signs(r[:, None] * x) if n_shapes else np.zeros((N, 0))
-    return Modes(omega=np.sqrt(lam), shapes=phi)
+    return Modes(omega=np.sqrt(lam), shapes=phi, omega_max=top)
 
 
 def _inverse_iteration(A: np.ndarray, lam: np.ndarray, sweeps: int = 3) -> np.ndarray:

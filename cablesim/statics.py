@@ -169,7 +169,10 @@ class ExactEquilibrium:
     length : ndarray, shape (n + 1,)
         Stretched segment lengths ``l_r``, m.
     K : ndarray, shape (2n, 2n)
-        Tangent stiffness of the deformed configuration, N/m.
+        Tangent stiffness of the deformed configuration, N/m; dense, so computed on first use
+        (a heavy cable works with :attr:`K_band`).
+    K_band : ndarray, shape (4, 2n)
+        The same in symmetric lower band form (:func:`tangent_stiffness_band`), O(n).
     dydP : ndarray, shape (2n, 2n)
         Tangent flexibility ``dy/dP`` from implicit differentiation, m/N (equals ``K^-1``);
         computed on first use (a dense O(n^2) product that large cables seldom need).
@@ -180,9 +183,18 @@ class ExactEquilibrium:
     y: np.ndarray
     T: np.ndarray
     length: np.ndarray
-    K: np.ndarray
     segments: SegmentForces
     cable: Cable
+
+    @functools.cached_property
+    def K(self) -> np.ndarray:
+        """Dense tangent stiffness, N/m."""
+        return tangent_stiffness(self.cable, self.y)
+
+    @functools.cached_property
+    def K_band(self) -> np.ndarray:
+        """Tangent stiffness in lower band form, N/m."""
+        return tangent_stiffness_band(self.cable, self.y)
 
     @functools.cached_property
     def dydP(self) -> np.ndarray:
@@ -308,7 +320,7 @@ def exact_equilibrium(
     P = np.asarray(P, dtype=float)
     seg = solve_segment_forces(cable, P, elastic=True, F_start=F_start, check_slack=check_slack)
     y = _positions(seg, cable.n_nodes)
-    return ExactEquilibrium(P=P, y=y, T=seg.T, length=seg.length, K=tangent_stiffness(cable, y), segments=seg, cable=cable)
+    return ExactEquilibrium(P=P, y=y, T=seg.T, length=seg.length, segments=seg, cable=cable)
 
 
 # ----------------------------------------------------------------------------------------------

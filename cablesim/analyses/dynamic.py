@@ -171,7 +171,8 @@ def plan_free_vibration(
                 "configuration through the loads, so it starts from its equilibrium (use v0).",
                 field="free_vibration.z0",
             )
-        w_int = float(static.modes.omega[-1]) if n_dof <= 4 else float(static.modes.omega[min(3, n_dof - 1)])
+        w = static.modes.omega
+        w_int = static.modes.highest if n_dof <= 4 else float(w[min(3, w.size - 1)])
     s0 = eom.initial_state(z0=z0, v0=v0)
     check_initial_state(s0, "free_vibration.z0 and v0" if mode is None else "free_vibration.peak_velocity")
     if z0 is not None:

@@ -97,7 +97,7 @@ def build_equations(
         F1=inext.segments.F[0].copy(),
         a0=float(a0),
         a1=float(a1),
-        modal_omega=static.modes.omega.copy(),
+        modal_omega=static.modes.omega_with_highest().copy(),  # with the highest: explicit steps need it
         slack=slack or case.slack,
         C_band=C_band,
     )

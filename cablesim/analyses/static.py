@@ -8,6 +8,7 @@ import numpy as np
 
 from ..cable import Cable
 from ..case import Case
+from ..case.sections import ALL_MODES_DOF, DEFAULT_MODES
 from ..errors import CablesimError
 from ..modal import (
     ALL_SHAPES_DOF,
@@ -26,7 +27,6 @@ from ..statics import (
     approximate_equilibrium,
     exact_equilibrium,
     inextensible_equilibrium,
-    tangent_stiffness_band,
 )
 
 #: Above this many nodes `cablesim static` computes only the chosen analysis by default: the
@@ -55,8 +55,6 @@ class StaticResult:
         None when the approximate analysis was asked for and the exact one was not needed.
     modes : Modes
         Linear modes from the tangent stiffness ``K0`` of the chosen analysis.
-    K0 : ndarray
-        That tangent stiffness, N/m.
     a0, a1 : float
         Rayleigh coefficients (1/s and s).
     damping_ratios : ndarray
@@ -70,6 +68,10 @@ class StaticResult:
     K0_band : ndarray or None
         ``K0`` in symmetric lower band form, shape (4, 2n) (exact analysis; see
         :func:`cablesim.statics.tangent_stiffness_band`).
+    K0 : ndarray
+        The tangent stiffness of the chosen analysis, dense (2n, 2n), N/m: in the exact
+        analysis built on first use, so that a heavy cable's statics stay O(n) in memory
+        unless something asks for it (``--matrices``, the dense checks of small cables).
     """
 
     cable: Cable
@@ -79,7 +81,6 @@ class StaticResult:
     approximate: ApproximateEquilibrium | None
     exact: ExactEquilibrium | None
     modes: Modes
-    K0: np.ndarray
     a0: float
     a1: float
     damping_ratios: np.ndarray
@@ -87,6 +88,11 @@ class StaticResult:
     sole_inextensible_omega: float | None
     warnings: tuple[str, ...] = ()
     K0_band: np.ndarray | None = None
+
+    @property
+    def K0(self) -> np.ndarray:
+        """Dense tangent stiffness of the chosen analysis, N/m (see the class docstring)."""
+        return self.exact.K if self.analysis == "exact" else self.approximate.K
 
     @property
     def y0(self) -> np.ndarray:
@@ -110,15 +116,35 @@ def damping_coefficients(case: Case, omega: np.ndarray) -> tuple[float, float]:
     return rayleigh_coefficients(omega[i - 1], omega[j - 1], d.ratio)
 
 
-def _modes(case: Case, cable: Cable, K0: np.ndarray, K0_band: np.ndarray | None) -> Modes:
+def modes_to_compute(case: Case, n_dof: int, n_modes: int | None = None) -> int | None:
+    """How many of the lowest modes to compute (None: all).
+
+    ``n_modes`` (``static --modes``), else ``modal.modes`` of the case, else every mode up to
+    :data:`~cablesim.case.sections.ALL_MODES_DOF` DOF and the lowest
+    :data:`~cablesim.case.sections.DEFAULT_MODES` beyond; never fewer than the modes the
+    damping or a free vibration names.
+    """
+    k = n_modes if n_modes is not None else case.modal.modes
+    if k is None and n_dof > ALL_MODES_DOF:
+        k = DEFAULT_MODES
+    if k is None:
+        return None
+    k = max(int(k), case.free_vibration.mode or 0, *case.damping.modes)
+    return None if k >= n_dof else k
+
+
+def _modes(case: Case, cable: Cable, K0: np.ndarray | None, K0_band: np.ndarray | None,
+           n_modes: int | None) -> Modes:
+    k = modes_to_compute(case, cable.n_dof, n_modes)
     if K0_band is None:
-        return modal_analysis(K0, cable.mass_diagonal)
+        return modal_analysis(K0, cable.mass_diagonal, n_modes=k)
     wanted = max(SHAPES_KEPT, case.free_vibration.mode or 0, *case.damping.modes)
     n_shapes = None if 2 * cable.n_nodes <= ALL_SHAPES_DOF else wanted
-    return modal_analysis_banded(K0_band, cable.mass_diagonal, n_shapes=n_shapes)
+    return modal_analysis_banded(K0_band, cable.mass_diagonal, n_modes=k, n_shapes=n_shapes)
 
 
-def run_static(case: Case, analysis: str | None = None, all_models: bool | None = True) -> StaticResult:
+def run_static(case: Case, analysis: str | None = None, all_models: bool | None = True,
+               n_modes: int | None = None) -> StaticResult:
     """Solve the statics of a case under its sustained loads F0.
 
     Parameters
@@ -129,6 +155,9 @@ def run_static(case: Case, analysis: str | None = None, all_models: bool | None 
     all_models : bool or None
         Compute every model (for the ``static`` command); ``False`` computes only what the
         chosen analysis needs; None: every model up to ALL_MODELS_NODES nodes.
+    n_modes : int, optional
+        Compute only the lowest this many modes (and the highest frequency); overrides the
+        case's ``modal.modes`` (see :func:`modes_to_compute` for the default).
 
     Returns
     -------
@@ -167,9 +196,8 @@ def run_static(case: Case, analysis: str | None = None, all_models: bool | None 
         exact = exact_equilibrium(cable, P)
         if taut:
             check_resolvable(cable, exact.T)
-    K0 = exact.K if analysis == "exact" else approx.K
-    K0_band = tangent_stiffness_band(cable, exact.y) if analysis == "exact" else None
-    modes = _modes(case, cable, K0, K0_band)
+    K0_band = exact.K_band if analysis == "exact" else None
+    modes = _modes(case, cable, None if K0_band is not None else approx.K, K0_band, n_modes)
     a0, a1 = damping_coefficients(case, modes.omega)
     inext_omega = np.array([])
     sole = None
@@ -185,7 +213,6 @@ def run_static(case: Case, analysis: str | None = None, all_models: bool | None 
         approximate=approx,
         exact=exact,
         modes=modes,
-        K0=K0,
         a0=a0,
         a1=a1,
         damping_ratios=modal_damping_ratios(modes.omega, a0, a1),

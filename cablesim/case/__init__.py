@@ -29,6 +29,7 @@ from .sections import (
     HistorySpec,
     IntegratorSpec,
     LoadsSpec,
+    ModalSpec,
     OmegaGrid,
     OutputsSpec,
     ParameterRange,
@@ -37,7 +38,7 @@ from .sections import (
 
 __all__ = [
     "EXAMPLE_RESOURCE", "FIGURE_KINDS", "OVERRIDES_MARK", "CableSpec", "Case", "ContinuationSpec", "DampingSpec",
-    "FigureSpec", "FreeVibrationSpec", "HistorySpec", "IntegratorSpec", "LoadsSpec", "OmegaGrid", "OutputsSpec",
+    "FigureSpec", "FreeVibrationSpec", "HistorySpec", "IntegratorSpec", "LoadsSpec", "ModalSpec", "OmegaGrid", "OutputsSpec",
     "ParameterRange", "SweepSpec", "apply_overrides", "case_from_dict", "example_text", "format_validation_error",
     "load_case", "parse_case", "read_figure", "stored_overrides",
 ]

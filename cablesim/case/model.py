@@ -22,6 +22,7 @@ from .sections import (
     HistorySpec,
     IntegratorSpec,
     LoadsSpec,
+    ModalSpec,
     OutputsSpec,
     StrictModel,
     SweepSpec,
@@ -41,6 +42,7 @@ class Case(StrictModel):
         "or 'stop' where a segment first goes slack; the approximate analysis always stops",
     )
     damping: DampingSpec = DampingSpec(ratio=0.01)
+    modal: ModalSpec = ModalSpec()
     integrator: IntegratorSpec = IntegratorSpec()
     history: HistorySpec = HistorySpec()
     free_vibration: FreeVibrationSpec = FreeVibrationSpec()
@@ -82,6 +84,8 @@ class Case(StrictModel):
                 )
         if self.damping.modes[1] > 2 * n or self.damping.modes[0] > 2 * n:
             raise ValueError(f"damping.modes must be between 1 and 2n = {2 * n}")
+        if self.modal.modes is not None and self.modal.modes > 2 * n:
+            raise ValueError(f"modal.modes is {self.modal.modes}; this cable has 2n = {2 * n} modes")
         fv = self.free_vibration
         for key in ("z0", "v0"):
             v = getattr(fv, key)

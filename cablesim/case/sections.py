@@ -487,6 +487,20 @@ class OutputsSpec(StrictModel):
                                "(default: up to 100 nodes; it costs a dense inner solve per saved instant)")
 
 
+#: Modes computed by default for cables of more than ALL_MODES_DOF / 2 nodes.
+DEFAULT_MODES = 100
+#: Up to this many DOF (n = 300 nodes) every mode is computed by default.
+ALL_MODES_DOF = 600
+
+
+class ModalSpec(StrictModel):
+    """Modal analysis (section ``modal:``)."""
+
+    modes: int | None = Field(default=None, ge=1, description=(
+        f"compute only the lowest this many modes (and the highest frequency); default: every mode up to "
+        f"n = {ALL_MODES_DOF // 2} nodes, else the lowest {DEFAULT_MODES}"))
+
+
 FIGURE_KINDS = ("fdr", "waveform", "waveform_phase", "waveform_fft", "split", "lissajous_tension")
 
 

@@ -91,6 +91,7 @@ ATTRIBUTE_UNITS = {
     "integrator_rho_inf": "1", "omega_c": "J", "omega_e": "J", "sole_inextensible_omega": "rad/s",
     "cap": "s", "window": "s", "tol": "1", "max_period": "forcing periods", "points_done": "1",
     "points_total": "1", "points_failed": "1", "peak_velocity": "m/s", "damping_ratio": "1",
+    "omega_max": "rad/s", "modes_computed": "1",
 }
 
 
@@ -210,6 +211,8 @@ def _write_static_modal(f: h5py.File, r) -> None:
     m.attrs["a0"] = r.a0
     m.attrs["a1"] = r.a1
     m.attrs["shapes_stored"] = r.modes.shapes.shape[1]
+    m.attrs["modes_computed"] = r.modes.omega.size  # the lowest ones; all when it equals 2n
+    m.attrs["omega_max"] = r.modes.highest
     if r.sole_inextensible_omega is not None:
         m.attrs["sole_inextensible_omega"] = r.sole_inextensible_omega
     attribute_units(m)

@@ -85,7 +85,8 @@ def static_summary(case, result, full: bool = False) -> str:
     out.append(_table(header, _rows(_shown(c.n_segments, full), segment_row, len(header))))
 
     m = result.modes
-    out += ["", f"Linear modes about the equilibrium ({result.analysis} tangent stiffness):"]
+    which = "" if m.complete else f"; the lowest {m.omega.size} of {c.n_dof}, highest {_g(m.omega_max, 7)} rad/s"
+    out += ["", f"Linear modes about the equilibrium ({result.analysis} tangent stiffness{which}):"]
     modes = range(m.omega.size) if full else range(min(m.omega.size, 2 * SUMMARY_ENDS))
     rows = [
         [str(k + 1), _g(m.omega[k], 7), _g(m.frequency_hz[k], 6), _g(m.period[k], 6), f"{result.damping_ratios[k]:.4g}"]

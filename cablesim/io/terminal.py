@@ -178,3 +178,9 @@ INTEGRATOR_OPT = typer.Option(None, "--integrator", help="Time-integration schem
                               "the case file, else dopri5, or generalized-alpha for a stiff cable).")
 FORCE_OPT = typer.Option(False, "--force", help="Run even when the cost estimate is above the limits (1e8 time "
                          "steps, a sweep 1e9, or 4 GB of memory).")
+MODES_OPT = typer.Option(None, "--modes", min=1, metavar="K", help="Compute only the lowest K modes and the highest "
+                         "frequency (sets modal.modes; default: every mode up to n = 300 nodes, else the lowest 100).")
+SNAPSHOTS_OPT = typer.Option(None, "--snapshots", min=1, max=24, metavar="K", help="Time histories: draw the cable "
+                             "at K instants spread over the record instead (<file>-snapshots.png).")
+STAMP_OPT = typer.Option(None, "--stamp", metavar="TEXT", help="Text drawn in a corner of every figure and kept "
+                         "in the PNG, e.g. 'preview: coarse grid'.")

@@ -8,6 +8,7 @@ import numpy as np
 
 from ..cable import nodes_with_supports
 from .base import pyplot, save_atomic, title_line
+from .snapshots import label_nodes
 from .style import COLOURS, FIGURE_WIDTH, lowest_modes_text, styled
 
 #: Above this many nodes the loads are drawn as one quiver rather than an arrow per node.
@@ -50,6 +51,7 @@ def plot_cable(result, path: str | Path, title: str) -> Path:
     ax.plot([0, cable.L], [0, cable.H], "^", color="k", ms=11, zorder=4, label="supports A, B")
     ax.annotate("A", (0, 0), textcoords="offset points", xytext=(-12, -14))
     ax.annotate("B", (cable.L, cable.H), textcoords="offset points", xytext=(6, -14))
+    label_nodes(ax, pts)  # node numbers: all of a short cable, a readable subset of a long one
 
     # Load arrows, the largest one 15% of the span long.
     P = result.P.reshape(-1, 2)

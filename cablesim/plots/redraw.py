@@ -21,10 +21,12 @@ from .cable import plot_cable
 from .composite import draw_figure
 from .continuation import plot_continuation
 from .history import plot_history
+from .snapshots import plot_snapshots
 from .sweep import plot_sweep
 
 
-def redraw(paths, output=None, figure=None, stamp: str | None = None) -> list[Path]:
+def redraw(paths, output=None, figure=None, stamp: str | None = None,
+           snapshots: int | None = None) -> list[Path]:
     """Redraw figures from stored result files; nothing is recomputed.
 
     Parameters
@@ -43,6 +45,9 @@ def redraw(paths, output=None, figure=None, stamp: str | None = None) -> list[Pa
     stamp : str, optional
         Text drawn in a corner of every figure and recorded in the PNG metadata, e.g.
         ``"preview: coarse grid"``.
+    snapshots : int, optional
+        Instead: the cable drawn at this many instants of each time history
+        (:func:`~cablesim.plots.snapshots.plot_snapshots`), as ``<file>-snapshots.png`` or ``output``.
 
     Returns
     -------
@@ -57,10 +62,10 @@ def redraw(paths, output=None, figure=None, stamp: str | None = None) -> list[Pa
         z_c/z_e), or a channel, segment or label list does not fit.
     """
     with stamp_figures(stamp):
-        return _redraw([Path(p) for p in paths], output, figure)
+        return _redraw([Path(p) for p in paths], output, figure, snapshots)
 
 
-def _redraw(paths: list[Path], output, figure) -> list[Path]:
+def _redraw(paths: list[Path], output, figure, snapshots: int | None) -> list[Path]:
     if not paths:
         raise CablesimError("Give at least one result file (.h5) to plot.")
     infos = [inspect_result(p) for p in paths]
@@ -74,6 +79,8 @@ def _redraw(paths: list[Path], output, figure) -> list[Path]:
             "free-vibration files count as one)."
         )
     family = infos[0].family
+    if snapshots is not None:
+        return _snapshots(infos, output, snapshots)
     case = parse_case(infos[0].case_text, source=f"(the case stored in {paths[0]})", default_name=paths[0].stem)
     output = None if output is None else Path(output)
 
@@ -132,3 +139,19 @@ def _standard(info: ResultInfo, output: Path | None) -> list[Path]:
     return plot_history(hist, prefix, case.name, channels=channels)
 
 
+
+
+def _snapshots(infos: list[ResultInfo], output, count: int) -> list[Path]:
+    """The snapshot figure of each time history."""
+    if infos[0].family != "history":
+        raise CablesimError(f"--snapshots draws time histories, but {infos[0].path} is {FAMILY_TEXT[infos[0].family]}.",
+                            field="snapshots")
+    if output is not None and len(infos) > 1:
+        raise CablesimError("-o names one output, but --snapshots was given several files; drop -o "
+                            "(each figure goes beside its file as <file>-snapshots.png).")
+    written = []
+    for info in infos:
+        case = parse_case(info.case_text, source=f"(the case stored in {info.path})", default_name=info.path.stem)
+        png = Path(output) if output is not None else info.path.with_name(info.path.stem + "-snapshots.png")
+        written.append(plot_snapshots(read_history(info.path), case.to_cable(), png, case.name, count))
+    return written

@@ -60,7 +60,7 @@ def _output_step(omega_hi: float, duration: float) -> float:
 
 
 def _make_integrator(scheme: Scheme, prep: _Prepared):
-    w_max = float(prep.static.modes.omega[-1])
+    w_max = prep.static.modes.highest
     if scheme.kind == "dopri5":  # cablesim's default settings of the scheme
         return default_dopri5(prep.eom)
     if scheme.kind == "rk4":
@@ -80,7 +80,7 @@ def fastest_rate(static) -> float:
     ``w (xi + sqrt(xi^2 - 1)) ~ a1 w^2``, which can exceed ``omega_max`` several times. An explicit
     scheme's step must resolve this rate, not only ``omega_max``.
     """
-    return damped_fastest_rate(static.modes.omega, static.a0, static.a1)
+    return damped_fastest_rate(static.modes.omega_with_highest(), static.a0, static.a1)
 
 
 def _reference(kind: str, prep: _Prepared, duration: float):

@@ -79,7 +79,8 @@ def test_options_hold_the_effective_values(files):
 
 
 def test_group_attributes_carry_their_units(files):
-    assert _units(files["static"], "modal") == {"a0": "1/s", "a1": "s", "sole_inextensible_omega": "rad/s"}
+    assert _units(files["static"], "modal") == {"a0": "1/s", "a1": "s", "sole_inextensible_omega": "rad/s",
+                                                "modes_computed": "1", "omega_max": "rad/s"}
     assert _units(files["static"], "static/approximate") == {"omega_c": "J", "omega_e": "J"}
     hist = _units(files["history"], "history")
     assert hist["omega"] == "rad/s" and hist["t_stop"] == "s" and hist["duration"] == "s" and hist["a1"] == "s"

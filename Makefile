@@ -46,7 +46,7 @@ clean:
 #
 # FAST=1 runs the same scenes into runs/paper-fast/ on coarse grids that keep every frequency
 # docs/paper-reproduction.md names (peaks, band points), with histories long enough for the
-# jumps (`make figures FAST=1`: 3.9 minutes of CPU in all; -j2 runs two scenes at a time); each
+# jumps (`make -j2 figures FAST=1`: about 2 minutes on 2 cores once the kernels are compiled); each
 # FAST figure is stamped as a preview (PREVIEW_STAMP= leaves the stamp off).
 # ---------------------------------------------------------------------------------------------
 FIGS := fig2 fig3a fig3b fig4 fig5a fig5b fig6 fig7a fig6-7a fig7b fig7c fig8a fig8b fig8c

@@ -78,10 +78,12 @@ class Layout:
     size: int
 
 
-def layout(nd: int) -> Layout:
-    nn = nd // 2
+@njit(cache=True, inline="always")
+def param_offsets(nd):
+    """Offsets ``(S, EA, m, C, F0, FL, gamma, y0, tol, size)`` of the packed parameter array of
+    ``nd`` DOF (see :func:`pack`): the one statement of its layout, for the kernels and Python."""
     o_S = 1
-    o_EA = o_S + nn + 1  # EA, L, H
+    o_EA = o_S + nd // 2 + 1  # EA, L, H
     o_m = o_EA + 3
     o_C = o_m + nd
     o_F0 = o_C + nd * nd
@@ -89,7 +91,12 @@ def layout(nd: int) -> Layout:
     o_g = o_FL + nd
     o_y0 = o_g + 1
     o_tol = o_y0 + nd
-    return Layout(nd, o_S, o_EA, o_m, o_C, o_F0, o_FL, o_g, o_y0, o_tol, o_tol + 1)
+    return o_S, o_EA, o_m, o_C, o_F0, o_FL, o_g, o_y0, o_tol, o_tol + 1
+
+
+def layout(nd: int) -> Layout:
+    """The offsets of :func:`param_offsets` by name."""
+    return Layout(nd, *(int(o) for o in param_offsets(nd)))
 
 
 def pack(eom, gamma: float = 1.0) -> np.ndarray:
@@ -235,15 +242,7 @@ def _second_order(theta, x, prm, P, dx, J, dp, ipar, nd, o_m, o_C, o_F0, o_FL, o
 def exact_field(theta, x, prm, work, dx, J, dp, ipar):
     """Exact analysis (module docstring)."""
     nd = int(prm[0])
-    nn = nd // 2
-    o_S = 1
-    o_EA = o_S + nn + 1
-    o_m = o_EA + 3
-    o_C = o_m + nd
-    o_F0 = o_C + nd * nd
-    o_FL = o_F0 + nd
-    o_g = o_FL + nd
-    o_y0 = o_g + 1
+    o_S, o_EA, o_m, o_C, o_F0, o_FL, o_g, o_y0, _, _ = param_offsets(nd)
     # P lives in work[nd : 2 nd]
     slack = force_and_stiffness(x, prm, o_y0, o_S, prm[o_EA], prm[o_EA + 1], prm[o_EA + 2], work, nd, J, nd)
     if slack >= 0:
@@ -458,15 +457,7 @@ def approximate_field(theta, x, prm, work, dx, J, dp, ipar):
     """Approximate analysis (module docstring)."""
     nd = int(prm[0])
     nn = nd // 2
-    o_S = 1
-    o_EA = o_S + nn + 1
-    o_m = o_EA + 3
-    o_C = o_m + nd
-    o_F0 = o_C + nd * nd
-    o_FL = o_F0 + nd
-    o_g = o_FL + nd
-    o_y0 = o_g + 1
-    o_tol = o_y0 + nd
+    o_S, o_EA, o_m, o_C, o_F0, o_FL, o_g, o_y0, o_tol, _ = param_offsets(nd)
     S = prm[o_S : o_S + nn + 1]
     EA, L, H = prm[o_EA], prm[o_EA + 1], prm[o_EA + 2]
     tol = prm[o_tol]

@@ -90,16 +90,20 @@ class Integrator(ABC):
         return {k: v for k, v in self.__dict__.items() if not k.startswith("_")}
 
 
-@njit(cache=True)
-def hermite(ta, tb, sa, sb, da, db, t, out):
-    """Cubic Hermite interpolation of a state between two steps (4th-order accurate)."""
+@njit(cache=True, inline="always")
+def hermite_weights(ta, tb, t):
+    """Weights ``(h00, h10 h, h01, h11 h)`` of the cubic Hermite interpolant at ``t`` between
+    ``ta`` and ``tb``: of the value at ``ta``, its derivative, the value at ``tb``, its derivative."""
     h = tb - ta
     th = (t - ta) / h
     th2 = th * th
     th3 = th2 * th
-    h00 = 2.0 * th3 - 3.0 * th2 + 1.0
-    h10 = th3 - 2.0 * th2 + th
-    h01 = -2.0 * th3 + 3.0 * th2
-    h11 = th3 - th2
+    return 2.0 * th3 - 3.0 * th2 + 1.0, (th3 - 2.0 * th2 + th) * h, -2.0 * th3 + 3.0 * th2, (th3 - th2) * h
+
+
+@njit(cache=True)
+def hermite(ta, tb, sa, sb, da, db, t, out):
+    """Cubic Hermite interpolation of a state between two steps (4th-order accurate)."""
+    h00, h10, h01, h11 = hermite_weights(ta, tb, t)
     for i in range(out.size):
-        out[i] = h00 * sa[i] + h10 * h * da[i] + h01 * sb[i] + h11 * h * db[i]
+        out[i] = h00 * sa[i] + h10 * da[i] + h01 * sb[i] + h11 * db[i]

@@ -19,6 +19,7 @@ import numpy as np
 from numba import njit
 
 from .. import kernels as kn
+from .base import hermite_weights
 
 #: Samples of the gaps per step.
 NSAMP = 4
@@ -38,17 +39,10 @@ CHATTER_TEXT = (
 def _config_at(prm, t, ta, tb, sa, sb, y):
     """``y = y0 + z(t)`` from the cubic Hermite interpolant of z (values and velocities)."""
     nd = y.size
-    h = tb - ta
-    th = (t - ta) / h
-    th2 = th * th
-    th3 = th2 * th
-    h00 = 2.0 * th3 - 3.0 * th2 + 1.0
-    h10 = th3 - 2.0 * th2 + th
-    h01 = -2.0 * th3 + 3.0 * th2
-    h11 = th3 - th2
+    h00, h10, h01, h11 = hermite_weights(ta, tb, t)
     y0 = prm[10]
     for i in range(nd):
-        y[i] = y0[i] + h00 * sa[i] + h10 * h * sa[nd + i] + h01 * sb[i] + h11 * h * sb[nd + i]
+        y[i] = y0[i] + h00 * sa[i] + h10 * sa[nd + i] + h01 * sb[i] + h11 * sb[nd + i]
 
 
 @njit(cache=True)

@@ -40,6 +40,7 @@ from cablesim.dynamics.spectra import spectrum_peaks
 from cablesim.io.continuation import read_continuation
 from cablesim.io.hdf5 import read_case_text, read_history
 from cablesim.io.sweeps import read_sweep
+from cablesim.plots.style import decimals_for as decimals  # the plots' rule: a number to its resolution
 
 #: The steady-state tolerance makes amplitudes good to far more digits; the document uses 3.
 AMP_DIGITS = 3
@@ -72,10 +73,6 @@ class Numbers:
     def amp(self, key, a, source, note="3 significant digits", digits=AMP_DIGITS):
         self.add(key, a, significant(a, digits), "m", note, source)
 
-
-def decimals(resolution: float) -> int:
-    """Decimals that print a number to the given resolution (0.02 -> 2, 0.005 -> 3, 0.2 -> 1)."""
-    return max(0, math.ceil(-math.log10(resolution) - 1e-9))
 
 
 def step_decimals(step: float) -> int:

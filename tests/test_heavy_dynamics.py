@@ -27,7 +27,9 @@ def equations():
         "loads: {gravity: 9.81, point: [{node: 8, F: [0.0, 5.0e3], FL: [300.0, 1.0e3]}]}\n"
     )
     banded = build_equations(case, run_static(case, all_models=False), omega=2.0)
-    return banded, dataclasses.replace(banded, C_band=None)
+    dense = dataclasses.replace(banded, K0_band=None, K0_dense=band_to_dense(banded.K0_band))
+    assert dense.C_band is None
+    return banded, dense
 
 
 def test_band_storage_holds_the_dense_damping(equations):
@@ -41,6 +43,37 @@ def test_band_storage_holds_the_dense_damping(equations):
     for C in (banded.C, banded.C_band):
         got = np.array([bd.damping_row(np.ascontiguousarray(C), v, 0, i) for i in range(2 * N)])
         np.testing.assert_allclose(got, banded.C @ v, rtol=1e-12, atol=1e-12 * abs(banded.C @ v).max())
+
+
+def test_band_product_and_internal_force_match_the_dense_products(equations):
+    banded, dense = equations
+    rng = np.random.default_rng(11)
+    v = rng.standard_normal(2 * N)
+    ref = dense.C @ v
+    np.testing.assert_allclose(bd.band_product(banded.C_band, v), ref, rtol=0, atol=1e-13 * abs(ref).max())
+    np.testing.assert_allclose(banded.damping_force(v), ref, rtol=0, atol=1e-13 * abs(ref).max())
+    s = rng.standard_normal(6 * N)
+    P_dense = dense.F0 + dense.FL * np.sin(dense.omega * 0.7) - dense.C @ s[2 * N : 4 * N] - dense.mass * s[4 * N :]
+    np.testing.assert_allclose(banded.internal_force(0.7, s), P_dense, rtol=0, atol=1e-12 * abs(P_dense).max())
+    with pytest.raises(ValueError, match="exactly one"):
+        dataclasses.replace(banded, K0_dense=dense.K0)
+
+
+def test_time_loop_of_the_exact_analysis_builds_no_dense_matrix():
+    """At set-up and in the time loop the exact analysis keeps K0 and C banded: neither the
+    static result's dense tangent stiffness nor the equations' dense K0 or C is ever built."""
+    case = parse_case(
+        "cable: {L: 100.0, H: 0.0, length: 102.5, nodes: 60, EA: 2.0e8, mass_per_length: 10.0}\n"
+        "loads: {gravity: 9.81, point: [{node: 20, FL: [0.0, 1.0e3]}]}\n"
+    )
+    static = run_static(case, all_models=False)
+    eom = build_equations(case, static, omega=2.0)
+    for integ in (make_integrator(case.integrator, eom, 2.0), RK4(dt=1e-5)):
+        assert simulate(eom, integ, 2e-3, 1e-3).completed
+    assert eom.initial_state().shape == (6 * 60,)
+    built = [name for obj, name in ((static.exact, "K"), (eom, "K0"), (eom, "C")) if name in vars(obj)]
+    assert built == []
+    assert eom.params()[13].shape == (4, 120)  # the band stands in for K0 (read by the approximate analysis only)
 
 
 def test_rate_is_the_same_with_banded_and_dense_damping(equations):

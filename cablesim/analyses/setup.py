@@ -10,7 +10,6 @@ from __future__ import annotations
 import numpy as np
 
 from ..case import Case, IntegratorSpec
-from ..dynamics.banded import band_storage
 from ..dynamics.equations import EquationsOfMotion
 from ..dynamics.integrators import INTEGRATORS, DOPRI5, GeneralizedAlpha, Integrator, Newmark, RK4
 from ..errors import CablesimError
@@ -73,33 +72,27 @@ def build_equations(
         i, j = case.damping.modes
         w = static.modes.omega
         a0, a1 = rayleigh_coefficients(w[i - 1], w[j - 1], damping_ratio)
-    C = a0 * np.diag(M) + a1 * static.K0
-    C_band = None
-    if static.K0_band is not None:  # exact analysis: K0 is block-tridiagonal, so is C
-        lower = a1 * static.K0_band
-        lower[0] += a0 * M
-        C_band = band_storage(lower)
+    banded = static.K0_band is not None  # exact analysis: K0 is block-tridiagonal, so is C
     inext = static.inextensible
     x0 = inext.x
     return EquationsOfMotion(
         cable=cable,
         analysis=static.analysis,
         mass=M,
-        C=C,
         F0=static.P.copy(),
         FL=case.FL * load_scale,
         omega=float(omega),
         y0=static.y0.copy(),
         x0=x0.copy(),
         u0=static.y0 - x0,
-        K0=static.K0.copy(),
         T0=static.T0.copy(),
         F1=inext.segments.F[0].copy(),
         a0=float(a0),
         a1=float(a1),
         modal_omega=static.modes.omega_with_highest().copy(),  # with the highest: explicit steps need it
         slack=slack or case.slack,
-        C_band=C_band,
+        K0_band=static.K0_band.copy() if banded else None,
+        K0_dense=None if banded else static.K0.copy(),
     )
 
 

@@ -52,6 +52,19 @@ def band_storage(lower: np.ndarray) -> np.ndarray:
     return C
 
 
+def band_product(A: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``A x`` for ``A`` in banded storage (as :func:`damping_row`), O(n), vectorised."""
+    nd = x.size
+    y = np.zeros(nd)
+    for r in range(BAND_ROWS):
+        d = r - BAND_HALF  # row index minus column index of this diagonal
+        if d >= 0:
+            y[d:] += A[r, : nd - d] * x[: nd - d]
+        else:
+            y[: nd + d] += A[r, -d:] * x[-d:]
+    return y
+
+
 @njit(cache=True)
 def band_row(A, x, i):
     """Row ``i`` of the banded ``A`` (storage as :func:`damping_row`) times ``x``."""

@@ -13,8 +13,9 @@ equilibrium (so tolerances act on the displacement, not on absolute coordinates)
 Numba functions take the model as a tuple ``prm`` built by :meth:`EquationsOfMotion.params`:
 ``(model, S, EA, L, H, m, C, F0, FL, w, y0, x0, u0, K0, tol, slack)`` with ``slack`` 1 when the exact
 analysis continues through slack segments (:data:`CONTINUE`) and 0 when it stops there; ``C`` is
-dense or, for heavy cables, banded (:func:`cablesim.dynamics.banded.damping_row` multiplies by
-either).
+banded in the exact analysis (:func:`cablesim.dynamics.banded.damping_row` multiplies by a dense
+or a banded one) and ``K0`` is read only by the approximate analysis (the exact analysis passes
+its band in that place).
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ from numba import njit
 
 from ..cable import Cable
 from ..modal import modal_analysis
-from ..statics import resisting_force
+from ..statics import band_to_dense, resisting_force
 from . import banded as bd
 from . import kernels as kn
 
@@ -227,8 +228,6 @@ class EquationsOfMotion:
         ``"exact"`` or ``"approximate"``.
     mass : ndarray, shape (2n,)
         Diagonal of ``M``, kg.
-    C : ndarray, shape (2n, 2n)
-        Rayleigh damping ``a0 M + a1 K0``, N s/m (constant in time).
     F0, FL : ndarray, shape (2n,)
         Sustained and peak harmonic loads, N.
     omega : float
@@ -237,14 +236,12 @@ class EquationsOfMotion:
         Static equilibrium under F0 of the chosen analysis, m.
     x0, u0 : ndarray
         Natural state ``x(F0)`` and elastic displacement ``y0 - x0`` there, m.
-    K0 : ndarray
-        Tangent stiffness at the equilibrium, N/m.
     T0 : ndarray
         Tensions at the equilibrium, N.
     F1 : ndarray, shape (2,)
         Force in segment 1 of the inextensible equilibrium (warm start of inner solves), N.
     a0, a1 : float
-        The Rayleigh coefficients behind ``C`` (1/s, s).
+        The Rayleigh coefficients of the damping ``C = a0 M + a1 K0`` (1/s, s).
     modal_omega : ndarray, optional
         Linear modal frequencies about the equilibrium, rad/s, ascending (computed from ``K0``
         and ``mass`` when not given).
@@ -252,29 +249,68 @@ class EquationsOfMotion:
         ``"continue"`` (default): in the exact analysis segments are tension-only and the
         integrators locate every slack onset and re-tightening; ``"stop"``: a run stops where a
         segment first goes slack. The approximate analysis always stops.
-    C_band : ndarray, shape (7, 2n), optional
-        ``C`` in banded storage (:func:`cablesim.dynamics.banded.band_storage`); when given the
-        compiled kernels multiply by it in O(n) instead of by the dense ``C``.
+    K0_band : ndarray, shape (4, 2n), optional
+        Tangent stiffness at the equilibrium in symmetric lower band form
+        (``K0_band[d, j] = K0[j + d, j]``), N/m: the exact analysis, whose ``K0`` is
+        block-tridiagonal. ``C`` is then kept banded too and the compiled kernels multiply by it
+        in O(n); dense ``K0`` and ``C`` are built only when asked for (orbits, small checks).
+    K0_dense : ndarray, shape (2n, 2n), optional
+        The full tangent stiffness, N/m: the approximate analysis, whose ``K = N(P)^-1`` is
+        full. Exactly one of ``K0_band`` and ``K0_dense`` is given.
     """
 
     cable: Cable
     analysis: str
     mass: np.ndarray
-    C: np.ndarray
     F0: np.ndarray
     FL: np.ndarray
     omega: float
     y0: np.ndarray
     x0: np.ndarray
     u0: np.ndarray
-    K0: np.ndarray
     T0: np.ndarray
     F1: np.ndarray
     a0: float = 0.0
     a1: float = 0.0
     modal_omega: np.ndarray | None = None
     slack: str = "continue"
-    C_band: np.ndarray | None = None
+    K0_band: np.ndarray | None = None
+    K0_dense: np.ndarray | None = None
+
+    def __post_init__(self):
+        if (self.K0_band is None) == (self.K0_dense is None):
+            raise ValueError("EquationsOfMotion takes exactly one of K0_band and K0_dense")
+
+    @cached_property
+    def K0(self) -> np.ndarray:
+        """Tangent stiffness at the equilibrium, N/m, full ``(2n, 2n)`` (built from the band on
+        first use for the exact analysis: O(n^2) memory, so not in the time loop)."""
+        return self.K0_dense if self.K0_band is None else band_to_dense(self.K0_band)
+
+    @cached_property
+    def C(self) -> np.ndarray:
+        """Rayleigh damping ``C = a0 M + a1 K0``, N s/m, full ``(2n, 2n)`` (see :attr:`K0`)."""
+        return self.a0 * np.diag(self.mass) + self.a1 * self.K0
+
+    @cached_property
+    def C_band(self) -> np.ndarray | None:
+        """``C`` in banded storage (:func:`cablesim.dynamics.banded.band_storage`) when ``K0`` is
+        banded (exact analysis), else None; the compiled kernels multiply by it in O(n)."""
+        if self.K0_band is None:
+            return None
+        lower = self.a1 * self.K0_band
+        lower[0] += self.a0 * self.mass
+        return bd.band_storage(lower)
+
+    def damping_force(self, v: np.ndarray) -> np.ndarray:
+        """``C y'``, N: banded O(n) when ``K0`` is banded."""
+        return self.C @ v if self.K0_band is None else bd.band_product(self.C_band, v)
+
+    def internal_force(self, t: float, s: np.ndarray) -> np.ndarray:
+        """``P = F(t) - C y' - M y''`` (eq. 15) at the state ``s = (z, y', y'')``, N."""
+        nd = self.n_dof
+        F = self.F0 + self.FL * np.sin(self.omega * t)
+        return F - self.damping_force(s[nd : 2 * nd]) - self.mass * s[2 * nd :]
 
     @cached_property
     def frequencies(self) -> np.ndarray:
@@ -322,7 +358,9 @@ class EquationsOfMotion:
             np.ascontiguousarray(self.y0),
             np.ascontiguousarray(self.x0),
             np.ascontiguousarray(self.u0),
-            np.ascontiguousarray(self.K0),
+            # K0 serves only the approximate analysis' drift (observe); the exact kernels never
+            # read it, so its band stands in (same numba type, no O(n^2) matrix)
+            np.ascontiguousarray(self.K0_dense if self.K0_band is None else self.K0_band),
             float(tol),
             CONTINUE if self.continues_slack else STOP,
         )
@@ -348,5 +386,5 @@ class EquationsOfMotion:
             if np.any(z0 != 0):
                 raise ValueError("the approximate analysis starts from its equilibrium (z0 = 0)")
             P = self.F0
-        a0 = (F - P - self.C @ v0) / self.mass
+        a0 = (F - P - self.damping_force(v0)) / self.mass
         return np.concatenate([z0, v0, a0])

@@ -108,8 +108,7 @@ def failure_text(code: int, t: float, eom: EquationsOfMotion, integrator: Integr
 def _slack_in_approximate(eom: EquationsOfMotion, t: float, s) -> int | None:
     """The segment (1-based) of the inextensible cable that is slack or nearly so under the
     internal forces of eq. 15 at the last good state, or None."""
-    nd = eom.n_dof
-    P = eom.F0 + eom.FL * np.sin(eom.omega * t) - eom.C @ s[nd : 2 * nd] - eom.mass * s[2 * nd :]
+    P = eom.internal_force(t, s)
     try:
         inext = inextensible_equilibrium(eom.cable, P)
     except SlackSegmentError as exc:
@@ -126,7 +125,7 @@ def _inner_diagnosis(eom: EquationsOfMotion, t: float, s) -> str:
     if eom.exact:
         P = resisting_force(eom.cable, eom.y0 + s[:nd])
     else:
-        P = eom.F0 + eom.FL * np.sin(eom.omega * t) - eom.C @ s[nd : 2 * nd] - eom.mass * s[2 * nd :]
+        P = eom.internal_force(t, s)
     try:
         inext = inextensible_equilibrium(eom.cable, P)
     except SlackSegmentError as exc:

@@ -254,7 +254,7 @@ def _stop_state_tensions(prep: _Prepared, integ, duration: float, hist) -> dict:
         info["T_exact"] = segment_geometry(cable, y)[2]
         P = resisting_force(cable, y)
     else:
-        P = eom.F0 + eom.FL * np.sin(eom.omega * t) - eom.C @ s[nd : 2 * nd] - eom.mass * s[2 * nd :]
+        P = eom.internal_force(t, s)
     try:
         info["T_inext"] = inextensible_equilibrium(cable, P).T
     except CablesimError as exc:  # the robust solver finds it slack (or cannot solve): genuine

@@ -298,7 +298,7 @@ class GeneralizedAlpha(Integrator):
             P, Kv = np.empty(nd), np.empty(nd)  # no dense K: O(n) for heavy cables
             kn.exact_force_and_Kv(eom.y0 + st.s[:nd], np.zeros(nd), c.S, c.EA, c.L, c.H, P, Kv, st.wk[0][4])
             return P
-        return eom.F0 + eom.FL * np.sin(eom.omega * st.t) - eom.C @ st.s[nd : 2 * nd] - eom.mass * st.s[2 * nd :]
+        return eom.internal_force(st.t, st.s)
 
     def advance(self, prm, state, t_end, t_out, out):
         ex = state.extra

@@ -30,6 +30,7 @@ from ..cable import Cable
 from ..modal import modal_analysis
 from ..statics import band_to_dense, resisting_force
 from . import banded as bd
+from . import flexibility as fx
 from . import kernels as kn
 
 EXACT = 0
@@ -53,35 +54,31 @@ def workspace(n: int):
 
 
 def approximate_workspace(n: int):
-    """Scratch arrays of the approximate analysis' inner solves (Q, x, u, T, N, LU, ...)."""
+    """Scratch arrays of the approximate analysis' inner solves: Q (n+1, 2), x, u, T and the
+    stiffness factors of :func:`cablesim.dynamics.flexibility.factor_workspace` (O(n) memory)."""
     nd = 2 * n
-    return (
-        np.empty((n + 1, 2)),
-        np.empty(nd),
-        np.empty(nd),
-        np.empty(n + 1),
-        np.empty((nd, nd)),
-        np.empty((nd, nd)),
-        kn.flexibility_workspace(n),
-    )
+    return (np.empty((n + 1, 2)), np.empty(nd), np.empty(nd), np.empty(n + 1), *fx.factor_workspace(n))
 
 
 @njit(cache=True)
 def approximate_stiffness(prm, P, warm, awk):
-    """Solve the inextensible closure at loads P (warm start ``warm``) and build ``N = D + f``.
+    """Solve the inextensible closure at loads P (warm start ``warm``) and factor ``K = N^-1``.
 
-    Fills ``awk`` (:func:`approximate_workspace`): Q, x, u, T and N; returns ``kn.OK`` or
+    Fills ``awk`` (:func:`approximate_workspace`): Q, x, u, T and the factors of
+    :func:`cablesim.dynamics.flexibility.segment_factors` (all O(n)); returns ``kn.OK`` or
     ``kn.INNER_SOLVE``.
     """
     S, EA, L, H, tol = prm[1], prm[2], prm[3], prm[4], prm[14]
-    Q, x, u, T, N = awk[0], awk[1], awk[2], awk[3], awk[4]
+    Q, x, u, T = awk[0], awk[1], awk[2], awk[3]
     for i in range(P.size):
         if not abs(P[i]) < 1e100:  # a blown-up state (or NaN): the closure's products would underflow
             return kn.INNER_SOLVE
     kn.cumulative_loads(P, Q)
     if kn.closure_solve(S, Q, 0.0, L, H, warm, tol, 60) < 0:
         return kn.INNER_SOLVE
-    kn.approximate_flexibility(S, EA, Q, warm, x, u, T, N, awk[6])
+    if not fx.segment_factors(S, EA, Q, warm, T, awk[4], awk[5]):
+        return kn.INNER_SOLVE
+    fx.natural_and_elastic(S, EA, awk[4], T, x, u)
     return kn.OK
 
 
@@ -155,8 +152,7 @@ def _approximate_Kv(prm, t, s, warm, wk, awk):
     st = approximate_stiffness(prm, wk[1], warm, awk)
     if st != kn.OK:
         return st
-    if not kn.solve_small(awk[4], wk[3], wk[2], awk[5]):
-        return kn.INNER_SOLVE
+    fx.stiffness_product(awk[4], awk[5], wk[3], wk[2], awk[6])
     return kn.OK
 
 

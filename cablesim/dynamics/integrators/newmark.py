@@ -25,6 +25,7 @@ import numpy as np
 from numba import njit
 
 from .. import banded as bd
+from .. import flexibility as fx
 from .. import kernels as kn
 from ..equations import approximate_stiffness
 from .base import Integrator, IntegratorState, hermite
@@ -54,22 +55,23 @@ def _internal(prm, z, P_n, z_n, warm, P1, K, first, wk, awk, check_slack):
     scale = 0.0
     for i in range(nd):
         scale = max(scale, abs(P_n[i]))
+    dz, Kdz = wk[1], wk[2]
+    for i in range(nd):
+        dz[i] = z[i] - z_n[i]
     for _ in range(4):
         st = approximate_stiffness(prm, Pm, warm, awk)
         if st != kn.OK:
             return st
-        K[:, :] = np.linalg.inv(awk[4])
+        fx.stiffness_product(awk[4], awk[5], dz, Kdz, awk[6])  # O(n): K = N^-1 is never inverted
         change = 0.0
         for i in range(nd):
-            acc = P_n[i]
-            for j in range(nd):
-                acc += K[i, j] * (z[j] - z_n[j])
-            P1[i] = acc
-            new = 0.5 * (P_n[i] + acc)
+            P1[i] = P_n[i] + Kdz[i]
+            new = 0.5 * (P_n[i] + P1[i])
             change = max(change, abs(new - Pm[i]))
             Pm[i] = new
         if change <= 1e-13 * scale:
             break
+    fx.stiffness_dense(awk[4], awk[5], K)  # the Newton matrix's K, at the last midpoint's loads
     return kn.OK
 
 

@@ -9,8 +9,10 @@ import pytest
 from cablesim.analyses.setup import build_equations
 from cablesim.analyses.static import run_static
 from cablesim.case import parse_case
+from cablesim.dynamics import banded as bd
 from cablesim.dynamics import flexibility as fx
 from cablesim.dynamics import kernels as kn
+from cablesim.dynamics.integrators.newmark import solve_band_low_rank
 
 CASES = {
     "level-heavy": "cable: {L: 100.0, H: 0.0, length: 102.5, nodes: %d, EA: 2.0e8, mass_per_length: 10.0}\n"
@@ -33,6 +35,16 @@ def solved(text: str, n: int, seed: int):
     return np.asarray(c.S, float), float(c.EA), Q, F
 
 
+def general_band_to_dense(A: np.ndarray) -> np.ndarray:
+    """The full matrix of LAPACK's general band storage ``A[3 + i - j, j] = M[i, j]``."""
+    nd = A.shape[1]
+    M = np.zeros((nd, nd))
+    for i in range(nd):
+        for j in range(max(0, i - 3), min(nd, i + 4)):
+            M[i, j] = A[3 + i - j, j]
+    return M
+
+
 @pytest.mark.parametrize("name", sorted(CASES))
 @pytest.mark.parametrize("n", [1, 2, 7, 30])
 def test_product_is_the_inverse_of_the_full_flexibility(name, n):
@@ -53,8 +65,11 @@ def test_product_is_the_inverse_of_the_full_flexibility(name, n):
         # N is ill-conditioned (cond ~ EA / T), so compare within its conditioning
         np.testing.assert_allclose(out, K_ref @ v, rtol=0, atol=1e-7 * scale * np.abs(v).max())
         np.testing.assert_allclose(N @ out, v, rtol=0, atol=1e-9 * np.abs(v).max())
-    K = np.empty((2 * n, 2 * n))
-    fx.stiffness_dense(fac, gi, K)
+    Kb, U = np.empty((bd.BAND_ROWS, 2 * n)), np.empty((2 * n, 2))
+    fx.stiffness_band(fac, gi, Kb, U)
+    Gi = np.array([[gi[0], gi[1]], [gi[1], gi[2]]])
+    K = general_band_to_dense(Kb) - U @ Gi @ U.T
+    np.testing.assert_allclose(K @ v, out, rtol=0, atol=1e-10 * np.abs(out).max())
     np.testing.assert_allclose(K, K.T, rtol=0, atol=1e-12 * scale)
     np.testing.assert_allclose(N @ K, np.eye(2 * n), rtol=0, atol=1e-9)
     assert np.linalg.eigvalsh(K).min() > 0.0  # a taut cable's stiffness is positive definite
@@ -62,3 +77,46 @@ def test_product_is_the_inverse_of_the_full_flexibility(name, n):
     fx.natural_and_elastic(S, EA, fac, T2, x2, u2)
     np.testing.assert_allclose(x2, x, rtol=0, atol=1e-12 * S.sum())
     np.testing.assert_allclose(u2, u, rtol=0, atol=1e-12 * np.abs(u).max())
+
+
+def test_damping_of_the_approximate_analysis_is_banded_minus_rank_2():
+    """C = a0 M + a1 K0 with K0 the static tangent (dense N(F0)^-1) equals the banded part minus
+    U G U^T that the kernels use, and every damping product agrees."""
+    case = parse_case(CASES["inclined-soft"] % 12 + "analysis: approximate\n")
+    eom = build_equations(case, run_static(case, all_models=False))
+    Cr = eom.damping_low_rank
+    assert eom.C_band.shape == (bd.BAND_ROWS, 24) and Cr.shape == (26, 2)
+    C_ref = eom.a0 * np.diag(eom.mass) + eom.a1 * np.asarray(eom.K0_dense)
+    C_kernel = general_band_to_dense(eom.C_band) - Cr[:24] @ Cr[24:] @ Cr[:24].T
+    np.testing.assert_allclose(C_kernel, C_ref, rtol=0, atol=1e-9 * np.abs(C_ref).max())
+    v = np.random.default_rng(4).standard_normal(24)
+    np.testing.assert_allclose(eom.damping_force(v), C_ref @ v, rtol=0, atol=1e-9 * np.abs(C_ref @ v).max())
+    out = np.empty(24)
+    bd.damping_product(eom.C_band, Cr, np.concatenate([np.zeros(5), v]), 5, out)
+    np.testing.assert_allclose(out, C_ref @ v, rtol=0, atol=1e-9 * np.abs(C_ref @ v).max())
+
+
+def test_banded_lu_with_several_right_hand_sides_and_woodbury():
+    """factor_band + solve_factored solve a banded SPD system; the rank-k correction of the
+    approximate analysis' Newton matrices (Woodbury) gives the dense solution."""
+    rng = np.random.default_rng(9)
+    nd = 30
+    A = np.zeros((nd, nd))
+    for i in range(nd):
+        for j in range(max(0, i - 3), min(nd, i + 4)):
+            A[i, j] = A[j, i] = rng.standard_normal()
+    A += 12.0 * np.eye(nd)
+    band = np.zeros((bd.BAND_ROWS, nd))
+    for i in range(nd):
+        for j in range(max(0, i - 3), min(nd, i + 4)):
+            band[3 + i - j, j] = A[i, j]
+    LU, x, b = np.empty_like(band), np.empty(nd), rng.standard_normal(nd)
+    assert bd.factor_band(band, LU)
+    bd.solve_factored(LU, b, x)
+    np.testing.assert_allclose(x, np.linalg.solve(A, b), rtol=1e-12, atol=1e-14)
+    V = rng.standard_normal((4, nd))
+    D = np.diag([0.3, 0.2, 0.0, 0.0])
+    D[2:, 2:] = [[0.4, 0.1], [0.1, 0.25]]
+    out, Z = np.empty(nd), np.empty((4, nd))
+    assert solve_band_low_rank(band, V, D, b, out, LU, Z, (np.empty((4, 4)), np.empty((4, 4))))
+    np.testing.assert_allclose(out, np.linalg.solve(A - V.T @ D @ V, b), rtol=1e-10, atol=1e-12)

@@ -76,30 +76,71 @@ def band_row(A, x, i):
 
 
 @njit(cache=True)
-def solve_band(A, b, out, LU):
-    """Solve ``A out = b`` for a banded ``A`` (bandwidth BAND_HALF, storage as
-    :func:`damping_row`) by Gaussian elimination without pivoting, O(n) (scratch ``LU``).
+def factor_band(A, LU):
+    """LU factors of a banded ``A`` (storage as :func:`damping_row`) into ``LU`` by Gaussian
+    elimination without pivoting, O(n): the multipliers below the diagonal, U on and above.
 
     For the symmetric positive definite Newton matrices of the implicit schemes
     (``c_m M + c_c C + K`` of a taut cable). Returns False on a zero or non-finite pivot.
     """
-    nd = b.size
+    nd = A.shape[1]
     hb = BAND_HALF
     LU[:, :] = A
-    out[:] = b
     for k in range(nd):
         piv = LU[hb, k]
         if piv == 0.0 or not np.isfinite(piv):
             return False
         for i in range(k + 1, min(nd, k + hb + 1)):
             f = LU[hb + i - k, k] / piv
+            LU[hb + i - k, k] = f
             if f != 0.0:
                 for j in range(k + 1, min(nd, k + hb + 1)):
                     LU[hb + i - j, j] -= f * LU[hb + k - j, j]
-                out[i] -= f * out[k]
+    return True
+
+
+@njit(cache=True)
+def solve_factored(LU, b, out):
+    """Solve ``A out = b`` with the factors of :func:`factor_band`, O(n)."""
+    nd = b.size
+    hb = BAND_HALF
+    out[:] = b
+    for k in range(nd):
+        for i in range(k + 1, min(nd, k + hb + 1)):
+            out[i] -= LU[hb + i - k, k] * out[k]
     for i in range(nd - 1, -1, -1):
         acc = out[i]
         for j in range(i + 1, min(nd, i + hb + 1)):
             acc -= LU[hb + i - j, j] * out[j]
         out[i] = acc / LU[hb, i]
+
+
+@njit(cache=True)
+def solve_band(A, b, out, LU):
+    """Solve ``A out = b`` for a banded ``A`` (:func:`factor_band`, then :func:`solve_factored`);
+    False on a zero or non-finite pivot."""
+    if not factor_band(A, LU):
+        return False
+    solve_factored(LU, b, out)
     return True
+
+
+@njit(cache=True)
+def damping_product(C, Cr, x, off, out):
+    """``out = (C - U G U^T) x[off:off + nd]``: ``C`` dense or banded (:func:`damping_row`) and
+    ``Cr = [U; G]`` (nd + r, r) its low-rank part (r = 0, or 2 for the approximate analysis,
+    whose ``K0`` is banded minus rank 2); O(n) when ``C`` is banded."""
+    nd = out.size
+    r = Cr.shape[1]
+    for i in range(nd):
+        out[i] = damping_row(C, x, off, i)
+    w = np.zeros(r)
+    for c in range(r):
+        for j in range(nd):
+            w[c] += Cr[j, c] * x[off + j]
+    for c in range(r):
+        g = 0.0
+        for d in range(r):
+            g += Cr[nd + c, d] * w[d]
+        for i in range(nd):
+            out[i] -= Cr[i, c] * g

@@ -11,11 +11,11 @@ The state integrated is ``s = (z, y', y'')`` with ``z = y - y(0)`` measured from
 equilibrium (so tolerances act on the displacement, not on absolute coordinates).
 
 Numba functions take the model as a tuple ``prm`` built by :meth:`EquationsOfMotion.params`:
-``(model, S, EA, L, H, m, C, F0, FL, w, y0, x0, u0, K0, tol, slack)`` with ``slack`` 1 when the exact
-analysis continues through slack segments (:data:`CONTINUE`) and 0 when it stops there; ``C`` is
-banded in the exact analysis (:func:`cablesim.dynamics.banded.damping_row` multiplies by a dense
-or a banded one) and ``K0`` is read only by the approximate analysis (the exact analysis passes
-its band in that place).
+``(model, S, EA, L, H, m, C, F0, FL, w, y0, x0, u0, Cr, tol, slack)`` with ``slack`` 1 when the exact
+analysis continues through slack segments (:data:`CONTINUE`) and 0 when it stops there. The
+damping is ``C - U G U^T`` (:func:`cablesim.dynamics.banded.damping_product`): ``C`` banded
+(or dense, for checks) and ``Cr = [U; G]`` a low-rank part, empty in the exact analysis and of
+rank 2 in the approximate one, so that every product costs O(n).
 """
 
 from __future__ import annotations
@@ -47,10 +47,11 @@ def load(prm, t):
 
 
 def workspace(n: int):
-    """Scratch arrays for :func:`rate` (no allocation inside the time loop): y, P, Kv, v and the
-    segment modes ``taut`` (1: taut, 0: slack; all taut to start, see :func:`segment_modes`)."""
+    """Scratch arrays for :func:`rate` (no allocation inside the time loop): y, P, Kv, v, the
+    segment modes ``taut`` (1: taut, 0: slack; all taut to start, see :func:`segment_modes`) and
+    a damping product ``C x``."""
     nd = 2 * n
-    return (np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd), np.ones(n + 1))
+    return (np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd), np.ones(n + 1), np.empty(nd))
 
 
 def approximate_workspace(n: int):
@@ -87,8 +88,9 @@ def resisting_from_eq15(prm, t, v, a, P):
     """``P = F(t) - C y' - M y''`` (eq. 15) into P."""
     m, C, F0, FL, w = prm[5], prm[6], prm[7], prm[8], prm[9]
     sw = np.sin(w * t)
+    bd.damping_product(C, prm[13], v, 0, P)
     for i in range(m.size):
-        P[i] = F0[i] + FL[i] * sw - m[i] * a[i] - bd.damping_row(C, v, 0, i)
+        P[i] = F0[i] + FL[i] * sw - m[i] * a[i] - P[i]
 
 
 @njit(cache=True)
@@ -119,8 +121,10 @@ def rate(prm, t, s, warm, ds, wk, awk):
         if st != kn.OK:
             return st
     wc = w * np.cos(w * t)
+    Ca = wk[5]
+    bd.damping_product(C, prm[13], s, 2 * nd, Ca)
     for i in range(nd):
-        acc = (FL[i] * wc - Kv[i] - bd.damping_row(C, s, 2 * nd, i)) / m[i]
+        acc = (FL[i] * wc - Kv[i] - Ca[i]) / m[i]
         if not np.isfinite(acc):
             return kn.NONFINITE
         ds[2 * nd + i] = acc
@@ -140,8 +144,9 @@ def consistent_acceleration(prm, t, s, wk):
         v[i] = s[nd + i]
     kn.exact_force_and_Kv(y, v, S, EA, L, H, P, Kv, wk[4])
     sw = np.sin(w * t)
+    bd.damping_product(C, prm[13], v, 0, wk[5])
     for i in range(nd):
-        s[2 * nd + i] = (F0[i] + FL[i] * sw - P[i] - bd.damping_row(C, v, 0, i)) / m[i]
+        s[2 * nd + i] = (F0[i] + FL[i] * sw - P[i] - wk[5][i]) / m[i]
 
 
 @njit(cache=True)
@@ -194,9 +199,9 @@ def observe(prm, t, s, warm, zc, ze, T, segment_state, awk, split):
         else:
             zc[:] = x - prm[11]
             ze[:] = z - zc
-        r = m * a + P - F
-        for i in range(nd):
-            r[i] += bd.damping_row(C, v, 0, i)
+        Cv = np.empty(nd)
+        bd.damping_product(C, prm[13], v, 0, Cv)
+        r = m * a + P - F + Cv
         return np.sqrt(np.sum(r * r)) / f0norm
     P = np.empty(nd)
     resisting_from_eq15(prm, t, v, a, P)
@@ -209,7 +214,11 @@ def observe(prm, t, s, warm, zc, ze, T, segment_state, awk, split):
     T[:] = awk[3]
     zc[:] = x - prm[11]
     ze[:] = u - prm[12]
-    d = prm[13] @ (z - zc - ze)
+    mismatch = z - zc - ze
+    if approximate_stiffness(prm, prm[7], warm.copy(), awk) != kn.OK:  # K0 = K(F0), factored
+        return np.nan
+    d = np.empty(nd)
+    fx.stiffness_product(awk[4], awk[5], mismatch, d, awk[6])
     return np.sqrt(np.sum(d * d)) / f0norm
 
 
@@ -290,17 +299,56 @@ class EquationsOfMotion:
 
     @cached_property
     def C_band(self) -> np.ndarray | None:
-        """``C`` in banded storage (:func:`cablesim.dynamics.banded.band_storage`) when ``K0`` is
-        banded (exact analysis), else None; the compiled kernels multiply by it in O(n)."""
-        if self.K0_band is None:
+        """``C`` in banded storage (:func:`cablesim.dynamics.banded.band_storage`), O(n): the whole
+        of it in the exact analysis, its banded part ``C + U G U^T`` in the approximate one (see
+        :attr:`damping_low_rank`); None when only a dense ``K0`` is given for the exact analysis.
+        The compiled kernels multiply by it in O(n)."""
+        if self.K0_band is not None:
+            lower = self.a1 * self.K0_band
+            lower[0] += self.a0 * self.mass
+            return bd.band_storage(lower)
+        if self.exact:
             return None
-        lower = self.a1 * self.K0_band
-        lower[0] += self.a0 * self.mass
-        return bd.band_storage(lower)
+        Cb = self.a1 * self._approximate_K0[0]
+        Cb[bd.BAND_HALF] += self.a0 * self.mass
+        return Cb
+
+    @cached_property
+    def damping_low_rank(self) -> np.ndarray:
+        """``Cr = [U; G]`` (2n + r, r) with ``C = C_band - U G U^T``: r = 0, except in the
+        approximate analysis, whose ``K0 = B0 - U0 Gamma0^-1 U0^T`` (block-tridiagonal minus
+        rank 2, see :mod:`cablesim.dynamics.flexibility`) gives ``U = U0``, ``G = a1 Gamma0^-1``
+        (not always definite: for soft cables the segment flexibilities of the approximate
+        analysis need not be)."""
+        if self.exact:
+            return np.zeros((self.n_dof, 0))
+        U0, Gi0 = self._approximate_K0[1:]
+        return np.ascontiguousarray(np.vstack([U0, self.a1 * Gi0]))
+
+    @cached_property
+    def _approximate_K0(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(B0, U0, Gamma0^-1)`` of the approximate analysis' ``K0 = K(F0)`` from the segment
+        factors at the inextensible equilibrium under F0 (band storage (7, 2n), (2n, 2), (2, 2))."""
+        c = self.cable
+        n = c.n_nodes
+        Q, F, T = np.empty((n + 1, 2)), np.array(self.F1, dtype=float), np.empty(n + 1)
+        kn.cumulative_loads(self.F0, Q)
+        S = np.ascontiguousarray(c.S, dtype=float)
+        kn.closure_solve(S, Q, 0.0, float(c.L), float(c.H), F, 1e-13 * max(c.total_length, c.chord_length), 60)
+        fac, gi, _ = fx.factor_workspace(n)
+        if not fx.segment_factors(S, float(c.EA), Q, F, T, fac, gi):
+            raise ValueError("the approximate analysis' stiffness at the equilibrium is singular")
+        B0, U0 = np.empty((bd.BAND_ROWS, self.n_dof)), np.empty((self.n_dof, 2))
+        fx.stiffness_band(fac, gi, B0, U0)
+        return B0, U0, np.array([[gi[0], gi[1]], [gi[1], gi[2]]])
 
     def damping_force(self, v: np.ndarray) -> np.ndarray:
-        """``C y'``, N: banded O(n) when ``K0`` is banded."""
-        return self.C @ v if self.K0_band is None else bd.band_product(self.C_band, v)
+        """``C y'``, N: O(n) when ``C`` is banded (minus a rank-2 part in the approximate analysis)."""
+        if self.C_band is None:
+            return self.C @ v
+        nd, Cr = self.n_dof, self.damping_low_rank
+        U, G = Cr[:nd], Cr[nd:]
+        return bd.band_product(self.C_band, v) - U @ (G @ (U.T @ v))
 
     def internal_force(self, t: float, s: np.ndarray) -> np.ndarray:
         """``P = F(t) - C y' - M y''`` (eq. 15) at the state ``s = (z, y', y'')``, N."""
@@ -354,9 +402,7 @@ class EquationsOfMotion:
             np.ascontiguousarray(self.y0),
             np.ascontiguousarray(self.x0),
             np.ascontiguousarray(self.u0),
-            # K0 serves only the approximate analysis' drift (observe); the exact kernels never
-            # read it, so its band stands in (same numba type, no O(n^2) matrix)
-            np.ascontiguousarray(self.K0_dense if self.K0_band is None else self.K0_band),
+            self.damping_low_rank,
             float(tol),
             CONTINUE if self.continues_slack else STOP,
         )

@@ -129,40 +129,39 @@ def stiffness_product(fac, gi, v, out, Fd):
 
 
 @njit(cache=True)
-def stiffness_dense(fac, gi, K):
-    """The full ``K`` (2n, 2n) from :func:`segment_factors`, O(n^2) (for dense Newton matrices)."""
+def stiffness_band(fac, gi, Kb, U):
+    """``K = B - U Gamma^-1 U^T`` from :func:`segment_factors`, O(n): the block-tridiagonal
+    ``B = Delta^T M^-1 Delta`` into ``Kb`` in the general band storage of
+    :mod:`cablesim.dynamics.banded` (shape (7, 2n)), and ``U = Delta^T M^-1 G`` into ``U`` (2n, 2).
+    ``Gamma^-1`` is ``gi`` (for Newton matrices: banded solves plus a rank-2 correction)."""
     n1 = fac.shape[0]
-    nd = K.shape[0]
-    K[:, :] = 0.0
-    U = np.zeros((nd, 2))
+    nn = n1 - 1
+    hb = Kb.shape[0] // 2
+    Kb[:, :] = 0.0
+    U[:, :] = 0.0
     for k in range(n1):
         t0, t1, e0, e1, g = fac[k, 0], fac[k, 1], fac[k, 2], fac[k, 3], fac[k, 4]
         ltt, lte, lee = fac[k, 5], fac[k, 6], fac[k, 7]
-        m00 = ltt * t0 * t0 + lee * e0 * e0 + 2.0 * lte * t0 * e0  # M_k^-1 in x, y
-        m01 = ltt * t0 * t1 + lee * e0 * e1 + lte * (t0 * e1 + e0 * t1)
-        m11 = ltt * t1 * t1 + lee * e1 * e1 + 2.0 * lte * t1 * e1
+        mk = ((ltt * t0 * t0 + lee * e0 * e0 + 2.0 * lte * t0 * e0,  # M_k^-1 in x, y
+               ltt * t0 * t1 + lee * e0 * e1 + lte * (t0 * e1 + e0 * t1)),
+              (ltt * t0 * t1 + lee * e0 * e1 + lte * (t0 * e1 + e0 * t1),
+               ltt * t1 * t1 + lee * e1 * e1 + 2.0 * lte * t1 * e1))
         q0 = g * (ltt * t0 + lte * e0)  # M_k^-1 G_k = q t^T
         q1 = g * (ltt * t1 + lte * e1)
         for a, sa in ((k - 1, -1.0), (k, 1.0)):  # segment k joins node k-1 to node k
-            if a < 0 or a >= nd // 2:
+            if a < 0 or a >= nn:
                 continue
             U[2 * a, 0] += sa * q0 * t0
             U[2 * a, 1] += sa * q0 * t1
             U[2 * a + 1, 0] += sa * q1 * t0
             U[2 * a + 1, 1] += sa * q1 * t1
             for b, sb in ((k - 1, -1.0), (k, 1.0)):
-                if b < 0 or b >= nd // 2:
+                if b < 0 or b >= nn:
                     continue
-                s = sa * sb
-                K[2 * a, 2 * b] += s * m00
-                K[2 * a, 2 * b + 1] += s * m01
-                K[2 * a + 1, 2 * b] += s * m01
-                K[2 * a + 1, 2 * b + 1] += s * m11
-    for i in range(nd):
-        u0 = gi[0] * U[i, 0] + gi[1] * U[i, 1]
-        u1 = gi[1] * U[i, 0] + gi[2] * U[i, 1]
-        for j in range(nd):
-            K[i, j] -= u0 * U[j, 0] + u1 * U[j, 1]
+                for r in range(2):
+                    for c in range(2):
+                        i, j = 2 * a + r, 2 * b + c
+                        Kb[hb + i - j, j] += sa * sb * mk[r][c]
 
 
 @njit(cache=True)

@@ -71,8 +71,7 @@ def _internal(prm, z, P_n, z_n, warm, P1, K, first, wk, awk, check_slack):
             Pm[i] = new
         if change <= 1e-13 * scale:
             break
-    fx.stiffness_dense(awk[4], awk[5], K)  # the Newton matrix's K, at the last midpoint's loads
-    return kn.OK
+    return kn.OK  # awk holds the factors of K at the last midpoint's loads, for the Newton matrix
 
 
 @njit(cache=True)
@@ -156,6 +155,71 @@ def _band_newton(prm, z, v, a, z1, v1, a1, P_n, P1, Kb, J, R, Cv, wk, coef, c_m,
 
 
 @njit(cache=True)
+def _approximate_newton(prm, z, v, a, z1, v1, a1, P_n, P1, Kb, J, R, Cv, warm, wk, awk, coef, c_m, c_c, sf, first,
+                        V, U, D):
+    """:func:`_dense_newton` for the approximate analysis in O(n): the Newton matrix is the band
+    ``J`` minus ``V D V^T`` of rank 4 (``V = [Cr, U]``: the low-rank parts of ``C`` and of
+    ``K = B - U Gamma^-1 U^T``, see :mod:`cablesim.dynamics.flexibility`), for
+    :func:`solve_band_low_rank`."""
+    m, C, F0, FL, Cr = prm[5], prm[6], prm[7], prm[8], prm[13]
+    am, af = coef[0], coef[1]
+    nd = m.size
+    st = _internal(prm, z1, P_n, z, warm, P1, Kb, first, wk, awk, False)
+    if st != kn.OK:
+        return st
+    for q in range(nd):
+        R[q] = (1.0 - af) * v1[q] + af * v[q]  # the velocity C multiplies, for now
+    bd.damping_product(C, Cr, R, 0, Cv)
+    for q in range(nd):
+        acc = m[q] * ((1.0 - am) * a1[q] + am * a[q]) + (1.0 - af) * P1[q] + af * P_n[q] + Cv[q]
+        R[q] = F0[q] + FL[q] * sf - acc
+    fx.stiffness_band(awk[4], awk[5], Kb, U)
+    for d in range(bd.BAND_ROWS):
+        for q in range(nd):
+            J[d, q] = (1.0 - af) * Kb[d, q] + c_c * C[d, q]
+    for q in range(nd):
+        J[bd.BAND_HALF, q] += c_m * m[q]
+    D[:, :] = 0.0
+    r = Cr.shape[1]
+    for c in range(r):  # c_c C = c_c C_band - U (c_c G) U^T
+        V[c, :] = Cr[:nd, c]
+        for d in range(r):
+            D[c, d] = c_c * Cr[nd + c, d]
+    gi = awk[5]
+    for c in range(2):  # (1 - af) K = (1 - af) B - (1 - af) U Gamma^-1 U^T
+        V[r + c, :] = U[:, c]
+    D[r, r], D[r, r + 1], D[r + 1, r], D[r + 1, r + 1] = gi[0], gi[1], gi[1], gi[2]
+    for i in range(r, r + 2):
+        for j in range(r, r + 2):
+            D[i, j] *= 1.0 - af
+    return kn.OK
+
+
+@njit(cache=True)
+def solve_band_low_rank(J, V, D, R, out, LU, Z, small):
+    """Solve ``(J - V D V^T) out = R`` with ``J`` banded and ``V`` (k, nd) of small rank k, O(n):
+    ``out = y + Z^T w`` with ``J y = R``, ``J Z^T = V^T`` and ``(D^-1 - V Z^T) w = V y``."""
+    k = V.shape[0]
+    if not bd.factor_band(J, LU):
+        return False
+    bd.solve_factored(LU, R, out)
+    for c in range(k):
+        bd.solve_factored(LU, V[c], Z[c])
+    A, LUs = small
+    Dinv = np.linalg.inv(D)
+    rhs, w = np.empty(k), np.empty(k)
+    for i in range(k):
+        rhs[i] = np.dot(V[i], out)
+        for j in range(k):
+            A[i, j] = Dinv[i, j] - np.dot(V[i], Z[j])
+    if not kn.solve_small(A, rhs, w, LUs):
+        return False
+    for c in range(k):
+        out += w[c] * Z[c]
+    return True
+
+
+@njit(cache=True)
 def _newmark_update(z, v, a, z1, v1, a1, h, beta, gamma):
     """Acceleration and velocity at the step end from the displacement ``z1`` (Newmark)."""
     for q in range(z.size):
@@ -167,13 +231,14 @@ def _newmark_update(z, v, a, z1, v1, a1, h, beta, gamma):
 def _galpha_step(prm, z, v, a, P_n, warm, wk, awk, tb, h, coef, ztol, maxit, z1, v1, a1, P1, scratch):
     """One step of size h ending at ``tb`` from ``(z, v, a, P_n)`` into ``(z1, v1, a1, P1)``.
 
-    With banded damping (exact analysis of a heavy cable) every Newton iteration assembles and
-    solves a banded system, O(n); otherwise a dense one.
+    With banded damping every Newton iteration assembles and solves a banded system, O(n) (in
+    the approximate analysis plus a rank-4 correction); otherwise a dense one.
     """
     am, af, beta, gamma = coef[0], coef[1], coef[2], coef[3]
-    R, dz, K, J, LU = scratch
+    R, dz, K, J, LU, V, Z, U, D, Cv, small = scratch
     nd = z.size
     banded = awk is None and bd.is_band(prm[6])
+    approx_band = awk is not None and bd.is_band(prm[6])
     c_m = (1.0 - am) / (beta * h * h)
     c_c = (1.0 - af) * gamma / (beta * h)
     sf = np.sin(prm[9] * (tb - af * h))
@@ -186,6 +251,12 @@ def _galpha_step(prm, z, v, a, P_n, warm, wk, awk, tb, h, coef, ztol, maxit, z1,
         if banded:
             _band_newton(prm, z, v, a, z1, v1, a1, P_n, P1, K, J, R, dz, wk, coef, c_m, c_c, sf, False)
             solved = bd.solve_band(J, R, dz, LU)
+        elif approx_band:
+            st = _approximate_newton(prm, z, v, a, z1, v1, a1, P_n, P1, K, J, R, Cv, warm, wk, awk, coef, c_m, c_c,
+                                     sf, it == 0, V, U, D)
+            if st != kn.OK:
+                return st
+            solved = solve_band_low_rank(J, V, D, R, dz, LU, Z, small)
         else:
             st = _dense_newton(prm, z, v, a, z1, v1, a1, P_n, P1, K, J, R, warm, wk, awk, coef, c_m, c_c, sf, it == 0)
             if st != kn.OK:
@@ -221,8 +292,11 @@ def _galpha_advance(prm, s, P_n, warm, wk, awk, evw, track, t0, h, i, i_end, t, 
     nd = prm[5].size
     z, v, a = s[:nd].copy(), s[nd : 2 * nd].copy(), s[2 * nd :].copy()
     z1, v1, a1, P1 = np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd)
-    rows = bd.BAND_ROWS if awk is None and bd.is_band(prm[6]) else nd  # banded Newton matrices: O(n)
-    scratch = (np.empty(nd), np.empty(nd), np.empty((rows, nd)), np.empty((rows, nd)), np.empty((rows, nd)))
+    rows = bd.BAND_ROWS if bd.is_band(prm[6]) else nd  # banded Newton matrices: O(n)
+    k = prm[13].shape[1] + 2  # rank of the approximate analysis' correction (damping, stiffness)
+    scratch = (np.empty(nd), np.empty(nd), np.empty((rows, nd)), np.empty((rows, nd)), np.empty((rows, nd)),
+               np.empty((k, nd)), np.empty((k, nd)), np.empty((nd, 2)), np.empty((k, k)), np.empty(nd),
+               (np.empty((k, k)), np.empty((k, k))))
     sa, sb, da, db = np.empty(3 * nd), np.empty(3 * nd), np.empty(3 * nd), np.empty(3 * nd)
     j = 0
     while i < i_end:
@@ -304,8 +378,6 @@ class GeneralizedAlpha(Integrator):
 
     def advance(self, prm, state, t_end, t_out, out):
         ex = state.extra
-        if bd.is_band(prm[6]) and not ex["eom"].exact:  # banded Newton matrices: exact analysis only
-            prm = prm[:6] + (np.ascontiguousarray(ex["eom"].C),) + prm[7:]
         coef = np.array(self._coefficients())
         i_end = max(int(np.ceil((t_end - ex["t0"]) / self.dt - 1e-9)), ex["i"])
         written = 0

@@ -29,6 +29,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_continuation.py
 	$(PY) benchmarks/bench_accelerate.py
 	$(PY) benchmarks/bench_heavy.py
+	$(PY) benchmarks/bench_approximate.py
 
 # numba caches compiled kernels beside the sources but does not notice when a kernel called
 # from another module changes: after editing cablesim/dynamics/, clear the cache.

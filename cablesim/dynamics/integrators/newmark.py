@@ -158,7 +158,7 @@ def _band_newton(prm, z, v, a, z1, v1, a1, P_n, P1, Kb, J, R, Cv, wk, coef, c_m,
 def _approximate_newton(prm, z, v, a, z1, v1, a1, P_n, P1, Kb, J, R, Cv, warm, wk, awk, coef, c_m, c_c, sf, first,
                         V, U, D):
     """:func:`_dense_newton` for the approximate analysis in O(n): the Newton matrix is the band
-    ``J`` minus ``V D V^T`` of rank 4 (``V = [Cr, U]``: the low-rank parts of ``C`` and of
+    ``J`` minus ``V^T D V`` of rank 4 (``V = [Cr, U]``: the low-rank parts of ``C`` and of
     ``K = B - U Gamma^-1 U^T``, see :mod:`cablesim.dynamics.flexibility`), for
     :func:`solve_band_low_rank`."""
     m, C, F0, FL, Cr = prm[5], prm[6], prm[7], prm[8], prm[13]
@@ -197,8 +197,9 @@ def _approximate_newton(prm, z, v, a, z1, v1, a1, P_n, P1, Kb, J, R, Cv, warm, w
 
 @njit(cache=True)
 def solve_band_low_rank(J, V, D, R, out, LU, Z, small):
-    """Solve ``(J - V D V^T) out = R`` with ``J`` banded and ``V`` (k, nd) of small rank k, O(n):
-    ``out = y + Z^T w`` with ``J y = R``, ``J Z^T = V^T`` and ``(D^-1 - V Z^T) w = V y``."""
+    """Solve ``(J - V^T D V) out = R`` with ``J`` banded and ``V`` (k, nd) of small rank k, O(n):
+    ``out = y + Z^T w`` with ``J y = R``, ``J Z^T = V^T`` and ``(I - D V Z^T) w = D V y``
+    (Sherman-Morrison-Woodbury without inverting D, which may be singular)."""
     k = V.shape[0]
     if not bd.factor_band(J, LU):
         return False
@@ -206,12 +207,20 @@ def solve_band_low_rank(J, V, D, R, out, LU, Z, small):
     for c in range(k):
         bd.solve_factored(LU, V[c], Z[c])
     A, LUs = small
-    Dinv = np.linalg.inv(D)
+    Vy, VZ = np.empty(k), np.empty((k, k))
+    for i in range(k):
+        Vy[i] = np.dot(V[i], out)
+        for j in range(k):
+            VZ[i, j] = np.dot(V[i], Z[j])
     rhs, w = np.empty(k), np.empty(k)
     for i in range(k):
-        rhs[i] = np.dot(V[i], out)
+        rhs[i] = 0.0
         for j in range(k):
-            A[i, j] = Dinv[i, j] - np.dot(V[i], Z[j])
+            rhs[i] += D[i, j] * Vy[j]
+            acc = 0.0
+            for m in range(k):
+                acc += D[i, m] * VZ[m, j]
+            A[i, j] = (1.0 if i == j else 0.0) - acc
     if not kn.solve_small(A, rhs, w, LUs):
         return False
     for c in range(k):

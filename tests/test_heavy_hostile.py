@@ -553,6 +553,56 @@ def test_cli_static_modes_k_against_dense_eigh(tmp_path):
     _check_modes(K, m, omega, shapes, 5)
 
 
+
+def my_K_sparse(L, H, S, EA, y):
+    """The same assembly as my_K, in sparse storage (for 2000 nodes)."""
+    length, e, T = geometry(L, H, S, EA, y)
+    n = len(S) - 1
+    rows, cols, vals = [], [], []
+    for r in range(n + 1):
+        ee = np.outer(e[r], e[r])
+        k = EA / S[r] * ee + T[r] / length[r] * (np.eye(2) - ee)
+        a, b = r - 1, r
+        for i, j, sign in ((a, a, 1.0), (b, b, 1.0), (a, b, -1.0), (b, a, -1.0)):
+            if 0 <= i < n and 0 <= j < n:
+                for p in range(2):
+                    for q in range(2):
+                        rows.append(2 * i + p)
+                        cols.append(2 * j + q)
+                        vals.append(sign * k[p, q])
+    return sparse.csc_matrix((vals, (rows, cols)), shape=(2 * n, 2 * n))
+
+
+def test_2000_nodes_lowest_100_and_highest_mode_against_sparse_reference():
+    from scipy.sparse.linalg import eigsh
+    case = case_from_dict(heavy(n=2000, L=300.0, H=10.0, length=300.7, EA=3.3e7, mu=1.628,
+                                point=[{"node": 1000, "mass": 15.0}]))
+    st = run_static(case, all_models=False)
+    L, H, S, EA, m1 = cable_arrays(case)
+    m = np.repeat(m1, 2)
+    # equilibrium by own force balance, to what the solver's closure tolerance (1e-12 of the
+    # length, docs/theory.md section 3) allows: a position error d gives a force error EA/S d
+    closure = 1e-12 * max(sum(S), math.hypot(L, H))
+    assert np.abs(my_P(L, H, S, EA, st.exact.y) - case.F0).max() < 2 * EA / S.min() * closure
+    K = my_K_sparse(L, H, S, EA, st.exact.y)
+    assert np.abs(st.K0_band - np.vstack([np.concatenate([K.diagonal(-d), np.zeros(d)]) for d in range(4)])).max() \
+        < 1e-12 * abs(K).max()
+    # default above 300 nodes: the lowest 100 frequencies, 20 shapes, and the highest frequency
+    assert st.modes.omega.size == 100 and st.modes.shapes.shape == (4000, 20)
+    Mi = sparse.diags(1.0 / np.sqrt(m))
+    A = (Mi @ K @ Mi).tocsc()
+    lam = np.sort(eigsh(A, k=40, sigma=0.0, which="LM", return_eigenvectors=False))
+    assert np.allclose(st.modes.omega[:40], np.sqrt(lam), rtol=1e-7)
+    assert np.all(np.diff(st.modes.omega) >= 0)
+    # the highest: between the largest Rayleigh quotient of a unit vector (the largest diagonal
+    # entry) and Gershgorin's bound (checked exactly at 400 nodes above)
+    assert A.diagonal().max() <= st.modes.omega_max**2 <= abs(A).sum(axis=1).max()
+    phi = st.modes.shapes
+    assert np.abs(phi.T @ (m[:, None] * phi) - np.eye(20)).max() < 1e-8
+    R = K @ phi - (m[:, None] * phi) * st.modes.omega[:20] ** 2
+    assert np.abs(R).max() < 1e-9 * abs(K).max() * np.abs(phi).max()
+
+
 # ----------------------------------------------------------------------------------------------
 # 5. Dynamics of a 30-node heavy cable against an independent second-order integration
 # ----------------------------------------------------------------------------------------------
@@ -881,3 +931,15 @@ def test_case_from_a_mapping_with_numpy_numbers():
     except CablesimError:
         return  # a clear refusal would do
     assert case.cable.n_nodes == 10 and case.cable.EA == 2.0e6
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "continuation.channels (and figure.channels) naming a node the cable does not have are not checked "
+    "when the case is read, unlike history/free_vibration/sweep/outputs.channels: `cablesim check` calls "
+    "such a case valid, and `cablesim continue` refuses it only after the statics, with a message that "
+    "does not name the field continuation.channels"))
+def test_continuation_node_channels_are_checked_with_the_case():
+    d = heavy(n=3, L=12.0, H=0.5, length=12.6, mu=1.5, point=[{"node": 2, "FL": [0.0, 5.0]}])
+    d["continuation"] = {"omega": {"start": 1.0, "stop": 2.0}, "channels": ["node9.v"]}
+    with pytest.raises(CablesimError, match=r"continuation\.channels"):
+        case_from_dict(d)

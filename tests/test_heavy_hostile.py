@@ -321,12 +321,19 @@ def big():
     st = run_static(case, all_models=False)
     L, H, S, EA, m = cable_arrays(case)
     K, mm = my_K(L, H, S, EA, st.exact.y), np.repeat(m, 2)
+    # the lowest 12 frequencies and the highest, by sparse shift-invert Lanczos on the own K
+    # (single-threaded SuperLU: quick even on a busy machine)
+    from scipy.sparse.linalg import eigsh
+    Mi = sparse.diags(1.0 / np.sqrt(mm))
+    A = (Mi @ sparse.csc_matrix(K) @ Mi).tocsc()
+    low = np.sort(eigsh(A, k=12, sigma=0.0, return_eigenvectors=False))
+    top = eigsh(A, k=1, sigma=abs(A).sum(axis=1).max(), return_eigenvectors=False)
     BIG_W.clear()
-    BIG_W.extend(np.sqrt(eigh(K, np.diag(mm), eigvals_only=True)))
+    BIG_W.extend(np.sqrt(np.concatenate([low, top])))
     return case, st, K, mm
 
 
-BIG_W: list = []  # every frequency of the `big` cable, from the dense eigh (computed once)
+BIG_W: list = []  # the lowest 12 frequencies and then the highest of the `big` cable
 
 
 def test_band_stiffness_of_400_nodes_is_the_dense_assembly(big):
@@ -483,7 +490,7 @@ def _check_modes(K, m, omega, shapes, k_shapes, top=None, rtol=1e-9, w_all=None)
     assert np.abs(R).max() < 1e-7 * np.abs(K).max() * np.abs(phi).max()
 
 
-def test_banded_lowest_modes_of_400_nodes_against_dense_eigh(big):
+def test_banded_lowest_modes_of_400_nodes_against_own_reference(big):
     case, st, K, m = big
     modes = modal_analysis_banded(lower_band(K), m, n_modes=10, n_shapes=10)
     assert modes.omega.size == 10 and modes.omega_max is not None
@@ -526,31 +533,6 @@ def test_modes_never_fewer_than_the_damping_names():
     assert st.modes.omega.size >= 4
     a0, a1, _ = _rayleigh(K, m, 2, 4, 0.01)
     assert math.isclose(st.a0, a0, rel_tol=1e-9) and math.isclose(st.a1, a1, rel_tol=1e-9)
-
-
-def test_cli_static_modes_k_against_dense_eigh(tmp_path):
-    import h5py
-    d = heavy(n=30, point=[{"node": 20, "mass": 4.0}])
-    (tmp_path / "c.yaml").write_text(yaml.safe_dump(d))
-    p = _cli(["static", "c.yaml", "--modes", "5", "--no-plot", "-o", "s.h5"], tmp_path)
-    out, err = p.communicate(timeout=120)
-    assert p.returncode == 0, err
-    case = case_from_dict(d)
-    L, H, S, EA, m1 = cable_arrays(case)
-    with h5py.File(tmp_path / "s.h5") as f:
-        omega = f["modal/omega"][:]
-        attrs = dict(f["modal"].attrs)
-        y = f["static/exact/y"][:]
-        shapes = f["modal/shapes"][:]
-    # the stored equilibrium is one (own force balance), then own K and eigh
-    assert np.abs(my_P(L, H, S, EA, y) - case.F0).max() < 1e-8 * np.abs(case.F0).max()
-    K, m = my_K(L, H, S, EA, y), np.repeat(m1, 2)
-    assert int(attrs["modes_computed"]) == 5 and omega.size == 5
-    w = np.sqrt(eigh(K, np.diag(m), eigvals_only=True))
-    assert np.allclose(omega, w[:5], rtol=1e-9)
-    assert math.isclose(float(attrs["omega_max"]), w[-1], rel_tol=1e-9)
-    shapes = shapes if shapes.shape[0] == 60 else shapes.T
-    _check_modes(K, m, omega, shapes, 5)
 
 
 
@@ -661,6 +643,38 @@ def _error(run, sol):
     assert h.status.name == "COMPLETED", h.message
     zref = sol.sol(h.t)[: h.z.shape[1]].T
     return np.abs(h.z - zref).max() / np.abs(zref).max(), zref
+
+
+def test_compiled_third_order_rate_is_the_own_jerk(reference):
+    """eq. 17: y''' = M^-1 (w FL cos(w t) - K(y) y' - C y''), with the banded C, taut and slack modes."""
+    from cablesim.dynamics import equations as eq
+    case = reference[0]
+    st = run_static(case, all_models=False)
+    eom = build_equations(case, st, omega=OMEGA_F)
+    L, H, S, EA, m1 = cable_arrays(case)
+    m = np.repeat(m1, 2)
+    nd = m.size
+    C = eom.a0 * np.diag(m) + eom.a1 * my_K(L, H, S, EA, eom.y0)
+    rng = np.random.default_rng(11)
+    s = np.concatenate([rng.normal(0, 0.01, nd), rng.normal(0, 0.3, nd), rng.normal(0, 1.0, nd)])
+    y = eom.y0 + s[:nd]
+    length, e, T = geometry(L, H, S, EA, y)
+    t = 0.3
+    for slack in ((), (4, 17)):
+        wk, awk = eom.workspaces()
+        for k in slack:
+            wk[4][k] = 0.0  # segment k+1 slack: no force, no stiffness
+        ds = np.empty(3 * nd)
+        assert eq.rate(eom.params(), t, s, eom.F1.copy(), ds, wk, awk) == 0
+        K = my_K(L, H, S, EA, y)
+        for k in slack:  # remove that segment's block from the own assembly
+            ee = np.outer(e[k], e[k])
+            kb = EA / S[k] * ee + T[k] / length[k] * (np.eye(2) - ee)
+            for a, b, sign in ((k - 1, k - 1, 1), (k, k, 1), (k - 1, k, -1), (k, k - 1, -1)):
+                K[2 * a:2 * a + 2, 2 * b:2 * b + 2] -= sign * kb
+        jerk = (case.FL * OMEGA_F * np.cos(OMEGA_F * t) - K @ s[nd:2 * nd] - C @ s[2 * nd:]) / m
+        assert np.array_equal(ds[:nd], s[nd:2 * nd]) and np.array_equal(ds[nd:2 * nd], s[2 * nd:])
+        assert np.abs(ds[2 * nd:] - jerk).max() < 1e-10 * np.abs(jerk).max(), slack
 
 
 def test_default_integrator_matches_independent_reference(reference):
@@ -803,17 +817,17 @@ def test_undamped_free_vibration_conserves_own_energy():
         assert np.abs(E - E[0]).max() < tol * kinetic0, (h.integrator, np.abs(E - E[0]).max() / kinetic0)
 
 
-def test_static_full_summary_prints_every_row_and_the_right_modes(tmp_path):
+def test_static_full_summary_and_modes_k_from_the_command_line(tmp_path):
     d = heavy(n=30, point=[{"node": 20, "mass": 4.0}])
     (tmp_path / "c.yaml").write_text(yaml.safe_dump(d))
     procs = [_cli(["static", "c.yaml", "--no-plot", "-o", f"{k}.h5", *extra], tmp_path)
-             for k, extra in (("full", ["--full"]), ("short", []))]
+             for k, extra in (("full", ["--full"]), ("short", []), ("s", ["--modes", "5"]))]
     outs = []
     for p in procs:
         out, err = p.communicate(timeout=120)
         assert p.returncode == 0, err
         outs.append(out)
-    full, short = outs
+    full, short, _ = outs
     case = case_from_dict(d)
     L, H, S, EA, m1 = cable_arrays(case)
     st = run_static(case, all_models=False)
@@ -841,6 +855,26 @@ def test_static_full_summary_prints_every_row_and_the_right_modes(tmp_path):
     # without --full: shortened, and says so
     assert len([line for line in short.splitlines() if line.strip().startswith(("x", "y")) and "(" in line]) < 60
     assert "--full" in short
+    _check_modes_file(tmp_path / "s.h5", case, w)
+
+
+def _check_modes_file(path, case, w):
+    """`cablesim static --modes 5`: the lowest 5 and the highest frequency, against dense eigh."""
+    import h5py
+    L, H, S, EA, m1 = cable_arrays(case)
+    with h5py.File(path) as f:
+        omega = f["modal/omega"][:]
+        attrs = dict(f["modal"].attrs)
+        y = f["static/exact/y"][:]
+        shapes = f["modal/shapes"][:]
+    # the stored equilibrium is one (own force balance), then own K and eigh
+    assert np.abs(my_P(L, H, S, EA, y) - case.F0).max() < 1e-8 * np.abs(case.F0).max()
+    K, m = my_K(L, H, S, EA, y), np.repeat(m1, 2)
+    assert int(attrs["modes_computed"]) == 5 and omega.size == 5
+    assert np.allclose(omega, w[:5], rtol=1e-9)
+    assert math.isclose(float(attrs["omega_max"]), w[-1], rel_tol=1e-9)
+    shapes = shapes if shapes.shape[0] == 60 else shapes.T
+    _check_modes(K, m, omega, shapes, 5, w_all=w)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -909,9 +943,10 @@ def test_near_degenerate_modes_of_400_nodes_are_mass_orthonormal():
     case = case_from_dict(heavy(n=400, L=100.0, H=0.0, length=100.3, EA=4381066.0, mu=10.0, modal={"modes": 4}))
     st = run_static(case, all_models=False)
     L, H, S, EA, m1 = cable_arrays(case)
-    K, m = my_K(L, H, S, EA, st.exact.y), np.repeat(m1, 2)
-    w = np.sqrt(eigh(K, np.diag(m), eigvals_only=True, subset_by_index=[0, 3]))
-    assert np.allclose(st.modes.omega, w, rtol=1e-9)
+    from scipy.sparse.linalg import eigsh
+    K, m = my_K_sparse(L, H, S, EA, st.exact.y), np.repeat(m1, 2)
+    w = np.sqrt(np.sort(eigsh(K, k=4, M=sparse.diags(m).tocsc(), sigma=0.0, return_eigenvectors=False)))
+    assert np.allclose(st.modes.omega, w, rtol=1e-8)
     assert (w[1] - w[0]) / w[0] < 1e-6  # the nearly degenerate pair
     phi = st.modes.shapes
     assert phi.shape == (800, 4)

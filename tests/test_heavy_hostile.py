@@ -730,10 +730,23 @@ def test_cli_node_channels_store_the_right_dofs_and_snapshots_draw_them(referenc
     common = ["history", "c.yaml", "--omega", OMEGA_F, "--duration", DURATION, "--output-step", 0.01,
               "--integrator", "dopri5", "--no-plot"]
     p1 = _cli([*common, "--set", "outputs.channels=[node20.v, node20.h, node7.v]", "-o", "part.h5"], tmp_path)
-    p2 = _cli([*common, "--channels", "node20.v,node7.h", "-o", "full.h5"], tmp_path)
+    p2 = _cli([*common, "--channels", "node20.v,node7.h", "--full", "-o", "full.h5"], tmp_path)
+    outs = []
     for p in (p1, p2):
         out, err = p.communicate(timeout=120)
         assert p.returncode == 0, err
+        outs.append(out)
+    # --full: the summary lists every DOF, each with its peak |z| (5 digits), as the reference has it
+    peaks = {}
+    for line in outs[1].splitlines():
+        parts = line.split()
+        if len(parts) >= 2 and parts[0][:1] == "z" and parts[0][1:].isdigit():
+            peaks.setdefault(int(parts[0][1:]), float(parts[1]))
+    assert sorted(peaks) == list(range(1, 61))
+    t_all = np.linspace(0.0, DURATION, 51)
+    zmax = np.abs(sol.sol(t_all)[:60]).max(axis=1)
+    for k, value in peaks.items():
+        assert math.isclose(value, zmax[k - 1], rel_tol=2e-4), (k, value, zmax[k - 1])
     with h5py.File(tmp_path / "part.h5") as f:
         t, z, dof = f["history/t"][:], f["history/z"][:], list(f["history/dof"][:])
     zref = sol.sol(t)[:60].T

@@ -523,6 +523,25 @@ def test_banded_modes_with_every_shape_up_to_600_dof():
     assert math.isclose(st.modes.highest, np.sqrt(eigh(K, np.diag(m), eigvals_only=True)[-1]), rel_tol=1e-9)
 
 
+def test_inextensible_frequencies_are_the_stiff_limit_of_own_exact_ones():
+    """n - 1 finite inextensible frequencies = the limit EA -> inf of the lowest n - 1 exact ones
+    (own K and eigh), approached as 1/EA."""
+    point = [{"node": 3, "mass": 2.0}]
+    st = run_static(case_from_dict(heavy(n=40, EA=2e6, point=point)), all_models=True)
+    wi = st.inextensible_omega
+    assert wi.size == 39
+    errors = []
+    for EA in (1e9, 1e11):
+        case = case_from_dict(heavy(n=40, EA=EA, point=point))
+        L, H, S, EA_, m1 = cable_arrays(case)
+        y = run_static(case, all_models=False).exact.y
+        assert np.abs(my_P(L, H, S, EA_, y) - case.F0).max() < 2 * EA_ / S.min() * 1e-12 * sum(S)
+        w = np.sqrt(eigh(my_K(L, H, S, EA_, y), np.diag(np.repeat(m1, 2)), eigvals_only=True))
+        errors.append(np.abs(w[:39] / wi - 1).max())
+        assert w[39] > 5 * wi[-1]  # the next one is elastic, far above
+    assert errors[1] < 1e-6 and 50 < errors[0] / errors[1] < 200
+
+
 def test_modes_never_fewer_than_the_damping_names():
     d = heavy(n=40, modal={"modes": 1})
     d["damping"] = {"ratio": 0.01, "modes": [2, 4]}

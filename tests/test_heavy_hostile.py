@@ -552,6 +552,12 @@ def test_modes_never_fewer_than_the_damping_names():
     assert st.modes.omega.size >= 4
     a0, a1, _ = _rayleigh(K, m, 2, 4, 0.01)
     assert math.isclose(st.a0, a0, rel_tol=1e-9) and math.isclose(st.a1, a1, rel_tol=1e-9)
+    # more modes than the cable has: refused, naming the field
+    for key, value, field in (("modal", {"modes": 81}, "modal.modes"),
+                              ("damping", {"ratio": 0.01, "modes": [1, 81]}, "damping.modes")):
+        bad = heavy(n=40, **{key: value})
+        with pytest.raises(CablesimError, match=field.replace(".", r"\.")):
+            case_from_dict(bad)
 
 
 
@@ -990,7 +996,7 @@ def test_near_degenerate_modes_of_400_nodes_are_mass_orthonormal():
     "CablesimError) when a value is a numpy number, e.g. cable.nodes = np.int64(40) or "
     "cable.EA = np.float64(...), which is what a notebook computing a heavy cable's shorthand produces"))
 def test_case_from_a_mapping_with_numpy_numbers():
-    d = heavy(n=int(np.int64(10)))
+    d = heavy(n=10)
     d["cable"]["nodes"] = np.int64(10)
     d["cable"]["EA"] = np.float64(2.0e6)
     try:

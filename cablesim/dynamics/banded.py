@@ -58,6 +58,8 @@ def band_product(A: np.ndarray, x: np.ndarray) -> np.ndarray:
     y = np.zeros(nd)
     for r in range(BAND_ROWS):
         d = r - BAND_HALF  # row index minus column index of this diagonal
+        if abs(d) >= nd:  # a diagonal outside a small matrix (one node: 2 DOF)
+            continue
         if d >= 0:
             y[d:] += A[r, : nd - d] * x[: nd - d]
         else:

@@ -83,6 +83,14 @@ class Cable:
         return float(self.S.sum())
 
     @property
+    def spans_slack(self) -> bool:
+        """Whether the natural length exceeds the chord by more than round-off (relative 1e-12),
+        so that an inextensible cable of these segments can sag between the supports. A cable
+        within 1e-12 of its chord is taken as straight (pretensioned): its inextensible tension
+        would be set by the rounding of the sum of its segments."""
+        return self.total_length > self.chord_length * (1.0 + 1e-12)
+
+    @property
     def compliance(self) -> float:
         """Axial compliance ``1 / EA``, 1/N (zero for the inextensible cable)."""
         return 0.0 if np.isinf(self.EA) else 1.0 / self.EA

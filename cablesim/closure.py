@@ -306,10 +306,10 @@ def solve_segment_forces(
     Q = cumulative_loads(P)
     if Q.shape[0] != cable.n_segments:
         raise ValueError(f"expected {cable.n_dof} load components, got {2 * (Q.shape[0] - 1)}")
-    if eps_dim == 0.0 and cable.total_length <= cable.chord_length:
+    if eps_dim == 0.0 and not cable.spans_slack:
         raise ConvergenceError(
-            f"The natural segment lengths sum to {cable.total_length:.6g} m, not more than the "
-            f"chord {cable.chord_length:.6g} m between the supports, so an inextensible cable "
+            f"The natural segment lengths sum to {cable.total_length:.15g} m, not more than the "
+            f"chord {cable.chord_length:.15g} m between the supports, so an inextensible cable "
             "cannot span them. Lengthen cable.S, or use the exact analysis for a pretensioned cable.",
         )
     phi = _ComplementaryEnergy(cable, Q, eps_dim)

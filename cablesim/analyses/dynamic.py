@@ -149,9 +149,11 @@ def plan_free_vibration(
     peak_velocity = peak_velocity if peak_velocity is not None else fv.peak_velocity
     damping_ratio = damping_ratio if damping_ratio is not None else fv.damping_ratio
     duration = duration if duration is not None else fv.duration
-    static = run_static(case, analysis, all_models=False)
+    n_dof = case.to_cable().n_dof
+    if mode is not None and not 1 <= mode <= n_dof:  # before the statics compute up to that mode
+        raise CablesimError(f"--mode must be between 1 and {n_dof}; got {mode}.", field="free_vibration.mode")
+    static = run_static(case, analysis, all_models=False, modes_at_least=mode or 0)
     need_inextensible(static)
-    n_dof = static.cable.n_dof
     explicit = fv.z0 is not None or fv.v0 is not None
     if mode is None and not explicit:
         raise CablesimError(
@@ -161,7 +163,7 @@ def plan_free_vibration(
         )
     eom = build_equations(case, static, omega=0.0, load_scale=0.0, damping_ratio=damping_ratio)
     if mode is not None:
-        z0, v0, w_int = _mode_start(static, mode, peak_velocity, n_dof)
+        z0, v0, w_int = _mode_start(static, mode, peak_velocity)
     else:
         v0 = None if fv.v0 is None else np.array(fv.v0)
         z0 = None if fv.z0 is None else np.array(fv.z0)
@@ -198,9 +200,7 @@ def _check_taut_start(static: StaticResult, z0: np.ndarray) -> None:
         )
 
 
-def _mode_start(static: StaticResult, mode: int, peak_velocity: float | None, n_dof: int):
-    if not 1 <= mode <= n_dof:
-        raise CablesimError(f"--mode must be between 1 and {n_dof}; got {mode}.", field="free_vibration.mode")
+def _mode_start(static: StaticResult, mode: int, peak_velocity: float | None):
     if peak_velocity is None:
         raise CablesimError(
             f"Mode {mode} gives the shape of the initial velocities but not their size: give "

@@ -100,9 +100,9 @@ def need_inextensible(static: StaticResult) -> None:
     """Refuse a pretensioned cable (no inextensible state) for dynamics, with the reason."""
     if static.inextensible is None:
         raise CablesimError(
-            "This cable is shorter than its chord (pretensioned), so it has no inextensible "
-            "natural state and the configurational/elastic split of the paper does not exist; "
-            "time histories need sum(cable.S) greater than the chord.",
+            "This cable is not longer than its chord (pretensioned, or within 1e-12 of it), so it "
+            "has no inextensible natural state and the configurational/elastic split of the paper "
+            "does not exist; time histories need sum(cable.S) (or cable.length) greater than the chord.",
             field="cable.S",
         )
 

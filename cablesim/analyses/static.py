@@ -116,35 +116,35 @@ def damping_coefficients(case: Case, omega: np.ndarray) -> tuple[float, float]:
     return rayleigh_coefficients(omega[i - 1], omega[j - 1], d.ratio)
 
 
-def modes_to_compute(case: Case, n_dof: int, n_modes: int | None = None) -> int | None:
+def modes_to_compute(case: Case, n_dof: int, n_modes: int | None = None, at_least: int = 0) -> int | None:
     """How many of the lowest modes to compute (None: all).
 
     ``n_modes`` (``static --modes``), else ``modal.modes`` of the case, else every mode up to
     :data:`~cablesim.case.sections.ALL_MODES_DOF` DOF and the lowest
     :data:`~cablesim.case.sections.DEFAULT_MODES` beyond; never fewer than the modes the
-    damping or a free vibration names.
+    damping or a free vibration names, nor than ``at_least`` (a mode given on the command line).
     """
     k = n_modes if n_modes is not None else case.modal.modes
     if k is None and n_dof > ALL_MODES_DOF:
         k = DEFAULT_MODES
     if k is None:
         return None
-    k = max(int(k), case.free_vibration.mode or 0, *case.damping.modes)
+    k = max(int(k), case.free_vibration.mode or 0, at_least, *case.damping.modes)
     return None if k >= n_dof else k
 
 
 def _modes(case: Case, cable: Cable, K0: np.ndarray | None, K0_band: np.ndarray | None,
-           n_modes: int | None) -> Modes:
-    k = modes_to_compute(case, cable.n_dof, n_modes)
+           n_modes: int | None, at_least: int) -> Modes:
+    k = modes_to_compute(case, cable.n_dof, n_modes, at_least)
     if K0_band is None:
         return modal_analysis(K0, cable.mass_diagonal, n_modes=k)
-    wanted = max(SHAPES_KEPT, case.free_vibration.mode or 0, *case.damping.modes)
+    wanted = max(SHAPES_KEPT, case.free_vibration.mode or 0, at_least, *case.damping.modes)
     n_shapes = None if 2 * cable.n_nodes <= ALL_SHAPES_DOF else wanted
     return modal_analysis_banded(K0_band, cable.mass_diagonal, n_modes=k, n_shapes=n_shapes)
 
 
 def run_static(case: Case, analysis: str | None = None, all_models: bool | None = True,
-               n_modes: int | None = None) -> StaticResult:
+               n_modes: int | None = None, modes_at_least: int = 0) -> StaticResult:
     """Solve the statics of a case under its sustained loads F0.
 
     Parameters
@@ -158,6 +158,9 @@ def run_static(case: Case, analysis: str | None = None, all_models: bool | None 
     n_modes : int, optional
         Compute only the lowest this many modes (and the highest frequency); overrides the
         case's ``modal.modes`` (see :func:`modes_to_compute` for the default).
+    modes_at_least : int
+        Compute at least this many of the lowest modes, with their shapes (a free vibration's
+        ``--mode``).
 
     Returns
     -------
@@ -168,11 +171,11 @@ def run_static(case: Case, analysis: str | None = None, all_models: bool | None 
     P = case.F0
     if all_models is None:
         all_models = cable.n_nodes <= ALL_MODELS_NODES
-    taut = cable.total_length <= cable.chord_length
+    taut = not cable.spans_slack
     if taut and analysis == "approximate":
         raise CablesimError(
-            f"cable.S sums to {cable.total_length:.6g} m, not more than the chord "
-            f"{cable.chord_length:.6g} m between the supports: the approximate analysis starts "
+            f"cable.S sums to {cable.total_length:.15g} m, not more than the chord "
+            f"{cable.chord_length:.15g} m between the supports (within 1e-12): the approximate analysis starts "
             "from the inextensible cable, which cannot span them. Lengthen cable.S, or use "
             "`analysis: exact` for a pretensioned cable.",
             field="cable.S",
@@ -197,7 +200,7 @@ def run_static(case: Case, analysis: str | None = None, all_models: bool | None 
         if taut:
             check_resolvable(cable, exact.T)
     K0_band = exact.K_band if analysis == "exact" else None
-    modes = _modes(case, cable, None if K0_band is not None else approx.K, K0_band, n_modes)
+    modes = _modes(case, cable, None if K0_band is not None else approx.K, K0_band, n_modes, modes_at_least)
     a0, a1 = damping_coefficients(case, modes.omega)
     inext_omega = np.array([])
     sole = None

@@ -97,7 +97,7 @@ class Case(StrictModel):
                              "give displacements from the equilibrium smaller than that, in m")
         if fv.mode is not None and fv.mode > 2 * n:
             raise ValueError(f"free_vibration.mode must be between 1 and 2n = {2 * n}")
-        for section in ("history", "free_vibration", "sweep", "outputs"):
+        for section in ("history", "free_vibration", "sweep", "outputs", "continuation", "figure"):
             spec = getattr(self, section)
             for name in (getattr(spec, "channels", None) or ()) if spec is not None else ():
                 try:

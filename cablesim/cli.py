@@ -195,7 +195,7 @@ def _finish_history(run, out: Path, plot: bool, channels, wall: float, full: boo
 
     case, hist = run.case, run.history
     if case.outputs.channels:  # a scene keeps only the channels it draws
-        keep = [channel_index(c, hist.n_dof) + 1 for c in case.outputs.channels]
+        keep = list(dict.fromkeys(channel_index(c, hist.n_dof) + 1 for c in case.outputs.channels))  # node20.v = z40
         run = replace(run, history=hist.keep(keep))
         hist = run.history
     target = out

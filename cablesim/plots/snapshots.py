@@ -81,7 +81,10 @@ def snapshot_figure(hist, cable: Cable, title: str, count: int = 6):
     n_dof = cable.n_dof
     if not 1 <= count <= MAX_SNAPSHOTS:
         raise CablesimError(f"--snapshots is {count}; draw 1 to {MAX_SNAPSHOTS} instants.", field="snapshots")
-    if list(hist.dof_numbers) != list(range(1, n_dof + 1)):
+    every = list(range(1, n_dof + 1))
+    if list(hist.dof_numbers) != every and sorted(set(hist.dof_numbers)) == every:
+        hist = hist.keep(every)  # every DOF kept, in another order (outputs.channels)
+    if list(hist.dof_numbers) != every:
         raise CablesimError(
             f"Snapshots of the cable need every DOF, but this history kept only {len(hist.dof_numbers)} of "
             f"{n_dof} (outputs.channels); rerun it without outputs.channels.", field="snapshots")

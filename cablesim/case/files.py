@@ -238,7 +238,18 @@ def case_from_dict(data: dict, overrides=None) -> Case:
     """
     if not isinstance(data, dict):
         raise CablesimError("A case is a mapping with at least the keys `cable` and `loads`.")
-    return parse_case(yaml.safe_dump(data, sort_keys=False), source="(case given as a mapping)", overrides=overrides)
+    return parse_case(yaml.safe_dump(_plain(data), sort_keys=False), source="(case given as a mapping)",
+                      overrides=overrides)
+
+
+def _plain(value):
+    """``value`` with numpy numbers and arrays (as a notebook computes them) made Python ones."""
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    tolist = getattr(value, "tolist", None)  # numpy scalars and arrays, without importing numpy here
+    return _plain(tolist()) if callable(tolist) and not isinstance(value, (str, bytes)) else value
 
 
 OVERRIDES_MARK = "# cablesim --set:"

@@ -754,7 +754,8 @@ def test_cli_node_channels_store_the_right_dofs_and_snapshots_draw_them(referenc
     (tmp_path / "c.yaml").write_text(yaml.safe_dump(FORCED))
     common = ["history", "c.yaml", "--omega", OMEGA_F, "--duration", DURATION, "--output-step", 0.01,
               "--integrator", "dopri5", "--no-plot"]
-    p1 = _cli([*common, "--set", "outputs.channels=[node20.v, node20.h, node7.v]", "-o", "part.h5"], tmp_path)
+    # z40 is node20.v again: stored once
+    p1 = _cli([*common, "--set", "outputs.channels=[node20.v, node20.h, node7.v, z40]", "-o", "part.h5"], tmp_path)
     p2 = _cli([*common, "--channels", "node20.v,node7.h", "--full", "-o", "full.h5"], tmp_path)
     outs = []
     for p in (p1, p2):
@@ -775,7 +776,7 @@ def test_cli_node_channels_store_the_right_dofs_and_snapshots_draw_them(referenc
     with h5py.File(tmp_path / "part.h5") as f:
         t, z, dof = f["history/t"][:], f["history/z"][:], list(f["history/dof"][:])
     zref = sol.sol(t)[:60].T
-    assert z.shape == (t.size, 3)
+    assert z.shape == (t.size, 3) and dof == [40, 39, 14]
     for name, want in (("node20.v", 39), ("node20.h", 38), ("node7.v", 13)):
         col = dof.index(want + 1)
         assert np.abs(z[:, col] - zref[:, want]).max() < 1e-6 * np.abs(zref).max(), name
@@ -916,25 +917,18 @@ def _check_modes_file(path, case, w):
 
 
 # ----------------------------------------------------------------------------------------------
-# Bugs found (strict xfail: each fails today because of the bug described)
+# Defects found by these checks (each failed before its fix)
 # ----------------------------------------------------------------------------------------------
-@pytest.mark.xfail(strict=True, reason=(
-    "band_product fails for a 2-DOF matrix (n = 1): for the diagonal d = -3 it adds A[r, 3:] * x[3:] "
-    "(0 values) to y[:-1] (1 value) and raises ValueError, so C y' of a one-node cable cannot be formed"))
 def test_band_product_of_a_one_node_cable():
     A = np.array([[2.0, 0.5], [0.5, 3.0]])
     C = bd.band_storage(lower_band(A))
     assert np.allclose(bd.band_product(C, np.array([1.0, -2.0])), A @ [1.0, -2.0])
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "exact-analysis time history of a one-node cable (cable.nodes: 1, or S with 2 segments) crashes: "
-    "EquationsOfMotion.initial_state -> damping_force -> banded.band_product raises ValueError "
-    "(non-broadcastable output operand), shown as a traceback with exit status 1 by `cablesim history` "
-    "and `free-vibration`; the approximate analysis of the same cable runs"))
 def test_history_of_a_one_node_heavy_cable_against_own_reference():
     import cablesim
     d = heavy(n=1, L=10.0, H=1.0, length=10.5, mu=2.0, point=[{"node": 1, "FL": [2.0, 5.0]}])
+    d["integrator"] = {"rtol": 1e-11, "atol": 1e-15}  # the default atol (1e-10 of the chord) is 1e-5 of this response
     case = case_from_dict(d)
     st = run_static(case, all_models=False)
     L, H, S, EA, m1 = cable_arrays(case)
@@ -954,12 +948,6 @@ def test_history_of_a_one_node_heavy_cable_against_own_reference():
     assert np.abs(h.z - zref).max() < 1e-6 * np.abs(zref).max()
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "free vibration along a mode above the modes computed (modal.modes, `static --modes`, or the default "
-    "lowest 100 above 300 nodes) crashes with IndexError in analyses.dynamic._mode_start "
-    "(static.modes.omega[mode - 1]); `cablesim free-vibration --set modal.modes=5 --mode 8` prints a "
-    "traceback, exit 1. The --mode given as an argument is not counted by modes_to_compute, though "
-    "mode_velocity itself computes the shape"))
 def test_free_vibration_along_a_mode_above_the_computed_ones():
     import cablesim
     case = case_from_dict(heavy(n=30, modal={"modes": 5}))
@@ -972,11 +960,6 @@ def test_free_vibration_along_a_mode_above_the_computed_ones():
     assert np.abs(h.v[0] - p).max() < 1e-8
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "modal_analysis_banded above 600 DOF (inverse iteration, 3 sweeps) returns shapes that are not "
-    "mass-orthonormal for a nearly degenerate pair of modes whose eigenvalues differ by more than "
-    "1e-8 times the largest computed one (not re-orthogonalised): on a level 400-node cable near the "
-    "Irvine crossover (EA = 4381066 N, modal.modes 4) Phi^T M Phi - I reaches 4e-6 (dense eigh: 1e-13)"))
 def test_near_degenerate_modes_of_400_nodes_are_mass_orthonormal():
     case = case_from_dict(heavy(n=400, L=100.0, H=0.0, length=100.3, EA=4381066.0, mu=10.0, modal={"modes": 4}))
     st = run_static(case, all_models=False)
@@ -991,10 +974,6 @@ def test_near_degenerate_modes_of_400_nodes_are_mass_orthonormal():
     assert np.abs(phi.T @ (m[:, None] * phi) - np.eye(4)).max() < 1e-9
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "case_from_dict / cablesim.load_case(dict) raise yaml.representer.RepresenterError (not "
-    "CablesimError) when a value is a numpy number, e.g. cable.nodes = np.int64(40) or "
-    "cable.EA = np.float64(...), which is what a notebook computing a heavy cable's shorthand produces"))
 def test_case_from_a_mapping_with_numpy_numbers():
     d = heavy(n=10)
     d["cable"]["nodes"] = np.int64(10)
@@ -1006,11 +985,6 @@ def test_case_from_a_mapping_with_numpy_numbers():
     assert case.cable.n_nodes == 10 and case.cable.EA == 2.0e6
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "continuation.channels (and figure.channels) naming a node the cable does not have are not checked "
-    "when the case is read, unlike history/free_vibration/sweep/outputs.channels: `cablesim check` calls "
-    "such a case valid, and `cablesim continue` refuses it only after the statics, with a message that "
-    "does not name the field continuation.channels"))
 def test_continuation_node_channels_are_checked_with_the_case():
     d = heavy(n=3, L=12.0, H=0.5, length=12.6, mu=1.5, point=[{"node": 2, "FL": [0.0, 5.0]}])
     d["continuation"] = {"omega": {"start": 1.0, "stop": 2.0}, "channels": ["node9.v"]}
@@ -1018,13 +992,6 @@ def test_continuation_node_channels_are_checked_with_the_case():
         case_from_dict(d)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "a heavy cable whose natural length equals its chord (cable.length: 60 with L = 60, H = 0 and "
-    "nodes: 30 or 50) is refused with the bare message 'could not bracket the tension of the cable' "
-    "(ConvergenceError from closure.py, exit 2), which names no field and says nothing to do: the equal "
-    "segments' sum rounds a few 1e-14 m above the chord, so the inextensible solve of a cable with no sag "
-    "is attempted and fails (explicit S: [60/31]*31 fails alike); the exact analysis solves the same "
-    "cable when length is 1e-14 longer (60.00000000000001) or when S sums exactly to the chord ([2.0]*30)"))
 def test_cable_as_long_as_its_chord_is_solved_or_refused_naming_the_field():
     case = case_from_dict(heavy(n=30, L=60.0, H=0.0, length=60.0, mu=1.5))
     try:
@@ -1036,11 +1003,6 @@ def test_cable_as_long_as_its_chord_is_solved_or_refused_naming_the_field():
     assert np.abs(my_P(L, H, S, EA, st.exact.y) - case.F0).max() < 1e-6 * np.abs(case.F0).max()
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "snapshots refuse a history that kept every DOF when outputs.channels lists them in another order "
-    "(e.g. [node3.v, node3.h, node2.v, ...]): snapshot_figure compares dof_numbers with 1..2n in order "
-    "and says 'this history kept only 6 of 6 (outputs.channels)'; `cablesim plot RUN.h5 --snapshots 3` "
-    "exits 2 with that message, though every DOF is stored"))
 def test_snapshots_of_a_history_keeping_every_dof_in_another_order():
     import cablesim
     from cablesim.plots.snapshots import snapshot_figure

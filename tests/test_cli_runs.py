@@ -204,12 +204,12 @@ def _children(pid: int) -> list[int]:
     kids = []
     for d in os.listdir("/proc"):
         if d.isdigit():
-            try:
+            try:  # a process may end between the listing and these reads
                 fields = Path(f"/proc/{d}/stat").read_text().rsplit(")", 1)[1].split()
+                if int(fields[1]) == pid and "loky" in Path(f"/proc/{d}/cmdline").read_text():
+                    kids.append(int(d))
             except OSError:
                 continue
-            if int(fields[1]) == pid and "loky" in Path(f"/proc/{d}/cmdline").read_text():
-                kids.append(int(d))
     return kids
 
 

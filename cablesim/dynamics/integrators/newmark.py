@@ -132,17 +132,26 @@ def _dense_newton(prm, z, v, a, z1, v1, a1, P_n, P1, K, J, R, warm, wk, awk, coe
 def _band_newton(prm, z, v, a, z1, v1, a1, P_n, P1, Kb, J, R, Cv, wk, coef, c_m, c_c, sf, check_slack):
     """:func:`_dense_newton` in banded storage (exact analysis, banded damping), O(n): ``Kb``
     receives the tangent stiffness of the segment modes ``wk[4]``, ``Cv`` is scratch."""
-    S, EA, L, H, m, C, F0, FL = prm[1], prm[2], prm[3], prm[4], prm[5], prm[6], prm[7], prm[8]
-    am, af = coef[0], coef[1]
-    nd = m.size
+    S, EA, L, H = prm[1], prm[2], prm[3], prm[4]
     y = wk[0]
-    for q in range(nd):
+    for q in range(prm[5].size):
         y[q] = prm[10][q] + z1[q]
-        R[q] = (1.0 - af) * v1[q] + af * v[q]  # the velocity C multiplies, for now
     if kn.exact_force_and_stiffness_band(y, S, EA, L, H, P1, Kb, wk[4]) >= 0 and check_slack and prm[15] == 0:
         return kn.SLACK
+    _band_system(prm, v, a, v1, a1, P_n, P1, Kb, J, R, Cv, coef, c_m, c_c, sf)
+    return kn.OK
+
+
+@njit(cache=True)
+def _band_system(prm, v, a, v1, a1, P_n, P1, Kb, J, R, Cv, coef, c_m, c_c, sf):
+    """The generalized-alpha residual ``R`` and the banded part of the Newton matrix
+    ``J = c_m M + c_c C + (1 - af) K`` from the internal force ``P1`` and the banded ``Kb``."""
+    m, C, F0, FL = prm[5], prm[6], prm[7], prm[8]
+    am, af = coef[0], coef[1]
+    nd = m.size
     for q in range(nd):
-        Cv[q] = bd.band_row(C, R, q)
+        R[q] = (1.0 - af) * v1[q] + af * v[q]  # the velocity C multiplies, for now
+    bd.damping_product(C, prm[13], R, 0, Cv)
     for q in range(nd):
         acc = m[q] * ((1.0 - am) * a1[q] + am * a[q]) + (1.0 - af) * P1[q] + af * P_n[q] + Cv[q]
         R[q] = F0[q] + FL[q] * sf - acc
@@ -151,7 +160,6 @@ def _band_newton(prm, z, v, a, z1, v1, a1, P_n, P1, Kb, J, R, Cv, wk, coef, c_m,
             J[d, q] = (1.0 - af) * Kb[d, q] + c_c * C[d, q]
     for q in range(nd):
         J[bd.BAND_HALF, q] += c_m * m[q]
-    return kn.OK
 
 
 @njit(cache=True)
@@ -161,24 +169,14 @@ def _approximate_newton(prm, z, v, a, z1, v1, a1, P_n, P1, Kb, J, R, Cv, warm, w
     ``J`` minus ``V^T D V`` of rank 4 (``V = [Cr, U]``: the low-rank parts of ``C`` and of
     ``K = B - U Gamma^-1 U^T``, see :mod:`cablesim.dynamics.flexibility`), for
     :func:`solve_band_low_rank`."""
-    m, C, F0, FL, Cr = prm[5], prm[6], prm[7], prm[8], prm[13]
-    am, af = coef[0], coef[1]
-    nd = m.size
+    Cr = prm[13]
+    af = coef[1]
+    nd = prm[5].size
     st = _internal(prm, z1, P_n, z, warm, P1, Kb, first, wk, awk, False)
     if st != kn.OK:
         return st
-    for q in range(nd):
-        R[q] = (1.0 - af) * v1[q] + af * v[q]  # the velocity C multiplies, for now
-    bd.damping_product(C, Cr, R, 0, Cv)
-    for q in range(nd):
-        acc = m[q] * ((1.0 - am) * a1[q] + am * a[q]) + (1.0 - af) * P1[q] + af * P_n[q] + Cv[q]
-        R[q] = F0[q] + FL[q] * sf - acc
     fx.stiffness_band(awk[4], awk[5], Kb, U)
-    for d in range(bd.BAND_ROWS):
-        for q in range(nd):
-            J[d, q] = (1.0 - af) * Kb[d, q] + c_c * C[d, q]
-    for q in range(nd):
-        J[bd.BAND_HALF, q] += c_m * m[q]
+    _band_system(prm, v, a, v1, a1, P_n, P1, Kb, J, R, Cv, coef, c_m, c_c, sf)
     D[:, :] = 0.0
     r = Cr.shape[1]
     for c in range(r):  # c_c C = c_c C_band - U (c_c G) U^T

@@ -84,6 +84,20 @@ def _store(s, z, v, a):
 
 
 @njit(cache=True)
+def _equilibrium_acceleration(prm, t, v, P, a_out, Cv):
+    """``y'' = M^-1 (F(t) - C y' - P)`` (eq. 15) from the internal force ``P`` the scheme carries.
+
+    For the saved states of the approximate analysis, whose outputs (tensions, ``z_c``, ``z_e``)
+    follow from eq. 15: the scheme's own acceleration variable approximates ``y''`` at
+    ``t + (alpha_m - alpha_f) h``, which would make them first order in the step."""
+    m, F0, FL, w = prm[5], prm[7], prm[8], prm[9]
+    bd.damping_product(prm[6], prm[13], v, 0, Cv)
+    sw = np.sin(w * t)
+    for q in range(m.size):
+        a_out[q] = (F0[q] + FL[q] * sw - Cv[q] - P[q]) / m[q]
+
+
+@njit(cache=True)
 def _write_outputs(ta, tb, h, z, v, a, z1, v1, a1, sa, sb, da, db, t_out, out, j):
     """Interpolate the step ``ta -> tb`` at the output instants it covers; the next index."""
     nd = z.size
@@ -305,6 +319,7 @@ def _galpha_advance(prm, s, P_n, warm, wk, awk, evw, track, t0, h, i, i_end, t, 
                np.empty((k, nd)), np.empty((k, nd)), np.empty((nd, 2)), np.empty((k, k)), np.empty(nd),
                (np.empty((k, k)), np.empty((k, k))))
     sa, sb, da, db = np.empty(3 * nd), np.empty(3 * nd), np.empty(3 * nd), np.empty(3 * nd)
+    ae, ae1 = np.empty(nd), np.empty(nd)
     j = 0
     while i < i_end:
         tb = t0 + (i + 1) * h
@@ -333,7 +348,12 @@ def _galpha_advance(prm, s, P_n, warm, wk, awk, evw, track, t0, h, i, i_end, t, 
                     return i, t, j, st, -1
             tb = te
         if j < t_out.size and t_out[j] <= tb + (1e-9 * h if k < 0 else 0.0):
-            j = _write_outputs(t, tb, tb - t, z, v, a, z1, v1, a1, sa, sb, da, db, t_out, out, j)
+            if awk is None:
+                j = _write_outputs(t, tb, tb - t, z, v, a, z1, v1, a1, sa, sb, da, db, t_out, out, j)
+            else:  # saved y'' from the carried internal force (see _equilibrium_acceleration)
+                _equilibrium_acceleration(prm, t, v, P_n, ae, scratch[9])
+                _equilibrium_acceleration(prm, tb, v1, P1, ae1, scratch[9])
+                j = _write_outputs(t, tb, tb - t, z, v, ae, z1, v1, ae1, sa, sb, da, db, t_out, out, j)
         z[:], v[:], a[:], P_n[:] = z1, v1, a1, P1
         t = tb
         if k >= 0:

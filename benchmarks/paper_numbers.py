@@ -97,6 +97,14 @@ def grid_step(omega: np.ndarray) -> float:
     return float(np.round(steps.max(), 10))
 
 
+def read_grid(N, D, src: str, key: str):
+    """A scene's sweep and its grid step, the step recorded as the number ``key``."""
+    sw = read_sweep(read(D / src))
+    step = grid_step(sw.omega)
+    N.freq(key, step, step, src)
+    return sw, step
+
+
 def curve(sw, direction="independent", gamma=None):
     for c in sw.curves:
         if c.direction == direction and (gamma is None or np.isclose(c.gamma, gamma)):
@@ -190,10 +198,8 @@ def fig2(N, D):
 
 def fig3a(N, D):
     src = "fig3a.h5"
-    sw = read_sweep(read(D / src))
+    sw, step = read_grid(N, D, src, "fig3a.step")
     d = curve(sw)
-    step = grid_step(sw.omega)
-    N.freq("fig3a.step", step, step, src)
     for k, w in enumerate(sw.modal[:4], start=1):
         N.add(f"fig3a.mode{k}", w, significant(w, 4), "rad/s", "linear modal analysis, 4 digits", src)
     N.add("fig3a.points", sw.omega.size, f"{sw.omega.size}", "", "count", src)
@@ -259,9 +265,7 @@ def late_jump(N, D, name, channel_index=0, fraction=0.2):
 
 def fig4(N, D):
     src = "fig4.h5"
-    sw = read_sweep(read(D / src))
-    step = grid_step(sw.omega)
-    N.freq("fig4.step", step, step, src)
+    sw, step = read_grid(N, D, src, "fig4.step")
     for g in sw.gamma:
         d = curve(sw, gamma=g)
         w, a = grid_peak(sw, d, "z2", 2.0, 3.0)
@@ -278,9 +282,7 @@ def fig4(N, D):
         else:
             N.amp(f"fig4.sub.g{g:g}.z2", a, src, "largest value near 2 w1, 1 significant digit", 1)
     src = "fig4-peak.h5"
-    sw = read_sweep(read(D / src))
-    step = grid_step(sw.omega)
-    N.freq("fig4.peak.step", step, step, src)
+    sw, step = read_grid(N, D, src, "fig4.peak.step")
     for g in sw.gamma:
         w, a = grid_peak(sw, curve(sw, gamma=g), "z2", 0, 10)
         N.freq(f"fig4.peak.g{g:g}.omega", w, step, src)
@@ -300,10 +302,8 @@ def fig4(N, D):
 
 def fig5a(N, D):
     src = "fig5a.h5"
-    sw = read_sweep(read(D / src))
+    sw, step = read_grid(N, D, src, "fig5a.step")
     d = curve(sw)
-    step = grid_step(sw.omega)
-    N.freq("fig5a.step", step, step, src)
     modes = [w for w in sw.modal if 11.5 <= w <= 13.5]
     for k, w in enumerate(modes, start=1):
         N.add(f"fig5a.mode{k}", w, f"{w:.4f}", "rad/s", "linear modal analysis (approximate), 1e-4", src)
@@ -361,10 +361,8 @@ def fig5b(N, D):
 def fig6_7a(N, D):
     peaks = {}
     for name, src in (("fig6", "fig6.h5"), ("fig7a", "fig7a.h5")):
-        sw = read_sweep(read(D / src))
+        sw, step = read_grid(N, D, src, f"{name}.step")
         d = curve(sw)
-        step = grid_step(sw.omega)
-        N.freq(f"{name}.step", step, step, src)
         for k, w in enumerate(sw.modal[:2], start=1):
             N.add(f"{name}.mode{k}", w, f"{w:.3f}", "rad/s", "linear modal analysis, 1e-3", src)
         for label, lo, hi in (("first", 1.0, 2.1), ("second", 2.1, 4.0)):
@@ -427,10 +425,8 @@ def fig7_modes(N, D):
 
 def fig8(N, D):
     src = "fig8a.h5"
-    sw = read_sweep(read(D / src))
+    sw, step = read_grid(N, D, src, "fig8a.step")
     d = curve(sw)
-    step = grid_step(sw.omega)
-    N.freq("fig8a.step", step, step, src)
     for k, w in enumerate(sw.modal, start=1):
         N.add(f"fig8a.mode{k}", w, significant(w, 5 if w > 100 else 4), "rad/s", "linear modal analysis", src)
     N.add("fig8a.points", sw.omega.size, f"{sw.omega.size}", "", "count", src)

@@ -77,7 +77,7 @@ def test_product_is_the_inverse_of_the_full_flexibility(name, n):
     np.testing.assert_allclose(N @ K, np.eye(2 * n), rtol=0, atol=1e-9)
     assert np.linalg.eigvalsh(K).min() > 0.0  # a taut cable's stiffness is positive definite
     x2, u2 = np.empty(2 * n), np.empty(2 * n)
-    fx.natural_and_elastic(S, EA, fac, T2, x2, u2)
+    fx.natural_and_elastic(S, EA, fac, gi, T2, x2, u2)
     np.testing.assert_allclose(x2, x, rtol=0, atol=1e-12 * S.sum())
     np.testing.assert_allclose(u2, u, rtol=0, atol=1e-12 * np.abs(u).max())
 

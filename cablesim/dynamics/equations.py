@@ -65,12 +65,12 @@ def approximate_workspace(n: int):
 def approximate_stiffness(prm, P, warm, awk):
     """Solve the inextensible closure at loads P (warm start ``warm``) and factor ``K = N^-1``.
 
-    Fills ``awk`` (:func:`approximate_workspace`): Q, x, u, T and the factors of
+    Fills ``awk`` (:func:`approximate_workspace`): Q, T and the factors of
     :func:`cablesim.dynamics.flexibility.segment_factors` (all O(n)); returns ``kn.OK`` or
-    ``kn.INNER_SOLVE``.
+    ``kn.INNER_SOLVE``. The states x and u follow from :func:`natural_state` (outputs only).
     """
     S, EA, L, H, tol = prm[1], prm[2], prm[3], prm[4], prm[14]
-    Q, x, u, T = awk[0], awk[1], awk[2], awk[3]
+    Q, T = awk[0], awk[3]
     for i in range(P.size):
         if not abs(P[i]) < 1e100:  # a blown-up state (or NaN): the closure's products would underflow
             return kn.INNER_SOLVE
@@ -79,8 +79,13 @@ def approximate_stiffness(prm, P, warm, awk):
         return kn.INNER_SOLVE
     if not fx.segment_factors(S, EA, Q, warm, T, awk[4], awk[5]):
         return kn.INNER_SOLVE
-    fx.natural_and_elastic(S, EA, awk[4], T, x, u)
     return kn.OK
+
+
+@njit(cache=True)
+def natural_state(prm, awk):
+    """``x(P)`` and ``u(P)`` into ``awk[1]``, ``awk[2]`` after :func:`approximate_stiffness`."""
+    fx.natural_and_elastic(prm[1], prm[2], awk[4], awk[5], awk[3], awk[1], awk[2])
 
 
 @njit(cache=True)
@@ -197,6 +202,7 @@ def observe(prm, t, s, warm, zc, ze, T, segment_state, awk, split):
             zc[:] = np.nan
             ze[:] = np.nan
         else:
+            natural_state(prm, awk)
             zc[:] = x - prm[11]
             ze[:] = z - zc
         Cv = np.empty(nd)
@@ -212,6 +218,7 @@ def observe(prm, t, s, warm, zc, ze, T, segment_state, awk, split):
         T[:] = np.nan
         return np.nan
     T[:] = awk[3]
+    natural_state(prm, awk)
     zc[:] = x - prm[11]
     ze[:] = u - prm[12]
     mismatch = z - zc - ze

@@ -246,24 +246,18 @@ def stiffness_band(fac, gi, Kb, U):
 
 
 @njit(cache=True)
-def natural_and_elastic(S, EA, fac, T, x, u):
+def natural_and_elastic(S, EA, fac, gi, T, x, u):
     """Natural state ``x`` and elastic displacement ``u`` of the approximate analysis, O(n),
-    from :func:`segment_factors` and the tensions ``T`` (the same ``u`` as the full elastic
-    flexibility's ``sum_k (S_k T_k / EA) b_k``)."""
+    from :func:`segment_factors` (``fac`` and ``gi``, whose ``H^-1`` it uses) and the tensions
+    ``T`` (the same ``u`` as the full elastic flexibility's ``sum_k (S_k T_k / EA) b_k``)."""
     n1 = S.size
     # u_j = (sum_{k>j} G_k) H^-1 sigma - sum_{k>j} eps_k, eps_k = S_k T_k e_k / EA, sigma = sum eps
-    h00 = 0.0
-    h01 = 0.0
-    h11 = 0.0
     s0 = 0.0
     s1 = 0.0
     px = 0.0
     py = 0.0
     for k in range(n1):
-        t0, t1, e0, e1, g = fac[k, 0], fac[k, 1], fac[k, 2], fac[k, 3], fac[k, 4]
-        h00 += g * t0 * t0
-        h01 += g * t0 * t1
-        h11 += g * t1 * t1
+        e0, e1 = fac[k, 2], fac[k, 3]
         s0 += S[k] * T[k] * e0 / EA
         s1 += S[k] * T[k] * e1 / EA
         if k < n1 - 1:
@@ -271,9 +265,8 @@ def natural_and_elastic(S, EA, fac, T, x, u):
             py += S[k] * e1
             x[2 * k] = px
             x[2 * k + 1] = py
-    det = h00 * h11 - h01 * h01
-    l0 = (h11 * s0 - h01 * s1) / det
-    l1 = (-h01 * s0 + h00 * s1) / det
+    l0 = gi[3] * s0 + gi[4] * s1
+    l1 = gi[4] * s0 + gi[5] * s1
     a00 = 0.0
     a01 = 0.0
     a11 = 0.0

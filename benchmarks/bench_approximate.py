@@ -30,12 +30,13 @@ import time
 
 import numpy as np
 
+from bench_heavy import cost  # the same timing rule (median of repeats after a warm-up)
+
 from cablesim.analyses.setup import build_equations, make_integrator
 from cablesim.analyses.static import run_static
 from cablesim.case import IntegratorSpec, parse_case
 from cablesim.dynamics import flexibility as fx
 from cablesim.dynamics import kernels as kn
-from cablesim.dynamics.simulate import simulate
 
 CASE = """\
 cable: {{L: 100.0, H: 0.0, length: 102.5, nodes: {n}, EA: 2.0e8, mass_per_length: 10.0}}
@@ -98,14 +99,7 @@ def run_cost(n: int, seconds: float, repeats: int) -> tuple[float, float, str]:
     """(wall s per simulated s, ms per step, integrator) of a history from rest."""
     eom = equations(n)
     integ = make_integrator(IntegratorSpec(), eom, OMEGA)
-    simulate(eom, integ, min(seconds, 0.01), min(seconds, 0.01), split=False)  # warm-up
-    walls = []
-    for _ in range(repeats):
-        t = time.perf_counter()
-        h = simulate(eom, integ, seconds, min(0.05, seconds), split=False)
-        walls.append(time.perf_counter() - t)
-        assert h.completed, h.message
-    per_s = float(np.median(walls)) / seconds
+    per_s = cost(eom, integ, seconds, repeats)
     dt = getattr(integ, "dt", None)
     return per_s, (1e3 * per_s * dt if dt else math.nan), integ.name
 

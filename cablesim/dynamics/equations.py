@@ -167,14 +167,27 @@ def _approximate_Kv(prm, t, s, warm, wk, awk):
 
 
 @njit(cache=True)
-def observe(prm, t, s, warm, zc, ze, T, segment_state, awk, split):
+def equilibrium_factors(prm, warm, awk):
+    """The factors of the approximate analysis' ``K0 = K(F0)`` (copies of ``awk[4]``, ``awk[5]``
+    after :func:`approximate_stiffness` at F0), for :func:`observe`'s drift: computed once per
+    record. NaN for the exact analysis or if the closure at F0 fails (the drift is then NaN)."""
+    fac0, gi0 = np.full_like(awk[4], np.nan), np.full_like(awk[5], np.nan)
+    if prm[0] == APPROXIMATE and approximate_stiffness(prm, prm[7], warm.copy(), awk) == kn.OK:
+        fac0[:, :] = awk[4]
+        gi0[:] = awk[5]
+    return fac0, gi0
+
+
+@njit(cache=True)
+def observe(prm, t, s, warm, zc, ze, T, segment_state, awk, split, k0):
     """Derived outputs at one instant: ``z_c``, ``z_e``, tensions and the drift of eq. 15.
 
     ``segment_state`` receives the index of a slack segment (exact) or -1; tensions follow the
     tension-only law ``EA max(l - S, 0) / S``. Returns the drift
     residual ``|M y'' + C y' + P - F| / |F0|`` (exact analysis) or, for the approximate analysis
     where eq. 15 defines P, the mismatch between the integrated ``y`` and ``x(P) + u(P)``
-    expressed as a force through ``K0``, also relative to ``|F0|``. NaN if the inner solve fails.
+    expressed as a force through ``K0`` (its factors ``k0`` from :func:`equilibrium_factors`),
+    also relative to ``|F0|``. NaN if the inner solve fails.
     Without ``split`` the exact analysis skips the inner solve (``zc``, ``ze`` set to zero).
     """
     model, S, EA, L, H, m, C = prm[0], prm[1], prm[2], prm[3], prm[4], prm[5], prm[6]
@@ -222,10 +235,8 @@ def observe(prm, t, s, warm, zc, ze, T, segment_state, awk, split):
     zc[:] = x - prm[11]
     ze[:] = u - prm[12]
     mismatch = z - zc - ze
-    if approximate_stiffness(prm, prm[7], warm.copy(), awk) != kn.OK:  # K0 = K(F0), factored
-        return np.nan
     d = np.empty(nd)
-    fx.stiffness_product(awk[4], awk[5], mismatch, d, awk[6])
+    fx.stiffness_product(k0[0], k0[1], mismatch, d, awk[6])
     return np.sqrt(np.sum(d * d)) / f0norm
 
 

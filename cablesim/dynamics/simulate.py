@@ -21,7 +21,7 @@ from ..modal import fastest_rate
 from ..statics import inextensible_equilibrium, resisting_force
 from . import kernels as kn
 from .interrupts import MAX_CHUNK_STEPS, MIN_CHUNK_STEPS, Deferred, received
-from .equations import EquationsOfMotion, approximate_workspace, observe
+from .equations import EquationsOfMotion, approximate_workspace, equilibrium_factors, observe
 from .integrators import Integrator
 from .integrators.events import CHATTER_TEXT
 from .result import HistoryResult, SlackRecord
@@ -31,8 +31,9 @@ from .status import Status
 @njit(cache=True)
 def _observe_all(prm, t, S, warm, zc, ze, T, residual, slack, awk, split):
     seg = np.empty(1, dtype=np.int64)
+    k0 = equilibrium_factors(prm, warm, awk)
     for i in range(t.size):
-        residual[i] = observe(prm, t[i], S[i], warm, zc[i], ze[i], T[i], seg, awk, split)
+        residual[i] = observe(prm, t[i], S[i], warm, zc[i], ze[i], T[i], seg, awk, split, k0)
         slack[i] = seg[0]
 
 

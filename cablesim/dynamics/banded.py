@@ -136,6 +136,8 @@ def damping_product(C, Cr, x, off, out):
     r = Cr.shape[1]
     for i in range(nd):
         out[i] = damping_row(C, x, off, i)
+    if r == 0:  # no low-rank part (exact analysis): no scratch either, this is the time loop
+        return
     w = np.zeros(r)
     for c in range(r):
         for j in range(nd):

@@ -35,11 +35,11 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_heavy.py
 	$(PY) benchmarks/bench_approximate.py
 
-# numba caches compiled kernels beside the sources but does not notice when a kernel called
-# from another module changes: after editing cablesim/dynamics/, clear the cache.
+# numba's cache of the compiled kernels lives in cablesim/__pycache__/kernels-<hash of the compiled
+# sources> (cablesim/jit.py): an edited kernel starts a fresh cache by itself; `make clean` only
+# frees the space of the old ones.
 clean:
-	rm -rf runs/*/ .pytest_cache .hypothesis
-	find cablesim -name '*.nbi' -delete -o -name '*.nbc' -delete
+	rm -rf runs/*/ .pytest_cache .hypothesis cablesim/__pycache__/kernels-*
 
 # ---------------------------------------------------------------------------------------------
 # Paper figures: `make fig3a`, ..., `make figures`. Each scene runs cablesim on its case file in

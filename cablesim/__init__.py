@@ -17,7 +17,8 @@ Python API (the command line's analyses; see :mod:`cablesim.api`)::
 The package, from the bottom layer up (a module imports only from layers below it; checked by
 ``tests/test_architecture.py``):
 
-- ``names``, ``errors``, ``version``, ``channels`` -- the vocabulary;
+- ``names``, ``errors``, ``version``, ``channels`` -- the vocabulary; ``jit`` -- the decorator of
+  every compiled kernel, whose on-disk cache is keyed on a hash of the compiled sources;
 - ``cable``, ``closure``, ``statics``, ``modal`` -- the model: geometry, the closure problem on
   the complementary energy, the three static equilibria, modes and Rayleigh damping;
 - ``dynamics/`` -- compiled kernels, the equations of motion (``equations``), the integrators

@@ -11,7 +11,7 @@ dense or a banded damping matrix (:func:`damping_row`); :func:`is_band` tells th
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from ..jit import njit
 
 #: Rows of a damping matrix in banded storage (bandwidth 3: block-tridiagonal 2x2 blocks):
 #: ``C_band[3 + i - j, j] = C[i, j]`` (LAPACK's general band layout). The DOF count is even, so a
@@ -20,13 +20,13 @@ BAND_ROWS = 7
 BAND_HALF = 3
 
 
-@njit(cache=True)
+@njit
 def is_band(A):
     """Whether ``A`` is in banded storage (shape (BAND_ROWS, nd)) rather than dense (nd, nd)."""
     return A.shape[0] == BAND_ROWS and A.shape[1] != BAND_ROWS
 
 
-@njit(cache=True)
+@njit
 def damping_row(C, s, off, i):
     """Row ``i`` of ``C`` times ``s[off:off + nd]``: C dense (nd, nd), O(n), or banded
     (:data:`BAND_ROWS`, nd), O(1)."""
@@ -67,7 +67,7 @@ def band_product(A: np.ndarray, x: np.ndarray) -> np.ndarray:
     return y
 
 
-@njit(cache=True)
+@njit
 def band_row(A, x, i):
     """Row ``i`` of the banded ``A`` (storage as :func:`damping_row`) times ``x``."""
     nd = A.shape[1]
@@ -77,7 +77,7 @@ def band_row(A, x, i):
     return acc
 
 
-@njit(cache=True)
+@njit
 def factor_band(A, LU):
     """LU factors of a banded ``A`` (storage as :func:`damping_row`) into ``LU`` by Gaussian
     elimination without pivoting, O(n): the multipliers below the diagonal, U on and above.
@@ -101,7 +101,7 @@ def factor_band(A, LU):
     return True
 
 
-@njit(cache=True)
+@njit
 def solve_factored(LU, b, out):
     """Solve ``A out = b`` with the factors of :func:`factor_band`, O(n)."""
     nd = b.size
@@ -117,7 +117,7 @@ def solve_factored(LU, b, out):
         out[i] = acc / LU[hb, i]
 
 
-@njit(cache=True)
+@njit
 def solve_band(A, b, out, LU):
     """Solve ``A out = b`` for a banded ``A`` (:func:`factor_band`, then :func:`solve_factored`);
     False on a zero or non-finite pivot."""
@@ -127,7 +127,7 @@ def solve_band(A, b, out, LU):
     return True
 
 
-@njit(cache=True)
+@njit
 def damping_product(C, Cr, x, off, out):
     """``out = (C - U G U^T) x[off:off + nd]``: ``C`` dense or banded (:func:`damping_row`) and
     ``Cr = [U; G]`` (nd + r, r) its low-rank part (r = 0, or 2 for the approximate analysis,

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from numba import njit
+from ..jit import njit
 
 from ..cable import Cable
 from ..modal import modal_analysis
@@ -40,7 +40,7 @@ STOP = 0
 CONTINUE = 1
 
 
-@njit(cache=True)
+@njit
 def load(prm, t):
     """``F(t) = F0 + FL sin(w t)`` (allocates; for code outside the hot loop)."""
     return prm[7] + prm[8] * np.sin(prm[9] * t)
@@ -61,7 +61,7 @@ def approximate_workspace(n: int):
     return (np.empty((n + 1, 2)), np.empty(nd), np.empty(nd), np.empty(n + 1), *fx.factor_workspace(n))
 
 
-@njit(cache=True)
+@njit
 def approximate_stiffness(prm, P, warm, awk):
     """Solve the inextensible closure at loads P (warm start ``warm``) and factor ``K = N^-1``.
 
@@ -82,13 +82,13 @@ def approximate_stiffness(prm, P, warm, awk):
     return kn.OK
 
 
-@njit(cache=True)
+@njit
 def natural_state(prm, awk):
     """``x(P)`` and ``u(P)`` into ``awk[1]``, ``awk[2]`` after :func:`approximate_stiffness`."""
     fx.natural_and_elastic(prm[1], prm[2], awk[4], awk[5], awk[3], awk[1], awk[2])
 
 
-@njit(cache=True)
+@njit
 def resisting_from_eq15(prm, t, v, a, P):
     """``P = F(t) - C y' - M y''`` (eq. 15) into P."""
     m, C, F0, FL, w = prm[5], prm[6], prm[7], prm[8], prm[9]
@@ -98,7 +98,7 @@ def resisting_from_eq15(prm, t, v, a, P):
         P[i] = F0[i] + FL[i] * sw - m[i] * a[i] - P[i]
 
 
-@njit(cache=True)
+@njit
 def rate(prm, t, s, warm, ds, wk, awk):
     """Right-hand side of the third-order system: ``ds = (velocity, acceleration, jerk)``.
 
@@ -136,7 +136,7 @@ def rate(prm, t, s, warm, ds, wk, awk):
     return kn.OK
 
 
-@njit(cache=True)
+@njit
 def consistent_acceleration(prm, t, s, wk):
     """Exact analysis: set ``y''`` in ``s`` from eq. 15 with the segment modes ``wk[4]``,
     ``y'' = M^-1 (F(t) - C y' - P(y))`` (eq. 19 at a restart)."""
@@ -154,7 +154,7 @@ def consistent_acceleration(prm, t, s, wk):
         s[2 * nd + i] = (F0[i] + FL[i] * sw - P[i] - wk[5][i]) / m[i]
 
 
-@njit(cache=True)
+@njit
 def _approximate_Kv(prm, t, s, warm, wk, awk):
     """``K(P) y'`` of the approximate analysis into ``wk[2]``, with P from eq. 15."""
     nd = prm[5].size
@@ -166,7 +166,7 @@ def _approximate_Kv(prm, t, s, warm, wk, awk):
     return kn.OK
 
 
-@njit(cache=True)
+@njit
 def equilibrium_factors(prm, warm, awk):
     """The factors of the approximate analysis' ``K0 = K(F0)`` (copies of ``awk[4]``, ``awk[5]``
     after :func:`approximate_stiffness` at F0), for :func:`observe`'s drift: computed once per
@@ -178,7 +178,7 @@ def equilibrium_factors(prm, warm, awk):
     return fac0, gi0
 
 
-@njit(cache=True)
+@njit
 def observe(prm, t, s, warm, zc, ze, T, segment_state, awk, split, k0):
     """Derived outputs at one instant: ``z_c``, ``z_e``, tensions and the drift of eq. 15.
 

@@ -25,7 +25,7 @@ stiffness) minus a rank-2 correction: ``K v`` costs O(n) and needs no solve. Che
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from ..jit import njit
 
 #: Columns of a row of :func:`segment_factors`: t (2), e (2), S/T, M^-1 and M in the (t, e) basis.
 FACTOR_COLUMNS = 11
@@ -39,7 +39,7 @@ def factor_workspace(n: int):
             (np.empty((n + 1, 2)), np.empty(2 * n), np.empty(2 * n)))
 
 
-@njit(cache=True)
+@njit
 def segment_factors(S, EA, Q, F, T, fac, gi):
     """Per-segment factors of ``K`` at the solved inextensible closure (segment-1 force ``F``).
 
@@ -103,7 +103,7 @@ def segment_factors(S, EA, Q, F, T, fac, gi):
     return True
 
 
-@njit(cache=True)
+@njit
 def stiffness_product(fac, gi, v, out, scratch):
     """``out = K v = N^-1 v`` in O(n) from :func:`segment_factors` (``scratch`` from
     :func:`factor_workspace`), with one step of iterative refinement against the forward
@@ -124,7 +124,7 @@ def stiffness_product(fac, gi, v, out, scratch):
         out[i] += dw[i]
 
 
-@njit(cache=True)
+@njit
 def flexibility_product(fac, gi, w, out, Fd):
     """``out = N w`` in O(n) from :func:`segment_factors`: ``N = sum_k (dF_k/dP)^T M_k (dF_k/dP)``
     with the segment force rates ``F'_k = F'_1 - sum_{j<k} w_j`` (``F'_1`` from the closure) and
@@ -178,7 +178,7 @@ def flexibility_product(fac, gi, w, out, Fd):
         out[2 * j + 1] = a1
 
 
-@njit(cache=True)
+@njit
 def _factored_solve(fac, gi, v, out, Fd):
     """``out = K v`` by the factors alone (see the module docstring; scratch ``Fd`` (n+1, 2))."""
     n1 = fac.shape[0]
@@ -209,7 +209,7 @@ def _factored_solve(fac, gi, v, out, Fd):
         out[2 * j + 1] = Fd[j, 1] - Fd[j + 1, 1]
 
 
-@njit(cache=True)
+@njit
 def stiffness_band(fac, gi, Kb, U):
     """``K = B - U Gamma^-1 U^T`` from :func:`segment_factors`, O(n): the block-tridiagonal
     ``B = Delta^T M^-1 Delta`` into ``Kb`` in the general band storage of
@@ -245,7 +245,7 @@ def stiffness_band(fac, gi, Kb, U):
                         Kb[hb + i - j, j] += sa * sb * mk[r][c]
 
 
-@njit(cache=True)
+@njit
 def natural_and_elastic(S, EA, fac, gi, T, x, u):
     """Natural state ``x`` and elastic displacement ``u`` of the approximate analysis, O(n),
     from :func:`segment_factors` (``fac`` and ``gi``, whose ``H^-1`` it uses) and the tensions

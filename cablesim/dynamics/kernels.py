@@ -13,7 +13,7 @@ Every kernel returns a status code (:data:`OK` or a failure) instead of raising.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from ..jit import njit
 
 from .banded import BAND_HALF
 from .status import Status
@@ -29,7 +29,7 @@ STEP_UNDERFLOW = int(Status.STEP_UNDERFLOW)
 # ----------------------------------------------------------------------------------------------
 # Exact model: forces and stiffness of a deformed configuration
 # ----------------------------------------------------------------------------------------------
-@njit(cache=True)
+@njit
 def _segment(y, k, n, L, H):
     """Difference vector of segment k in configuration y."""
     if k == 0:
@@ -43,7 +43,7 @@ def _segment(y, k, n, L, H):
     return x1 - x0, y1 - y0
 
 
-@njit(cache=True)
+@njit
 def exact_tensions(y, S, EA, L, H, T):
     """Fill ``T`` with ``EA (l - S) / S``; return the first slack segment or -1."""
     n = S.size - 1
@@ -57,7 +57,7 @@ def exact_tensions(y, S, EA, L, H, T):
     return slack
 
 
-@njit(cache=True)
+@njit
 def segment_gaps(y, S, L, H, g):
     """Fill ``g`` with ``l - S`` of every segment (negative: shorter than its natural length)."""
     n = S.size - 1
@@ -66,7 +66,7 @@ def segment_gaps(y, S, L, H, g):
         g[k] = np.sqrt(dx * dx + dy * dy) - S[k]
 
 
-@njit(cache=True)
+@njit
 def segment_gap(y, k, S, L, H):
     """``l - S`` of segment k in configuration y."""
     n = S.size - 1
@@ -74,7 +74,7 @@ def segment_gap(y, k, S, L, H):
     return np.sqrt(dx * dx + dy * dy) - S[k]
 
 
-@njit(cache=True)
+@njit
 def tension_only_mask(y, S, L, H, taut):
     """``taut[k]`` = 1 where segment k is longer than its natural length, else 0 (slack)."""
     n = S.size - 1
@@ -83,7 +83,7 @@ def tension_only_mask(y, S, L, H, taut):
         taut[k] = 1.0 if np.sqrt(dx * dx + dy * dy) > S[k] else 0.0
 
 
-@njit(cache=True)
+@njit
 def exact_force_and_Kv(y, v, S, EA, L, H, P, Kv, taut):
     """Resisting force ``P(y)`` and the product ``K(y) v``; returns the first segment not longer
     than its natural length, or -1.
@@ -130,7 +130,7 @@ def exact_force_and_Kv(y, v, S, EA, L, H, P, Kv, taut):
     return slack
 
 
-@njit(cache=True)
+@njit
 def segment_stiffness(y, k, n, S, EA, L, H, taut_k):
     """Segment ``k``'s tension, unit vector and 2x2 stiffness block ``(EA/S) e e^T + (T/l)(I - e e^T)``
     in configuration ``y``, scaled by ``taut_k`` (0 while slack): ``(T, e0, e1, k00, k01, k11,
@@ -146,7 +146,7 @@ def segment_stiffness(y, k, n, S, EA, L, H, taut_k):
     return T, e0, e1, kg + (ka - kg) * e0 * e0, (ka - kg) * e0 * e1, kg + (ka - kg) * e1 * e1, short
 
 
-@njit(cache=True)
+@njit
 def exact_force_and_stiffness(y, S, EA, L, H, P, K, taut):
     """Resisting force ``P(y)`` and the assembled tangent stiffness ``K(y)`` of the segments with
     ``taut[k] = 1`` (see :func:`exact_force_and_Kv`); the first segment not longer than S, or -1."""
@@ -189,7 +189,7 @@ def exact_force_and_stiffness(y, S, EA, L, H, P, K, taut):
 # ----------------------------------------------------------------------------------------------
 # Inextensible closure and the approximate model's flexibility
 # ----------------------------------------------------------------------------------------------
-@njit(cache=True)
+@njit
 def _phi(S, Q, eps, L, H, F0, F1):
     """Complementary energy, its gradient and Hessian at segment-1 force (F0, F1)."""
     phi = -(F0 * L + F1 * H)
@@ -221,7 +221,7 @@ def _phi(S, Q, eps, L, H, F0, F1):
     return phi, g0, g1, h00, h01, h11, tmin
 
 
-@njit(cache=True)
+@njit
 def _escape_kink(S, Q, eps, L, H, F):
     """Move F out of the kink ``F = Q_k`` nearest to it, along the exact descent ray.
 
@@ -279,7 +279,7 @@ def _escape_kink(S, Q, eps, L, H, F):
     return True
 
 
-@njit(cache=True)
+@njit
 def closure_solve(S, Q, eps, L, H, F, tol, maxit):
     """Damped Newton on the complementary energy from the start ``F`` (updated in place).
 
@@ -335,7 +335,7 @@ def closure_solve(S, Q, eps, L, H, F, tol, maxit):
     return it
 
 
-@njit(cache=True)
+@njit
 def cumulative_loads(P, Q):
     """``Q_k = sum_{j<k} P_j`` into Q of shape (n+1, 2)."""
     Q[0, 0] = 0.0
@@ -345,7 +345,7 @@ def cumulative_loads(P, Q):
         Q[k, 1] = Q[k - 1, 1] + P[2 * k - 1]
 
 
-@njit(cache=True)
+@njit
 def inextensible_tangents(S, Q, F, x, T, a, b, e, gt, W):
     """Positions, tensions and force derivatives of the inextensible cable at its solution.
 
@@ -406,7 +406,7 @@ def inextensible_tangents(S, Q, F, x, T, a, b, e, gt, W):
     return i00, i01, i11
 
 
-@njit(cache=True)
+@njit
 def approximate_flexibility(S, EA, Q, F, x, u, T, N, wk):
     """Natural state ``x``, elastic displacement ``u``, tensions and ``N = D + f`` at loads Q.
 
@@ -479,7 +479,7 @@ def flexibility_workspace(n: int):
     )
 
 
-@njit(cache=True)
+@njit
 def solve_small(A, b, out, LU):
     """Solve ``A out = b`` by Gaussian elimination with partial pivoting into scratch ``LU``.
 
@@ -524,7 +524,7 @@ def solve_small(A, b, out, LU):
 # ----------------------------------------------------------------------------------------------
 # Banded stiffness and solves (heavy cables: O(n) per Newton iteration)
 # ----------------------------------------------------------------------------------------------
-@njit(cache=True)
+@njit
 def exact_force_and_stiffness_band(y, S, EA, L, H, P, Kb, taut):
     """:func:`exact_force_and_stiffness` with ``K`` in banded storage
     (``Kb[BAND_HALF + i - j, j] = K[i, j]``, shape (BAND_ROWS, 2n), see

@@ -14,7 +14,7 @@ import time
 from typing import Callable
 
 import numpy as np
-from numba import njit
+from ..jit import njit
 
 from ..errors import CablesimError, SlackSegmentError
 from ..modal import fastest_rate
@@ -28,7 +28,7 @@ from .result import HistoryResult, SlackRecord
 from .status import Status
 
 
-@njit(cache=True)
+@njit
 def _observe_all(prm, t, S, warm, zc, ze, T, residual, slack, awk, split):
     seg = np.empty(1, dtype=np.int64)
     k0 = equilibrium_factors(prm, warm, awk)

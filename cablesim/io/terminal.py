@@ -18,11 +18,12 @@ from pathlib import Path
 import typer
 from typer.core import TyperGroup
 
+from ..jit import cache_dir
 from ..names import ANALYSES, INTEGRATORS, SLACK_POLICIES
 
 
 #: Where numba caches the compiled kernels (their index files tell whether a run must compile).
-KERNEL_CACHE = Path(__file__).resolve().parents[1] / "dynamics" / "__pycache__"
+KERNEL_CACHE = cache_dir()
 
 
 def say_error(message: str, command: str | None = None) -> None:
@@ -140,7 +141,7 @@ class StatusLine:
 def compile_notice(note, cache: Path | None = None, pattern: str = "equations.rate-*.nbi") -> bool:
     """Tell ``note`` (a line to print) that the compiled kernels are not yet in numba's cache."""
     cache = cache if cache is not None else KERNEL_CACHE
-    if list(cache.glob(pattern)):
+    if any(cache.rglob(pattern)):
         return False
     note("compiling the numerical kernels on first use (about a minute; cached for later runs) ...")
     return True
@@ -151,7 +152,7 @@ def compiling(note, pattern: str = "equations.rate-*.nbi", delay: float = 1.5):
     """Say that the kernels are being compiled, if they are (cold cache) and it takes a while:
     a refusal found in the first moments is then never preceded by the notice."""
     timer = None
-    if not list(KERNEL_CACHE.glob(pattern)):
+    if not any(KERNEL_CACHE.rglob(pattern)):
         timer = threading.Timer(delay, compile_notice, args=(note,), kwargs={"pattern": pattern})
         timer.daemon = True
         timer.start()

@@ -49,7 +49,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
+from ..jit import njit
 
 from ..dynamics import kernels as dk
 from .kernels import FIELD_SIG, INNER_SOLVE, OK, SLACK
@@ -78,7 +78,7 @@ class Layout:
     size: int
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always")
 def param_offsets(nd):
     """Offsets ``(S, EA, m, C, F0, FL, gamma, y0, tol, size)`` of the packed parameter array of
     ``nd`` DOF (see :func:`pack`): the one statement of its layout, for the kernels and Python."""
@@ -139,7 +139,7 @@ def _approx_size(nd):
         + 2 * (nn + 1) * nd + 2 * (nn + 1) + (nn + 1) + 4 * nd + 3 * nd + 4
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always")
 def _node(prm, o_y0, j, n, L, H):
     """Equilibrium coordinates of node ``j`` (``0 .. n-1`` the masses, ``-1`` and ``n`` the
     supports), from ``y0`` at ``prm[o_y0:]``."""
@@ -150,7 +150,7 @@ def _node(prm, o_y0, j, n, L, H):
     return prm[o_y0 + 2 * j], prm[o_y0 + 2 * j + 1]
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always")
 def force_and_stiffness(x, prm, o_y0, o_S, EA, L, H, P, o_P, J, nd):
     """Resisting force ``P(y0 + z)`` into ``P[o_P : o_P + nd]`` and tangent stiffness ``K`` into
     ``J[nd:, :nd]`` (displacement form, module docstring; ``z = x[:nd]``, ``y0`` at
@@ -202,7 +202,7 @@ def force_and_stiffness(x, prm, o_y0, o_S, EA, L, H, P, o_P, J, nd):
     return slack
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always")
 def _add_block(J, r, c, k00, k01, k11):
     """``J[r:r+2, c:c+2] += [[k00, k01], [k01, k11]]``."""
     J[r, c] += k00
@@ -211,7 +211,7 @@ def _add_block(J, r, c, k00, k01, k11):
     J[r + 1, c + 1] += k11
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always")
 def _second_order(theta, x, prm, P, dx, J, dp, ipar, nd, o_m, o_C, o_F0, o_FL, o_g):
     """Fill dx, the lower blocks of J (K already in ``J[nd:, :nd]``) and dp."""
     sn = np.sin(theta)
@@ -238,7 +238,7 @@ def _second_order(theta, x, prm, P, dx, J, dp, ipar, nd, o_m, o_C, o_F0, o_FL, o
             dp[i] = 0.0
 
 
-@njit(FIELD_SIG, cache=True)
+@njit(FIELD_SIG)
 def exact_field(theta, x, prm, work, dx, J, dp, ipar):
     """Exact analysis (module docstring)."""
     nd = int(prm[0])
@@ -251,7 +251,7 @@ def exact_field(theta, x, prm, work, dx, J, dp, ipar):
     return OK
 
 
-@njit(cache=True)
+@njit
 def polish_closure(S, Q, L, H, F, steps):
     """Plain Newton steps on the inextensible closure ``sum_k S_k e_k = (L, H)`` after
     :func:`cablesim.dynamics.kernels.closure_solve`, whose stopping test leaves the segment
@@ -282,7 +282,7 @@ def polish_closure(S, Q, L, H, F, steps):
         F[1] -= (h00 * g1 - h01 * g0) / det
 
 
-@njit(cache=True)
+@njit
 def _inner_state(P, F1, S, EA, L, H, tol, Q, xx, u, T, N, fw):
     """Inextensible closure (to round-off) and ``x, u, T, N`` at loads P; False if it fails
     (no closure, or a slack segment)."""
@@ -297,7 +297,7 @@ def _inner_state(P, F1, S, EA, L, H, tol, Q, xx, u, T, N, fw):
     return True
 
 
-@njit(cache=True)
+@njit
 def _residual(yt, xx, u, r):
     big = 0.0
     for i in range(yt.size):
@@ -306,14 +306,14 @@ def _residual(yt, xx, u, r):
     return big
 
 
-@njit(cache=True)
+@njit
 def residual_floor(S, L, H):
     """Round-off level of the residual ``y - x(P) - u(P)``: :data:`FLOOR_ULPS` ulps of the
     cable's length (module docstring)."""
     return FLOOR_ULPS * np.finfo(np.float64).eps * max(np.sum(S), np.sqrt(L * L + H * H))
 
 
-@njit(cache=True)
+@njit
 def solve_loads(yt, P, F1, S, EA, L, H, tol, maxit, Q, xx, u, T, N, fw, LU, r, d, Pt, F1t):
     """Damped Newton for the loads ``P`` with ``x(P) + u(P) = yt``, from ``(P, F1)`` (updated).
 
@@ -370,7 +370,7 @@ def solve_loads(yt, P, F1, S, EA, L, H, tol, maxit, Q, xx, u, T, N, fw, LU, r, d
     return False
 
 
-@njit(cache=True)
+@njit
 def _approximate_scratch(work, nd):
     """Views of :func:`approximate_field`'s scratch space, in the order of :func:`_approx_size`:
     ``(y, P, F1, Q, xx, u, T, N, LU, r, d, ek, fw, Pt, Pw, yt, F1t, F1w)``, ``fw`` the workspace
@@ -428,7 +428,7 @@ def _approximate_scratch(work, nd):
     return y, P, F1, Q, xx, u, T, N, LU, r, d, ek, fw, Pt, Pw, yt, F1t, F1w
 
 
-@njit(cache=True)
+@njit
 def _walk_to_loads(y, P, F1, Pw, F1w, S, EA, L, H, tol, Q, xx, u, T, N, fw, LU, r, d, Pt, F1t, yt):
     """Loads at ``y`` from far away: restart from the warm start ``(Pw, F1w)`` and walk from its
     own configuration to ``y`` in 16 steps, each solved by :func:`solve_loads`; False if any
@@ -452,7 +452,7 @@ def _walk_to_loads(y, P, F1, Pw, F1w, S, EA, L, H, tol, Q, xx, u, T, N, fw, LU, 
     return True
 
 
-@njit(FIELD_SIG, cache=True)
+@njit(FIELD_SIG)
 def approximate_field(theta, x, prm, work, dx, J, dp, ipar):
     """Approximate analysis (module docstring)."""
     nd = int(prm[0])

@@ -39,7 +39,9 @@ whole 0.4 .. 2 rad/s response (14.8 million steps) 123 -> 99 s of CPU, identical
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, types
+from numba import types
+
+from ..jit import njit
 
 from ..dynamics import kernels as dk
 
@@ -127,7 +129,7 @@ def field_address(field) -> FieldAddress:
     return found
 
 
-@njit(cache=True)
+@njit
 def _hermite_extremes(xa, xb, da, db, h, i, xmax, xmin):
     """Update ``xmax[i]``, ``xmin[i]`` with the interior extremes of the cubic Hermite
     interpolant through ``(xa, da)`` and ``(xb, db)`` over a step ``h``."""
@@ -166,7 +168,7 @@ def _hermite_extremes(xa, xb, da, db, h, i, xmax, xmin):
                 xmin[i] = p
 
 
-@njit(cache=True)
+@njit
 def _logdet(Y, n, LU):
     """``(log|det|, sign)`` of the leading n x n block of Y (partial pivoting)."""
     for i in range(n):
@@ -201,7 +203,7 @@ def _logdet(Y, n, LU):
     return logdet, sign
 
 
-@njit(cache=True)
+@njit
 def _close_chunk(Y, n, ncol, Mtot, ptot, tmpM, tmpp, LU, info, first):
     """Fold the chunk's Jacobian ``Y`` into the totals and restart it from the identity."""
     ld, sg = _logdet(Y, n, LU)
@@ -234,7 +236,7 @@ def _close_chunk(Y, n, ncol, Mtot, ptot, tmpM, tmpp, LU, info, first):
         Y[i, i] = 1.0
 
 
-@njit(cache=True)
+@njit
 def _start_segment(x, Y, xmax, xmin, info):
     """Jacobian chunk from the identity, extremes at the start state, ``info`` cleared."""
     for i in range(x.size):
@@ -247,7 +249,7 @@ def _start_segment(x, Y, xmax, xmin, info):
     info[3] = 0.0
 
 
-@njit(cache=True)
+@njit
 def _stage_state(x, K, Yf, KYf, xs, Ysf, A, st, h, with_jac):
     """Stage state ``xs = x + h sum_r A[st, r] K[r]`` (and the same for the flat ``Y``)."""
     n = x.size
@@ -267,7 +269,7 @@ def _stage_state(x, K, Yf, KYf, xs, Ysf, A, st, h, with_jac):
                     Ysf[i] += a * KYf[r, i]
 
 
-@njit(cache=True)
+@njit
 def _variational_rate(J, Ys, dx, dp, KYst, omega, pmode):
     """Stage rate of the variational equations, ``KYst = J Ys`` plus the parameter forcing in
     the extra column; returns ``tr J`` (for the divergence integral)."""
@@ -317,7 +319,7 @@ def _variational_rate(J, Ys, dx, dp, KYst, omega, pmode):
     return tr
 
 
-@njit(cache=True)
+@njit
 def _sample_step(k, x, K, xprev, dprev, h, xmax, xmin, rec):
     """Extremes over the interval ending at sample ``k`` (the rate at ``x_k`` is ``K[0]``) and,
     if ``rec`` has rows, the sample and its rate."""
@@ -336,7 +338,7 @@ def _sample_step(k, x, K, xprev, dprev, h, xmax, xmin, rec):
             rec[k, n + i] = K[0, i]
 
 
-@njit(cache=True)
+@njit
 def _advance_state(x, K, b, h, xprev, dprev):
     """``x += h sum_st b[st] K[st]``, keeping the sample and its rate for the interpolant;
     False when the new state is not finite."""
@@ -352,7 +354,7 @@ def _advance_state(x, K, b, h, xprev, dprev):
     return True
 
 
-@njit(cache=True)
+@njit
 def _advance_jacobian(Yf, KYf, b, h):
     """``Y += h sum_st b[st] KY[st]`` on the flat views."""
     for st in range(b.size):
@@ -362,7 +364,7 @@ def _advance_jacobian(Yf, KYf, b, h):
                 Yf[i] += hb * KYf[st, i]
 
 
-@njit(FLOW_SIG, cache=True)
+@njit(FLOW_SIG)
 def flow_segment(field, prm, work, x0, theta0, omega, duration, nsteps, A, b, c, ipar, pmode, jac,
                  xend, Mout, pout, xmax, xmin, rec, info):
     """Integrate one segment (see the module docstring). Returns a status code.

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from typing import ClassVar
 
 import numpy as np
-from numba import njit
+from ...jit import njit
 
 
 @dataclass
@@ -90,7 +90,7 @@ class Integrator(ABC):
         return {k: v for k, v in self.__dict__.items() if not k.startswith("_")}
 
 
-@njit(cache=True, inline="always")
+@njit(inline="always")
 def hermite_weights(ta, tb, t):
     """Weights ``(h00, h10 h, h01, h11 h)`` of the cubic Hermite interpolant at ``t`` between
     ``ta`` and ``tb``: of the value at ``ta``, its derivative, the value at ``tb``, its derivative."""
@@ -101,7 +101,7 @@ def hermite_weights(ta, tb, t):
     return 2.0 * th3 - 3.0 * th2 + 1.0, (th3 - 2.0 * th2 + th) * h, -2.0 * th3 + 3.0 * th2, (th3 - th2) * h
 
 
-@njit(cache=True)
+@njit
 def hermite(ta, tb, sa, sb, da, db, t, out):
     """Cubic Hermite interpolation of a state between two steps (4th-order accurate)."""
     h00, h10, h01, h11 = hermite_weights(ta, tb, t)

@@ -16,7 +16,7 @@ first transition found after the window is taken at the window's end). Such hold
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from ...jit import njit
 
 from .. import kernels as kn
 from .base import hermite_weights
@@ -35,7 +35,7 @@ CHATTER_TEXT = (
 )
 
 
-@njit(cache=True)
+@njit
 def _config_at(prm, t, ta, tb, sa, sb, y):
     """``y = y0 + z(t)`` from the cubic Hermite interpolant of z (values and velocities)."""
     nd = y.size
@@ -45,13 +45,13 @@ def _config_at(prm, t, ta, tb, sa, sb, y):
         y[i] = y0[i] + h00 * sa[i] + h10 * sa[nd + i] + h01 * sb[i] + h11 * sb[nd + i]
 
 
-@njit(cache=True)
+@njit
 def _signed_gap(prm, t, ta, tb, sa, sb, k, y, sign):
     _config_at(prm, t, ta, tb, sa, sb, y)
     return sign * kn.segment_gap(y, k, prm[1], prm[3], prm[4])
 
 
-@njit(cache=True)
+@njit
 def _root(prm, ta, tb, sa, sb, k, lo, hi, y, sign):
     """Illinois on ``sign * g_k`` (>= 0 at lo, < 0 at hi); returns the bracket's end past the root."""
     flo = _signed_gap(prm, lo, ta, tb, sa, sb, k, y, sign)
@@ -79,7 +79,7 @@ def _root(prm, ta, tb, sa, sb, k, lo, hi, y, sign):
     return hi
 
 
-@njit(cache=True)
+@njit
 def _update_peaks(prm, t, g, peak, peak_t):
     S, EA = prm[1], prm[2]
     for k in range(S.size):
@@ -89,7 +89,7 @@ def _update_peaks(prm, t, g, peak, peak_t):
             peak_t[k] = t
 
 
-@njit(cache=True)
+@njit
 def locate_event(prm, ta, tb, sa, sb, taut, evw):
     """The first mode change in ``(ta, tb]`` on the step's interpolant: ``(t_event, segment)``,
     or ``(tb, -1)``. ``sa``, ``sb`` start with ``(z, y')``; ``evw`` is :func:`event_workspace`.

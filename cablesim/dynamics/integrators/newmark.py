@@ -22,7 +22,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
+from ...jit import njit
 
 from .. import banded as bd
 from .. import flexibility as fx
@@ -32,7 +32,7 @@ from .base import Integrator, IntegratorState, hermite
 from .events import locate_event, start_events, transition
 
 
-@njit(cache=True)
+@njit
 def _internal(prm, z, P_n, z_n, warm, P1, K, first, wk, awk, check_slack):
     """Internal force at the step end and its tangent; returns a status code.
 
@@ -74,7 +74,7 @@ def _internal(prm, z, P_n, z_n, warm, P1, K, first, wk, awk, check_slack):
     return kn.OK  # awk holds the factors of K at the last midpoint's loads, for the Newton matrix
 
 
-@njit(cache=True)
+@njit
 def _store(s, z, v, a):
     """``s = (z, v, a)``."""
     nd = z.size
@@ -83,7 +83,7 @@ def _store(s, z, v, a):
     s[2 * nd :] = a
 
 
-@njit(cache=True)
+@njit
 def _equilibrium_acceleration(prm, t, v, P, a_out, Cv):
     """``y'' = M^-1 (F(t) - C y' - P)`` (eq. 15) from the internal force ``P`` the scheme carries.
 
@@ -97,7 +97,7 @@ def _equilibrium_acceleration(prm, t, v, P, a_out, Cv):
         a_out[q] = (F0[q] + FL[q] * sw - Cv[q] - P[q]) / m[q]
 
 
-@njit(cache=True)
+@njit
 def _write_outputs(ta, tb, h, z, v, a, z1, v1, a1, sa, sb, da, db, t_out, out, j):
     """Interpolate the step ``ta -> tb`` at the output instants it covers; the next index."""
     nd = z.size
@@ -121,7 +121,7 @@ def _write_outputs(ta, tb, h, z, v, a, z1, v1, a1, sa, sb, da, db, t_out, out, j
     return j
 
 
-@njit(cache=True)
+@njit
 def _dense_newton(prm, z, v, a, z1, v1, a1, P_n, P1, K, J, R, warm, wk, awk, coef, c_m, c_c, sf, first):
     """Residual ``R`` (minus the generalized-alpha equilibrium) and dense Newton matrix ``J``;
     a status code."""
@@ -142,7 +142,7 @@ def _dense_newton(prm, z, v, a, z1, v1, a1, P_n, P1, K, J, R, warm, wk, awk, coe
     return kn.OK
 
 
-@njit(cache=True)
+@njit
 def _band_newton(prm, z, v, a, z1, v1, a1, P_n, P1, Kb, J, R, Cv, wk, coef, c_m, c_c, sf, check_slack):
     """:func:`_dense_newton` in banded storage (exact analysis, banded damping), O(n): ``Kb``
     receives the tangent stiffness of the segment modes ``wk[4]``, ``Cv`` is scratch."""
@@ -156,7 +156,7 @@ def _band_newton(prm, z, v, a, z1, v1, a1, P_n, P1, Kb, J, R, Cv, wk, coef, c_m,
     return kn.OK
 
 
-@njit(cache=True)
+@njit
 def _band_system(prm, v, a, v1, a1, P_n, P1, Kb, J, R, Cv, coef, c_m, c_c, sf):
     """The generalized-alpha residual ``R`` and the banded part of the Newton matrix
     ``J = c_m M + c_c C + (1 - af) K`` from the internal force ``P1`` and the banded ``Kb``."""
@@ -176,7 +176,7 @@ def _band_system(prm, v, a, v1, a1, P_n, P1, Kb, J, R, Cv, coef, c_m, c_c, sf):
         J[bd.BAND_HALF, q] += c_m * m[q]
 
 
-@njit(cache=True)
+@njit
 def _approximate_newton(prm, z, v, a, z1, v1, a1, P_n, P1, Kb, J, R, Cv, warm, wk, awk, coef, c_m, c_c, sf, first,
                         V, U, D):
     """:func:`_dense_newton` for the approximate analysis in O(n): the Newton matrix is the band
@@ -207,7 +207,7 @@ def _approximate_newton(prm, z, v, a, z1, v1, a1, P_n, P1, Kb, J, R, Cv, warm, w
     return kn.OK
 
 
-@njit(cache=True)
+@njit
 def solve_band_low_rank(J, V, D, R, out, LU, Z, small):
     """Solve ``(J - V^T D V) out = R`` with ``J`` banded and ``V`` (k, nd) of small rank k, O(n):
     ``out = y + Z^T w`` with ``J y = R``, ``J Z^T = V^T`` and ``(I - D V Z^T) w = D V y``
@@ -240,7 +240,7 @@ def solve_band_low_rank(J, V, D, R, out, LU, Z, small):
     return True
 
 
-@njit(cache=True)
+@njit
 def _newmark_update(z, v, a, z1, v1, a1, h, beta, gamma):
     """Acceleration and velocity at the step end from the displacement ``z1`` (Newmark)."""
     for q in range(z.size):
@@ -248,7 +248,7 @@ def _newmark_update(z, v, a, z1, v1, a1, h, beta, gamma):
         v1[q] = v[q] + h * ((1.0 - gamma) * a[q] + gamma * a1[q])
 
 
-@njit(cache=True)
+@njit
 def _galpha_step(prm, z, v, a, P_n, warm, wk, awk, tb, h, coef, ztol, maxit, z1, v1, a1, P1, scratch):
     """One step of size h ending at ``tb`` from ``(z, v, a, P_n)`` into ``(z1, v1, a1, P1)``.
 
@@ -306,7 +306,7 @@ def _galpha_step(prm, z, v, a, P_n, warm, wk, awk, tb, h, coef, ztol, maxit, z1,
     return _internal(prm, z1, P_n, z, warm, P1, K, False, wk, awk, True)
 
 
-@njit(cache=True)
+@njit
 def _galpha_advance(prm, s, P_n, warm, wk, awk, evw, track, t0, h, i, i_end, t, coef, t_out, out, ztol, maxit):
     """Steps on the grid ``t0 + i h`` up to step ``i_end`` from ``t``, split where a segment
     changes mode; returns ``(i, t, written, status, segment)`` as the explicit schemes do."""

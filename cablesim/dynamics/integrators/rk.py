@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
+from ...jit import njit
 
 from .. import kernels as kn
 from ..equations import consistent_acceleration, rate
@@ -41,7 +41,7 @@ def _after_event(prm, state, k, t):
     return rate(prm, t, state.s, state.warm, state.extra["fa"], *state.wk)
 
 
-@njit(cache=True)
+@njit
 def _rk4_step(prm, s, fa, warm, wk, awk, t, h, k2, k3, k4, tmp, snew):
     """One classical Runge-Kutta step of size h from ``(t, s)`` (rate ``fa``) into ``snew``."""
     n = s.size
@@ -65,7 +65,7 @@ def _rk4_step(prm, s, fa, warm, wk, awk, t, h, k2, k3, k4, tmp, snew):
     return kn.OK
 
 
-@njit(cache=True)
+@njit
 def _rk4_advance(prm, s, fa, warm, wk, awk, evw, track, t0, h, i, i_end, t, t_out, out):
     """Steps on the grid ``t0 + i h`` up to step ``i_end``, from ``t`` (inside step i after an
     event). Returns ``(i, t, written, status, segment)``; ``segment >= 0``: it changes mode at t
@@ -158,7 +158,7 @@ _A[6, :6] = [35 / 384, 0.0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84]
 _E = np.array([71 / 57600, 0.0, -71 / 16695, 71 / 1920, -17253 / 339200, 22 / 525, -1 / 40])
 
 
-@njit(cache=True)
+@njit
 def _dopri_advance(prm, s, fa, warm, wk, awk, evw, track, t, h, t_end, rtol, atol, h_max, t_out, out, A, Cc, E):
     n = s.size
     K = np.empty((7, n))

@@ -89,7 +89,7 @@ def cache_dir() -> Path:
 
 def is_cached(pattern: str) -> bool:
     """Whether numba's cache already holds a compiled function whose index file matches
-    ``pattern`` (for example ``"equations.rate-*.nbi"``): a run needing it will not compile."""
+    ``pattern`` (for example ``"field.rate-*.nbi"``): a run needing it will not compile."""
     root = cache_dir()
     return root.is_dir() and any(root.glob(f"*/{pattern}"))
 
@@ -100,8 +100,12 @@ def njit(*args, **kwargs):
     Used exactly as ``numba.njit``: ``@njit``, ``@njit(inline="always")``, ``@njit(SIGNATURE)``.
     numba's cache folder setting is changed only while the function is decorated (numba reads it
     then), so compiled functions of other packages in the same process keep their own cache.
+    Floating-point errors follow numpy's rules (``error_model="numpy"``): a division by zero
+    gives an infinity or NaN, which the kernels' status codes report, instead of raising inside
+    a compiled loop.
     """
     kwargs.setdefault("cache", True)
+    kwargs.setdefault("error_model", "numpy")
     if len(args) == 1 and inspect.isfunction(args[0]):
         return _compile(args[0], (), kwargs)
     return functools.partial(_compile, signature=args, options=kwargs)

@@ -19,10 +19,13 @@ The package, from the bottom layer up (a module imports only from layers below i
 
 - ``names``, ``errors``, ``version``, ``channels`` -- the vocabulary; ``jit`` -- the decorator of
   every compiled kernel, whose on-disk cache is keyed on a hash of the compiled sources;
-- ``cable``, ``closure``, ``statics``, ``modal`` -- the model: geometry, the closure problem on
-  the complementary energy, the three static equilibria, modes and Rayleigh damping;
-- ``dynamics/`` -- compiled kernels, the equations of motion (``equations``), the integrators
-  (``integrators/``), time histories (``simulate``, in chunks bounded in steps), steady states
+- ``cable`` -- the model's data: geometry, axial rigidity, masses, the degree-of-freedom order;
+- ``mechanics/`` -- the cable's physics written once for any number of components per node: the
+  segment law, its assembly, the closure problem on the complementary energy, the approximate
+  analysis' flexibility, the compiled model's named constants;
+- ``statics``, ``modal`` -- the three static equilibria, modes and Rayleigh damping;
+- ``dynamics/`` -- the equations of motion (``equations``) and their compiled vector field
+  (``field``), the integrators (``integrators/``), time histories (``simulate``, in chunks bounded in steps), steady states
   (``steady``), spectra, run status (``status``), Ctrl-C and SIGTERM (``interrupts``); it never
   sees a case file;
 - ``orbits/`` -- periodic orbits by shooting, Floquet multipliers, continuation, bifurcations;

@@ -276,7 +276,7 @@ def static(
     out = output if output is not None else Path("runs") / case.name / "static.h5"
     _check_outputs(out, case_file, (lambda o: [o.with_suffix(".png")]) if plot else [])
     _effective(ctx, output=out)
-    with compiling(_note, "kernels.closure_solve-*.nbi"):
+    with compiling(_note, "closure.minimise-*.nbi"):
         result = run_static(case, analysis.value if analysis else None, all_models=all_models)
     say_warnings(result.warnings)
     _echo(static_summary(case, result, full=full))

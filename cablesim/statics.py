@@ -8,9 +8,12 @@ Three models (``docs/theory.md``, section 2):
 - **exact elastic** -- equilibrium of the deformed configuration ``y`` with
   ``T_r = EA (l_r - S_r) / S_r``.
 
-All three are solved the same way, by :func:`cablesim.closure.solve_segment_forces` (Newton's
-method on the convex complementary energy, two unknowns whatever ``n`` is). Every derivative (``B = dT/dP``, ``D = dx/dP``, ``f = du/dP``, ``dy/dP``) follows from implicit
-differentiation of ``grad Phi = 0``; none uses finite differences.
+All three are solved the same way, by :func:`cablesim.mechanics.equilibrium.solve_segment_forces`
+(Newton's method on the convex complementary energy, ``dim`` unknowns whatever ``n`` is). Every
+derivative (``B = dT/dP``, ``D = dx/dP``, ``f = du/dP``, ``dy/dP``) follows from implicit
+differentiation of the closure, through the segment factors of
+:mod:`cablesim.mechanics.flexibility` (O(n) per column); none uses finite differences. Forces and
+stiffness of a deformed configuration come from :mod:`cablesim.mechanics.assembly`.
 """
 
 from __future__ import annotations
@@ -19,49 +22,60 @@ import functools
 from dataclasses import dataclass
 
 import numpy as np
+
 from .cable import Cable
-from .closure import SegmentForces, solve_segment_forces
-
-# ----------------------------------------------------------------------------------------------
-# Implicit derivatives
-# ----------------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class _Tangents:
-    a: np.ndarray  # (n+1, 2n): rows t_k . dF_k/dP (transverse force derivatives)
-    b: np.ndarray  # (n+1, 2n): rows e_k . dF_k/dP = dT_k/dP  (the matrix B)
-    H: np.ndarray  # (2, 2): Hessian of Phi
-    dydP: np.ndarray  # (2n, 2n): derivative of the node positions
-    gt: np.ndarray  # (n+1,): transverse segment compliance l_k / T_k
-    ge: np.ndarray  # (n+1,): axial segment compliance S_k / EA
-
-
-def _tangents(cable: Cable, seg: SegmentForces, compliance: float) -> _Tangents:
-    n = cable.n_nodes
-    e, t, T = seg.e, seg.normal, seg.T
-    gt = seg.length / T
-    ge = cable.S * compliance
-    # 2x2 compliance of each segment, G_k = d(l_k e_k)/dF_k.
-    G = gt[:, None, None] * t[:, :, None] * t[:, None, :] + ge[:, None, None] * e[:, :, None] * e[:, None, :]
-    H = G.sum(axis=0)
-    # dF/dP_j = H^-1 sum_{k>j} G_k  (segments after node j feel P_j with a minus sign).
-    suffix = np.cumsum(G[::-1], axis=0)[::-1]  # suffix[k] = sum_{m>=k} G_m
-    W = np.linalg.solve(H, np.concatenate(list(suffix[1 : n + 1]), axis=1))  # (2, 2n)
-    # dF_k/dP = W - E_k, E_k = identity blocks on nodes j < k.
-    below = np.tri(n + 1, n, k=-1, dtype=bool)  # [k, j] = j < k
-    a = t @ W - (below[:, :, None] * t[:, None, :]).reshape(n + 1, 2 * n)
-    b = e @ W - (below[:, :, None] * e[:, None, :]).reshape(n + 1, 2 * n)
-    # Node r sits at sum_{k<=r} l_k e_k, so dy_r/dP = sum_{k<=r} G_k dF_k/dP.
-    contrib = gt[:, None, None] * t[:, :, None] * a[:, None, :] + ge[:, None, None] * e[:, :, None] * b[:, None, :]
-    dydP = np.cumsum(contrib, axis=0)[:n].reshape(2 * n, 2 * n)
-    return _Tangents(a=a, b=b, H=H, dydP=dydP, gt=gt, ge=ge)
+from .mechanics import assembly as asm
+from .mechanics import flexibility as fx
+from .mechanics import segments as sg
+from .mechanics.banded import band_half, band_rows
+from .mechanics.equilibrium import SegmentForces, cumulative_loads, solve_segment_forces
 
 
 def _positions(seg: SegmentForces, n: int) -> np.ndarray:
+    """Node coordinates ``y_r = sum_{k<=r} l_k e_k`` (support A at the origin), m."""
     return np.cumsum(seg.length[:, None] * seg.e, axis=0)[:n].reshape(-1)
 
 
 def _sym(A: np.ndarray) -> np.ndarray:
     return 0.5 * (A + A.T)
+
+
+@dataclass(frozen=True)
+class Factors:
+    """Segment factors of an equilibrium (:func:`cablesim.mechanics.flexibility.segment_factors`):
+    the flexibility's products and dense matrices, column by column."""
+
+    fac: np.ndarray
+    gi: np.ndarray
+    dim: int
+
+    @property
+    def like(self) -> tuple:
+        return (0.0,) * self.dim
+
+    def dense(self, part: int) -> np.ndarray:
+        """``N`` (part 0), ``D`` (1) or ``f`` (2), m/N."""
+        nd = self.dim * (self.fac.shape[0] - 1)
+        out = np.empty((nd, nd))
+        fx.dense_flexibility(self.fac, self.gi, out, np.empty((self.fac.shape[0], self.dim)), self.like, part)
+        return out
+
+    def tension_rates(self) -> np.ndarray:
+        """``B = dT/dP``, (n + 1, dim n)."""
+        n1 = self.fac.shape[0]
+        B = np.empty((n1, self.dim * (n1 - 1)))
+        fx.dense_tension_rates(self.fac, self.gi, B, np.empty((n1, self.dim)), self.like)
+        return B
+
+
+def _inextensible_factors(cable: Cable, P: np.ndarray, seg: SegmentForces, EA: float) -> tuple[Factors, bool]:
+    """Factors at the inextensible closure under P (``EA = inf``: forward products only)."""
+    n, dim = cable.n_nodes, cable.dim
+    fac, gi, _ = fx.factor_workspace(n, dim)
+    T = np.empty(n + 1)
+    ok = fx.segment_factors(np.ascontiguousarray(cable.S, dtype=float), float(EA), cumulative_loads(P, dim),
+                            np.array(seg.F[0], dtype=float), T, fac, gi, (0.0,) * dim)
+    return Factors(fac, gi, dim), bool(ok)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -73,15 +87,15 @@ class InextensibleEquilibrium:
 
     Attributes
     ----------
-    P : ndarray, shape (2n,)
+    P : ndarray, shape (dim n,)
         Nodal loads, N.
-    x : ndarray, shape (2n,)
+    x : ndarray, shape (dim n,)
         Node coordinates ``x(P)``, m (homogeneous of order 0 in P).
     T : ndarray, shape (n + 1,)
         Segment tensions ``T(P)``, N (homogeneous of order 1).
-    B : ndarray, shape (n + 1, 2n)
+    B : ndarray, shape (n + 1, dim n)
         Tangent transformation ``B = dT/dP`` (eq. 7).
-    D : ndarray, shape (2n, 2n)
+    D : ndarray, shape (dim n, dim n)
         Tangent configurational flexibility ``D = dx/dP``, m/N; symmetric, ``D P = 0``.
         ``B`` and ``D`` are dense: they are computed on first use.
     omega_c : float
@@ -98,18 +112,18 @@ class InextensibleEquilibrium:
     cable: Cable
 
     @functools.cached_property
-    def _tangents(self) -> _Tangents:
-        return _tangents(self.cable, self.segments, 0.0)
+    def _factors(self) -> Factors:
+        return _inextensible_factors(self.cable, self.P, self.segments, np.inf)[0]
 
-    @property
+    @functools.cached_property
     def B(self) -> np.ndarray:
         """Tangent transformation ``B = dT/dP``."""
-        return self._tangents.b
+        return self._factors.tension_rates()
 
     @functools.cached_property
     def D(self) -> np.ndarray:
         """Tangent configurational flexibility ``D = dx/dP``, m/N."""
-        return _sym(self._tangents.dydP)
+        return _sym(self._factors.dense(1))
 
     @property
     def F_end(self) -> np.ndarray:
@@ -125,33 +139,58 @@ class ApproximateEquilibrium:
     ----------
     P, x, T, B, D
         As in :class:`InextensibleEquilibrium`.
-    u : ndarray, shape (2n,)
+    u : ndarray, shape (dim n,)
         Elastic displacements ``u_i = (1/EA) sum_r T_r S_r B_ri`` (eq. 7), m.
-    y : ndarray, shape (2n,)
+    y : ndarray, shape (dim n,)
         Deformed coordinates ``y = x + u``, m.
-    f : ndarray, shape (2n, 2n)
+    f : ndarray, shape (dim n, dim n)
         Tangent elastic flexibility ``f = du/dP`` (eq. 8), m/N.
-    N : ndarray, shape (2n, 2n)
+    N : ndarray, shape (dim n, dim n)
         Elasto-configurational flexibility ``N = D + f``, m/N.
-    K : ndarray, shape (2n, 2n)
-        Tangent stiffness ``K = N^-1``, N/m.
+    K : ndarray, shape (dim n, dim n)
+        Tangent stiffness ``K = N^-1``, N/m (from the factored inverse: no matrix is inverted).
     omega_c, omega_e : float
         Configurational and elastic complementary energies, J.
+
+    The dense matrices are computed on first use (O(n^2) each).
     """
 
     P: np.ndarray
     x: np.ndarray
     T: np.ndarray
-    B: np.ndarray
-    D: np.ndarray
     u: np.ndarray
     y: np.ndarray
-    f: np.ndarray
-    N: np.ndarray
-    K: np.ndarray
     omega_c: float
     omega_e: float
     inextensible: InextensibleEquilibrium
+    factors: Factors
+
+    @property
+    def B(self) -> np.ndarray:
+        return self.inextensible.B
+
+    @property
+    def D(self) -> np.ndarray:
+        return self.inextensible.D
+
+    @functools.cached_property
+    def f(self) -> np.ndarray:
+        """Tangent elastic flexibility ``f = du/dP``, m/N."""
+        return _sym(self.factors.dense(2))
+
+    @functools.cached_property
+    def N(self) -> np.ndarray:
+        """Elasto-configurational flexibility ``N = D + f``, m/N."""
+        return _sym(self.factors.dense(0))
+
+    @functools.cached_property
+    def K(self) -> np.ndarray:
+        """Tangent stiffness ``K = N^-1``, N/m."""
+        nd, dim = self.P.size, self.factors.dim
+        K = np.empty((nd, nd))
+        fx.dense_stiffness(self.factors.fac, self.factors.gi, K, 0, 0, np.empty((band_rows(dim), nd)), np.empty((nd, dim)),
+                           self.factors.like)
+        return _sym(K)
 
 
 @dataclass(frozen=True)
@@ -160,20 +199,20 @@ class ExactEquilibrium:
 
     Attributes
     ----------
-    P : ndarray, shape (2n,)
+    P : ndarray, shape (dim n,)
         Nodal loads, N.
-    y : ndarray, shape (2n,)
+    y : ndarray, shape (dim n,)
         Deformed node coordinates, m.
     T : ndarray, shape (n + 1,)
         Segment tensions ``EA (l_r - S_r) / S_r``, N.
     length : ndarray, shape (n + 1,)
         Stretched segment lengths ``l_r``, m.
-    K : ndarray, shape (2n, 2n)
+    K : ndarray, shape (dim n, dim n)
         Tangent stiffness of the deformed configuration, N/m; dense, so computed on first use
         (a heavy cable works with :attr:`K_band`).
-    K_band : ndarray, shape (4, 2n)
+    K_band : ndarray, shape (2 dim, dim n)
         The same in symmetric lower band form (:func:`tangent_stiffness_band`), O(n).
-    dydP : ndarray, shape (2n, 2n)
+    dydP : ndarray, shape (dim n, dim n)
         Tangent flexibility ``dy/dP`` from implicit differentiation, m/N (equals ``K^-1``);
         computed on first use (a dense O(n^2) product that large cables seldom need).
     segments : SegmentForces
@@ -199,7 +238,11 @@ class ExactEquilibrium:
     @functools.cached_property
     def dydP(self) -> np.ndarray:
         """Tangent flexibility ``dy/dP``, m/N."""
-        return _sym(_tangents(self.cable, self.segments, self.cable.compliance).dydP)
+        c, seg = self.cable, self.segments
+        fac, gi, _ = fx.factor_workspace(c.n_nodes, c.dim)
+        fx.exact_factors(np.ascontiguousarray(c.S, dtype=float), float(c.EA), np.ascontiguousarray(seg.F), seg.T,
+                         seg.length, fac, gi, c.support_A)
+        return _sym(Factors(fac, gi, c.dim).dense(0))
 
 
 def inextensible_equilibrium(
@@ -211,12 +254,12 @@ def inextensible_equilibrium(
     ----------
     cable : Cable
         Its ``EA`` is ignored.
-    P : ndarray, shape (2n,)
+    P : ndarray, shape (dim n,)
         Nodal loads, N.
-    F_start : ndarray, shape (2,), optional
+    F_start : ndarray, shape (dim,), optional
         Warm start: force in segment 1 of a nearby solution.
     check_slack : bool
-        See :func:`solve_segment_forces`.
+        See :func:`~cablesim.mechanics.equilibrium.solve_segment_forces`.
 
     Returns
     -------
@@ -229,32 +272,13 @@ def inextensible_equilibrium(
 
 
 def elastic_flexibility(cable: Cable, inext: InextensibleEquilibrium) -> np.ndarray:
-    """Tangent elastic flexibility ``f = du/dP`` of the approximate analysis (eq. 8).
+    """Tangent elastic flexibility ``f = du/dP`` of the approximate analysis (eq. 8), m/N.
 
-    ``f_ij = (1/EA) sum_r S_r [B_ri B_rj + T_r d^2 T_r / dP_i dP_j]``, with the second
-    derivatives of the tensions from twice differentiating the closure condition.
-
-    Parameters
-    ----------
-    cable : Cable
-    inext : InextensibleEquilibrium
-
-    Returns
-    -------
-    ndarray, shape (2n, 2n)
+    ``f_ij = (1/EA) sum_r S_r [B_ri B_rj + T_r d^2 T_r / dP_i dP_j]``, from the segment factors
+    (:mod:`cablesim.mechanics.flexibility`).
     """
-    seg = inext.segments
-    tg = _tangents(cable, seg, 0.0)
-    S, T, e, t = cable.S, seg.T, seg.e, seg.normal
-    a, b = tg.a, tg.b
-    # Contracting d^2F/dP^2 with w = sum_k S_k T_k e_k needs only v = H^-1 w.
-    v = np.linalg.solve(tg.H, (S * T) @ e)
-    c1 = S * (t @ v) / T**2
-    c2 = S * (e @ v) / T**2
-    f = b.T @ (S[:, None] * b) + a.T @ ((S + c2)[:, None] * a)
-    cross = a.T @ (c1[:, None] * b)
-    f += cross + cross.T
-    return _sym(f) * cable.compliance
+    factors, _ = _inextensible_factors(cable, inext.P, inext.segments, cable.EA)
+    return _sym(factors.dense(2))
 
 
 def approximate_equilibrium(
@@ -265,7 +289,7 @@ def approximate_equilibrium(
     Parameters
     ----------
     cable : Cable
-    P : ndarray, shape (2n,)
+    P : ndarray, shape (dim n,)
         Nodal loads, N.
     F_start, check_slack
         See :func:`inextensible_equilibrium`.
@@ -275,25 +299,24 @@ def approximate_equilibrium(
     ApproximateEquilibrium
     """
     inext = inextensible_equilibrium(cable, P, F_start=F_start, check_slack=check_slack)
+    factors, ok = _inextensible_factors(cable, inext.P, inext.segments, cable.EA)
+    if not ok:
+        raise ValueError("the approximate analysis' flexibility is singular at this equilibrium")
+    n, dim = cable.n_nodes, cable.dim
+    x, u = np.empty(dim * n), np.empty(dim * n)
+    fx.natural_and_elastic(np.ascontiguousarray(cable.S, dtype=float), float(cable.EA), factors.fac, factors.gi,
+                           np.ascontiguousarray(inext.T), x, u, factors.like)
     S, T = cable.S, inext.T
-    u = inext.B.T @ (S * T) * cable.compliance
-    f = elastic_flexibility(cable, inext)
-    N = inext.D + f
-    K = _sym(np.linalg.inv(N))
     return ApproximateEquilibrium(
         P=inext.P,
         x=inext.x,
         T=T,
-        B=inext.B,
-        D=inext.D,
         u=u,
         y=inext.x + u,
-        f=f,
-        N=N,
-        K=K,
         omega_c=inext.omega_c,
         omega_e=float(0.5 * (T * T) @ S * cable.compliance),
         inextensible=inext,
+        factors=factors,
     )
 
 
@@ -306,10 +329,10 @@ def exact_equilibrium(
     ----------
     cable : Cable
         Must have finite ``EA``.
-    P : ndarray, shape (2n,)
+    P : ndarray, shape (dim n,)
         Nodal loads, N.
     F_start, check_slack
-        See :func:`solve_segment_forces`.
+        See :func:`~cablesim.mechanics.equilibrium.solve_segment_forces`.
 
     Returns
     -------
@@ -332,27 +355,23 @@ def segment_geometry(cable: Cable, y: np.ndarray):
     Parameters
     ----------
     cable : Cable
-    y : ndarray, shape (2n,)
+    y : ndarray, shape (dim n,)
         Node coordinates, m.
 
     Returns
     -------
     length : ndarray, shape (n + 1,)
         Segment lengths ``l_r``, m.
-    e : ndarray, shape (n + 1, 2)
+    e : ndarray, shape (n + 1, dim)
         Unit vectors along the segments.
     T : ndarray, shape (n + 1,)
         Tensions ``EA (l_r - S_r) / S_r``, N; negative values mean the segment is shorter than
         its natural length (slack: the tension-only cable carries nothing there).
     """
-    pts = np.empty((cable.n_nodes + 2, 2))
-    pts[0] = 0.0
-    pts[1:-1] = np.reshape(y, (-1, 2))
-    pts[-1] = cable.chord
-    d = np.diff(pts, axis=0)
-    length = np.hypot(d[:, 0], d[:, 1])
-    e = d / length[:, None]
-    T = cable.EA * (length - cable.S) / cable.S
+    n1 = cable.n_segments
+    length, e, T = np.empty(n1), np.empty((n1, cable.dim)), np.empty(n1)
+    sg.segment_states(np.ascontiguousarray(y, dtype=float), np.ascontiguousarray(cable.S, dtype=float),
+                      float(cable.EA), cable.support_A, cable.support_B, length, e, T)
     return length, e, T
 
 
@@ -364,15 +383,18 @@ def resisting_force(cable: Cable, y: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     cable : Cable
-    y : ndarray, shape (2n,)
+    y : ndarray, shape (dim n,)
 
     Returns
     -------
-    ndarray, shape (2n,)
+    ndarray, shape (dim n,)
     """
-    _, e, T = segment_geometry(cable, y)
-    F = T[:, None] * e
-    return (F[:-1] - F[1:]).reshape(-1)
+    nd = cable.n_dof
+    P, Kv = np.empty(nd), np.empty(nd)
+    zero = (0.0,) * cable.dim
+    asm.force_and_rate(np.ascontiguousarray(y, dtype=float), np.zeros(nd), np.ascontiguousarray(cable.S, dtype=float),
+                       float(cable.EA), cable.support_A, cable.support_B, zero, zero, np.ones(cable.n_segments), P, Kv)
+    return P
 
 
 def tangent_stiffness(cable: Cable, y: np.ndarray) -> np.ndarray:
@@ -383,55 +405,35 @@ def tangent_stiffness(cable: Cable, y: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     cable : Cable
-    y : ndarray, shape (2n,)
+    y : ndarray, shape (dim n,)
 
     Returns
     -------
-    ndarray, shape (2n, 2n)
+    ndarray, shape (dim n, dim n)
     """
-    n = cable.n_nodes
-    length, e, T = segment_geometry(cable, y)
-    I2 = np.eye(2)
-    ks = (cable.EA / cable.S)[:, None, None] * e[:, :, None] * e[:, None, :] + (T / length)[
-        :, None, None
-    ] * (I2 - e[:, :, None] * e[:, None, :])
-    K = np.zeros((2 * n, 2 * n))
-    for r in range(n + 1):
-        i, j = r - 1, r  # segment r joins node r-1 to node r (0 and n+1 are supports)
-        if i >= 0:
-            K[2 * i : 2 * i + 2, 2 * i : 2 * i + 2] += ks[r]
-        if j < n:
-            K[2 * j : 2 * j + 2, 2 * j : 2 * j + 2] += ks[r]
-        if i >= 0 and j < n:
-            K[2 * i : 2 * i + 2, 2 * j : 2 * j + 2] -= ks[r]
-            K[2 * j : 2 * j + 2, 2 * i : 2 * i + 2] -= ks[r]
+    nd = cable.n_dof
+    P, K = np.empty(nd), np.empty((nd, nd))
+    asm.force_and_stiffness(np.ascontiguousarray(y, dtype=float), np.ascontiguousarray(cable.S, dtype=float),
+                            float(cable.EA), cable.support_A, cable.support_B, np.ones(cable.n_segments), P, K)
     return K
 
 
 def tangent_stiffness_band(cable: Cable, y: np.ndarray) -> np.ndarray:
     """The tangent stiffness of :func:`tangent_stiffness` in symmetric lower band form, N/m.
 
-    ``K`` is block-tridiagonal with 2x2 blocks, so its bandwidth is 3: ``band[d, j] = K[j + d, j]``
-    for ``d = 0..3`` (the layout of ``scipy.linalg.eig_banded(lower=True)``); O(n) storage.
+    ``K`` is block-tridiagonal with ``dim x dim`` blocks, so its bandwidth is ``2 dim - 1``:
+    ``band[d, j] = K[j + d, j]`` for ``d = 0 .. 2 dim - 1`` (the layout of
+    ``scipy.linalg.eig_banded(lower=True)``); O(n) storage.
 
     Returns
     -------
-    ndarray, shape (4, 2n)
+    ndarray, shape (2 dim, dim n)
     """
-    n = cable.n_nodes
-    length, e, T = segment_geometry(cable, y)
-    ks = (cable.EA / cable.S)[:, None, None] * e[:, :, None] * e[:, None, :] + (T / length)[
-        :, None, None
-    ] * (np.eye(2) - e[:, :, None] * e[:, None, :])
-    diag = ks[:-1] + ks[1:]  # node j is the end of segment j and the start of segment j+1
-    off = -ks[1:-1]  # coupling of node j+1 (rows) to node j (columns)
-    band = np.zeros((4, 2 * n))
-    band[0, 0::2], band[0, 1::2] = diag[:, 0, 0], diag[:, 1, 1]
-    band[1, 0::2] = diag[:, 1, 0]
-    band[1, 1:-1:2] = off[:, 0, 1]  # K[2j+2, 2j+1]
-    band[2, 0:-2:2], band[2, 1:-2:2] = off[:, 0, 0], off[:, 1, 1]  # K[2j+2, 2j], K[2j+3, 2j+1]
-    band[3, 0:-3:2] = off[:, 1, 0]  # K[2j+3, 2j]
-    return band
+    nd, dim = cable.n_dof, cable.dim
+    P, Kb = np.empty(nd), np.empty((band_rows(dim), nd))
+    asm.force_and_stiffness_band(np.ascontiguousarray(y, dtype=float), np.ascontiguousarray(cable.S, dtype=float),
+                                 float(cable.EA), cable.support_A, cable.support_B, np.ones(cable.n_segments), P, Kb)
+    return np.ascontiguousarray(Kb[band_half(dim):])
 
 
 def band_to_dense(band: np.ndarray) -> np.ndarray:

@@ -181,7 +181,7 @@ def _strobed(eom, s0, periods):
     integ = _transient(eom)
     st = integ.start(eom, s0)
     out = np.empty((periods, 3 * nd))
-    n, code = integ.advance(eom.params(), st, periods * T, T * np.arange(1, periods + 1), out)
+    n, code = integ.advance(eom.model(), st, periods * T, T * np.arange(1, periods + 1), out)
     assert code == 0 and n == periods
     return np.vstack([s0[None, : 2 * nd], out[:, : 2 * nd]])
 

@@ -1,5 +1,7 @@
 """The approximate analysis' stiffness K = N(P)^-1 in O(n) (block-tridiagonal minus rank 2)
-against the inverse of the full flexibility N = D + f, and its natural and elastic states."""
+against the inverse of the full flexibility N = D + f written out here in closed form (the
+derivatives of eq. 8 by implicit differentiation of the closure, as matrices), and its natural
+and elastic states."""
 
 from __future__ import annotations
 
@@ -9,10 +11,12 @@ import pytest
 from cablesim.analyses.setup import build_equations
 from cablesim.analyses.static import run_static
 from cablesim.case import parse_case
-from cablesim.dynamics import banded as bd
-from cablesim.dynamics import flexibility as fx
-from cablesim.dynamics import kernels as kn
 from cablesim.dynamics.integrators.newmark import solve_band_low_rank
+from cablesim.mechanics import banded as bd
+from cablesim.mechanics import closure as cl
+from cablesim.mechanics import flexibility as fx
+
+LIKE = (0.0, 0.0)  # planar: two components per node
 
 CASES = {
     "level-heavy": "cable: {L: 100.0, H: 0.0, length: 102.5, nodes: %d, EA: 2.0e8, mass_per_length: 10.0}\n"
@@ -30,9 +34,38 @@ def solved(text: str, n: int, seed: int):
     P = eom.F0 * (1.0 + 0.2 * rng.standard_normal(eom.n_dof))
     c = eom.cable
     Q, F = np.empty((n + 1, 2)), np.array(eom.F1, float)
-    kn.cumulative_loads(P, Q)
-    assert kn.closure_solve(c.S, Q, 0.0, c.L, c.H, F, 1e-13 * c.total_length, 60) >= 0
+    cl.cumulative_loads(P, Q, LIKE)
+    assert cl.minimise(np.asarray(c.S, float), Q, 0.0, (c.L, c.H), F, 1e-13 * c.total_length, 60) >= 0
     return np.asarray(c.S, float), float(c.EA), Q, F
+
+
+def reference(S, EA, Q, F):
+    """``x, u, T`` and the full ``N = D + f`` of the inextensible closure at segment-1 force F,
+    as dense matrices: ``dF_k/dP = W - E_k`` with ``W = H^-1 [sum_{k>j} G_k]_j`` (implicit
+    differentiation of the closure), ``D = dx/dP``, ``B = dT/dP`` and eq. 8's ``f`` with the
+    second derivatives of T contracted through ``v = H^-1 sum_k S_k T_k e_k``."""
+    n = S.size - 1
+    Fk = F[None, :] - Q
+    T = np.hypot(Fk[:, 0], Fk[:, 1])
+    e = Fk / T[:, None]
+    t = np.column_stack([-e[:, 1], e[:, 0]])
+    G = (S / T)[:, None, None] * t[:, :, None] * t[:, None, :]
+    H = G.sum(axis=0)
+    suffix = np.cumsum(G[::-1], axis=0)[::-1]
+    W = np.linalg.solve(H, np.concatenate(list(suffix[1 : n + 1]), axis=1))
+    below = np.tri(n + 1, n, k=-1, dtype=bool)
+    a = t @ W - (below[:, :, None] * t[:, None, :]).reshape(n + 1, 2 * n)
+    b = e @ W - (below[:, :, None] * e[:, None, :]).reshape(n + 1, 2 * n)
+    contrib = (S / T)[:, None, None] * t[:, :, None] * a[:, None, :]
+    D = np.cumsum(contrib, axis=0)[:n].reshape(2 * n, 2 * n)
+    v = np.linalg.solve(H, (S * T) @ e)
+    c1, c2 = S * (t @ v) / T**2, S * (e @ v) / T**2
+    f = b.T @ (S[:, None] * b) + a.T @ ((S + c2)[:, None] * a)
+    cross = a.T @ (c1[:, None] * b)
+    f = (f + cross + cross.T) / EA
+    x = np.cumsum(S[:, None] * e, axis=0)[:n].reshape(-1)
+    u = b.T @ (S * T) / EA
+    return x, u, T, 0.5 * (D + D.T) + 0.5 * (f + f.T)
 
 
 def general_band_to_dense(A: np.ndarray) -> np.ndarray:
@@ -49,35 +82,34 @@ def general_band_to_dense(A: np.ndarray) -> np.ndarray:
 @pytest.mark.parametrize("n", [1, 2, 7, 30])
 def test_product_is_the_inverse_of_the_full_flexibility(name, n):
     S, EA, Q, F = solved(CASES[name], n, seed=n)
-    x, u, T, N = np.empty(2 * n), np.empty(2 * n), np.empty(n + 1), np.empty((2 * n, 2 * n))
-    kn.approximate_flexibility(S, EA, Q, F, x, u, T, N, kn.flexibility_workspace(n))  # the full N = D + f
+    x, u, T, N = reference(S, EA, Q, F)  # the full N = D + f
     K_ref = np.linalg.inv(N)
     fac, gi, Fd = fx.factor_workspace(n)
     T2 = np.empty(n + 1)
-    assert fx.segment_factors(S, EA, Q, F, T2, fac, gi)
+    assert fx.segment_factors(S, EA, Q, F, T2, fac, gi, LIKE)
     np.testing.assert_allclose(T2, T, rtol=1e-14)
     rng = np.random.default_rng(7)
     scale = np.abs(K_ref).max()
     for _ in range(3):
         v = rng.standard_normal(2 * n)
         out = np.empty(2 * n)
-        fx.stiffness_product(fac, gi, v, out, Fd)
+        fx.stiffness_product(fac, gi, v, out, Fd, LIKE)
         # N is ill-conditioned (cond ~ EA / T), so compare within its conditioning
         np.testing.assert_allclose(out, K_ref @ v, rtol=0, atol=1e-7 * scale * np.abs(v).max())
         np.testing.assert_allclose(N @ out, v, rtol=0, atol=1e-9 * np.abs(v).max())
     Nw = np.empty(2 * n)
-    fx.flexibility_product(fac, gi, v, Nw, Fd[0])
+    fx.flexibility_product(fac, gi, v, Nw, Fd[0], LIKE, 0)
     np.testing.assert_allclose(Nw, N @ v, rtol=0, atol=1e-12 * np.abs(N @ v).max())
-    Kb, U = np.empty((bd.BAND_ROWS, 2 * n)), np.empty((2 * n, 2))
-    fx.stiffness_band(fac, gi, Kb, U)
-    Gi = np.array([[gi[0], gi[1]], [gi[1], gi[2]]])
+    Kb, U = np.empty((bd.band_rows(2), 2 * n)), np.empty((2 * n, 2))
+    fx.stiffness_band(fac, gi, Kb, U, LIKE)
+    Gi = gi[:4].reshape(2, 2)
     K = general_band_to_dense(Kb) - U @ Gi @ U.T
     np.testing.assert_allclose(K @ v, out, rtol=0, atol=1e-10 * np.abs(out).max())
     np.testing.assert_allclose(K, K.T, rtol=0, atol=1e-12 * scale)
     np.testing.assert_allclose(N @ K, np.eye(2 * n), rtol=0, atol=1e-9)
     assert np.linalg.eigvalsh(K).min() > 0.0  # a taut cable's stiffness is positive definite
     x2, u2 = np.empty(2 * n), np.empty(2 * n)
-    fx.natural_and_elastic(S, EA, fac, gi, T2, x2, u2)
+    fx.natural_and_elastic(S, EA, fac, gi, T2, x2, u2, LIKE)
     np.testing.assert_allclose(x2, x, rtol=0, atol=1e-12 * S.sum())
     np.testing.assert_allclose(u2, u, rtol=0, atol=1e-12 * np.abs(u).max())
 
@@ -88,7 +120,7 @@ def test_damping_of_the_approximate_analysis_is_banded_minus_rank_2():
     case = parse_case(CASES["inclined-soft"] % 12 + "analysis: approximate\n")
     eom = build_equations(case, run_static(case, all_models=False))
     Cr = eom.damping_low_rank
-    assert eom.C_band.shape == (bd.BAND_ROWS, 24) and Cr.shape == (26, 2)
+    assert eom.C_band.shape == (bd.band_rows(2), 24) and Cr.shape == (26, 2)
     C_ref = eom.a0 * np.diag(eom.mass) + eom.a1 * np.asarray(eom.K0_dense)
     C_kernel = general_band_to_dense(eom.C_band) - Cr[:24] @ Cr[24:] @ Cr[:24].T
     np.testing.assert_allclose(C_kernel, C_ref, rtol=0, atol=1e-9 * np.abs(C_ref).max())
@@ -109,7 +141,7 @@ def test_banded_lu_with_several_right_hand_sides_and_woodbury():
         for j in range(max(0, i - 3), min(nd, i + 4)):
             A[i, j] = A[j, i] = rng.standard_normal()
     A += 12.0 * np.eye(nd)
-    band = np.zeros((bd.BAND_ROWS, nd))
+    band = np.zeros((bd.band_rows(2), nd))
     for i in range(nd):
         for j in range(max(0, i - 3), min(nd, i + 4)):
             band[3 + i - j, j] = A[i, j]

@@ -21,7 +21,7 @@ ROOT = Path(__file__).resolve().parents[1] / "cablesim"
 LAYERS = {
     "version": 0, "names": 0, "errors": 0, "jit": 0,
     "cable": 1, "channels": 1,
-    "closure": 2,
+    "mechanics": 2,
     "statics": 3, "modal": 3,
     "dynamics": 4,
     "orbits": 5, "case": 5,
@@ -218,7 +218,7 @@ def test_names_agree_everywhere():
 
 
 def test_kernel_status_codes_are_the_status_values():
-    from cablesim.dynamics import kernels as kn
+    from cablesim.dynamics import status as kn
     from cablesim.dynamics.status import Status
 
     assert (kn.OK, kn.NONFINITE, kn.SLACK, kn.INNER_SOLVE, kn.STEP_UNDERFLOW) == (

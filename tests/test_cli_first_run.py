@@ -68,7 +68,7 @@ def test_the_compile_notice_appears_only_without_cached_kernels(tmp_path, capsys
 
     assert compile_notice(note, tmp_path)
     assert "compiling the numerical kernels on first use" in capsys.readouterr().err
-    (tmp_path / "equations.rate-88.py311.nbi").write_bytes(b"")
+    (tmp_path / "field.rate-88.py311.nbi").write_bytes(b"")
     assert not compile_notice(note, tmp_path)
     assert capsys.readouterr().err == ""
 

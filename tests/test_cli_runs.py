@@ -112,10 +112,10 @@ def test_advance_in_chunks_bounds_the_steps_of_each_compiled_call(paper, exact_s
     t_out = np.array([0.5, 1.0])
     out, ref = np.empty((2, 3 * eom.n_dof)), np.empty((2, 3 * eom.n_dof))
     state = integ.start(eom, eom.initial_state())
-    n, code = advance_in_chunks(integ, eom.params(), state, 1.0, t_out, out, max_steps=1000)
+    n, code = advance_in_chunks(integ, eom.model(), state, 1.0, t_out, out, max_steps=1000)
     assert (n, code) == (2, 0) and len(calls) == 10 and max(calls) <= 1000
     ref_state = plain.start(eom, eom.initial_state())
-    plain.advance(eom.params(), ref_state, 1.0, t_out, ref)
+    plain.advance(eom.model(), ref_state, 1.0, t_out, ref)
     assert np.array_equal(out, ref)  # the same steps as one call
 
 

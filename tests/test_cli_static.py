@@ -18,6 +18,7 @@ import pytest
 import yaml
 
 import cablesim
+from helpers_cli import error_paragraph
 from cablesim.analyses.static import run_static
 from cablesim.case import example_text, load_case, parse_case
 
@@ -67,7 +68,7 @@ def assert_user_error(res, root: Path, *needles: str) -> str:
     if len(res) > 3:  # in-process: the runner must not have caught anything but a clean exit
         assert isinstance(res[3], SystemExit), repr(res[3])
     assert "Traceback" not in err and "Traceback" not in out
-    msg = err.strip()
+    msg = error_paragraph(err)
     assert msg.startswith("error: "), err
     assert "\n\n" not in msg and all(line.strip() for line in msg.splitlines()), "one paragraph"
     assert out.strip() == "", "nothing on stdout for a failed run"

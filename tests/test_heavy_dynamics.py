@@ -10,9 +10,9 @@ import pytest
 from cablesim.analyses.setup import build_equations, make_integrator
 from cablesim.analyses.static import run_static
 from cablesim.case import parse_case
-from cablesim.dynamics import banded as bd
-from cablesim.dynamics import kernels as kn
-from cablesim.dynamics.equations import rate
+from cablesim.mechanics import banded as bd
+from cablesim.mechanics import assembly as asm
+from cablesim.dynamics.field import rate
 from cablesim.dynamics.integrators import DOPRI5, GeneralizedAlpha, RK4
 from cablesim.dynamics.simulate import simulate
 from cablesim.statics import band_to_dense
@@ -34,10 +34,10 @@ def equations():
 
 def test_band_storage_holds_the_dense_damping(equations):
     banded, _ = equations
-    assert banded.C_band is not None and banded.C_band.shape == (bd.BAND_ROWS, 2 * N)
+    assert banded.C_band is not None and banded.C_band.shape == (bd.band_rows(2), 2 * N)
     lower = np.zeros((4, 2 * N))
     for d in range(4):
-        lower[d, : 2 * N - d] = banded.C_band[bd.BAND_HALF + d, : 2 * N - d]
+        lower[d, : 2 * N - d] = banded.C_band[bd.band_half(2) + d, : 2 * N - d]
     np.testing.assert_allclose(band_to_dense(lower), banded.C, rtol=0, atol=1e-12 * abs(banded.C).max())
     v = np.random.default_rng(3).standard_normal(2 * N)
     for C in (banded.C, banded.C_band):
@@ -73,7 +73,7 @@ def test_time_loop_of_the_exact_analysis_builds_no_dense_matrix():
     assert eom.initial_state().shape == (6 * 60,)
     built = [name for obj, name in ((static.exact, "K"), (eom, "K0"), (eom, "C")) if name in vars(obj)]
     assert built == []
-    assert eom.params()[13].shape == (120, 0)  # no low-rank damping part in the exact analysis
+    assert eom.model().Cr.shape == (120, 0)  # no low-rank damping part in the exact analysis
 
 
 def test_rate_is_the_same_with_banded_and_dense_damping(equations):
@@ -83,7 +83,7 @@ def test_rate_is_the_same_with_banded_and_dense_damping(equations):
     got = []
     for eom in (banded, dense):
         ds = np.empty_like(s)
-        assert rate(eom.params(), 0.3, s, np.array(eom.F1), ds, *eom.workspaces()) == kn.OK
+        assert rate(eom.model(), 0.3, s, np.array(eom.F1), ds, *eom.workspaces()) == 0
         got.append(ds)
     np.testing.assert_allclose(got[0], got[1], rtol=1e-12, atol=1e-12 * abs(got[1]).max())
 
@@ -121,18 +121,18 @@ def test_banded_stiffness_kernel_and_solve(equations):
     eom, _ = equations
     cab = eom.cable
     y = eom.y0 + 1e-6 * np.random.default_rng(5).standard_normal(2 * N)
-    P, K, Pb, Kb = np.empty(2 * N), np.empty((2 * N, 2 * N)), np.empty(2 * N), np.empty((bd.BAND_ROWS, 2 * N))
+    P, K, Pb, Kb = np.empty(2 * N), np.empty((2 * N, 2 * N)), np.empty(2 * N), np.empty((bd.band_rows(2), 2 * N))
     taut = np.ones(N + 1)  # every segment in its taut mode
-    kn.exact_force_and_stiffness(y, cab.S, cab.EA, cab.L, cab.H, P, K, taut)
-    kn.exact_force_and_stiffness_band(y, cab.S, cab.EA, cab.L, cab.H, Pb, Kb, taut)
+    asm.force_and_stiffness(y, cab.S, cab.EA, cab.support_A, cab.support_B, taut, P, K)
+    asm.force_and_stiffness_band(y, cab.S, cab.EA, cab.support_A, cab.support_B, taut, Pb, Kb)
     dense = np.zeros_like(K)
     for i in range(2 * N):
         for j in range(max(0, i - 3), min(2 * N, i + 4)):
-            dense[i, j] = Kb[bd.BAND_HALF + i - j, j]
+            dense[i, j] = Kb[bd.band_half(2) + i - j, j]
     np.testing.assert_allclose(Pb, P, rtol=0, atol=1e-12 * abs(P).max())
     np.testing.assert_allclose(dense, K, rtol=0, atol=1e-12 * abs(K).max())
     J, Jb = K + 1e4 * np.diag(eom.mass), Kb.copy()
-    Jb[bd.BAND_HALF] += 1e4 * eom.mass
+    Jb[bd.band_half(2)] += 1e4 * eom.mass
     b, x = np.arange(2.0 * N), np.empty(2 * N)
     assert bd.solve_band(Jb, b, x, np.empty_like(Jb))
     np.testing.assert_allclose(x, np.linalg.solve(J, b), rtol=1e-10, atol=0)

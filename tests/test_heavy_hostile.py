@@ -26,7 +26,7 @@ from cablesim.analyses.setup import build_equations
 from cablesim.analyses.static import run_static
 from cablesim.case import case_from_dict, parse_case
 from cablesim.channels import channel_index
-from cablesim.dynamics import banded as bd
+from cablesim.mechanics import banded as bd
 from cablesim.errors import CablesimError
 from cablesim.modal import modal_analysis_banded
 from cablesim.statics import band_to_dense, tangent_stiffness, tangent_stiffness_band
@@ -372,7 +372,7 @@ def test_band_storage_product_row_and_solve_against_dense():
         A += np.diag(v, -d) + (np.diag(v, d) if d else 0)
     A += np.diag(np.full(nd, 20.0))  # diagonally dominant: SPD, no pivoting needed
     C = bd.band_storage(lower_band(A))
-    assert C.shape == (bd.BAND_ROWS, nd)
+    assert C.shape == (bd.band_rows(2), nd)
     for i in range(nd):
         for j in range(max(0, i - 3), min(nd, i + 4)):
             assert C[3 + i - j, j] == A[i, j]
@@ -672,7 +672,7 @@ def _error(run, sol):
 
 def test_compiled_third_order_rate_is_the_own_jerk(reference):
     """eq. 17: y''' = M^-1 (w FL cos(w t) - K(y) y' - C y''), with the banded C, taut and slack modes."""
-    from cablesim.dynamics import equations as eq
+    from cablesim.dynamics import field as eq
     case = reference[0]
     st = run_static(case, all_models=False)
     eom = build_equations(case, st, omega=OMEGA_F)
@@ -688,9 +688,9 @@ def test_compiled_third_order_rate_is_the_own_jerk(reference):
     for slack in ((), (4, 17)):
         wk, awk = eom.workspaces()
         for k in slack:
-            wk[4][k] = 0.0  # segment k+1 slack: no force, no stiffness
+            wk.taut[k] = 0.0  # segment k+1 slack: no force, no stiffness
         ds = np.empty(3 * nd)
-        assert eq.rate(eom.params(), t, s, eom.F1.copy(), ds, wk, awk) == 0
+        assert eq.rate(eom.model(), t, s, eom.F1.copy(), ds, wk, awk) == 0
         K = my_K(L, H, S, EA, y)
         for k in slack:  # remove that segment's block from the own assembly
             ee = np.outer(e[k], e[k])

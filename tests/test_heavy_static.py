@@ -111,7 +111,7 @@ def test_the_default_static_path_builds_no_dense_matrix(tmp_path, monkeypatch):
     """n = 400 (above the sizes that store matrices and compute every model): neither the dense
     tangent stiffness nor a dense eigensolver nor the O(n^2) slack test of the closure runs."""
     import cablesim.analyses.static
-    import cablesim.closure
+    import cablesim.mechanics.equilibrium
     import cablesim.statics
 
     def dense(*args, **kwargs):
@@ -119,7 +119,7 @@ def test_the_default_static_path_builds_no_dense_matrix(tmp_path, monkeypatch):
 
     monkeypatch.setattr(cablesim.statics, "tangent_stiffness", dense)
     monkeypatch.setattr(cablesim.analyses.static, "modal_analysis", dense)
-    monkeypatch.setattr(cablesim.closure, "_check_slack", dense)
+    monkeypatch.setattr(cablesim.mechanics.equilibrium, "slack_segment", dense)
     case = heavy(400)
     run = cablesim.static(case)
     static_summary(case, run.result)

@@ -115,7 +115,7 @@ def test_the_cache_folder_follows_the_compiled_sources_only(tmp_path):
     assert _hash_of(copy) == before
     # an edit to any compiled source starts a fresh one
     kernel = sorted((copy / "cablesim").rglob("*.py"), key=lambda p: p.as_posix())
-    kernel = [p for p in kernel if (copy / "cablesim" / "dynamics") in p.parents][0]
+    kernel = [p for p in kernel if (copy / "cablesim" / "mechanics") in p.parents][0]
     kernel.write_text(kernel.read_text() + "\n# a comment\n")
     assert _hash_of(copy) != before
 
@@ -125,7 +125,7 @@ def test_compiled_functions_are_cached_in_the_keyed_folder(tmp_path):
     __pycache__ beside its source."""
     code = (
         "import numpy as np\n"
-        "from cablesim.dynamics import banded\n"
+        "from cablesim.mechanics import banded\n"
         "banded.is_band(np.zeros((7, 4)))\n"
         "from cablesim import jit\n"
         "print(jit.cache_dir())\n"
@@ -134,4 +134,4 @@ def test_compiled_functions_are_cached_in_the_keyed_folder(tmp_path):
     folder = Path(out.stdout.strip())
     assert folder.name == f"kernels-{jit.source_hash()}"
     assert any(folder.rglob("banded.is_band-*.nbi"))
-    assert not any((ROOT / "dynamics").rglob("banded.is_band-*.nbi"))
+    assert not any((ROOT / "mechanics").rglob("banded.is_band-*.nbi"))

@@ -29,6 +29,7 @@ from cablesim.orbits import (
     solve_orbit,
     state_from_history,
 )
+from cablesim.orbits.kernels import copy_work
 
 CONFIG = Path(__file__).resolve().parents[1] / "configs" / "paper-example.yaml"
 
@@ -71,8 +72,8 @@ def third_order(eom, x):
     sysm = cable_system(eom)
     n = sysm.dim
     dx, J, dp = np.empty(n), np.zeros((n, n)), np.zeros(n)
-    work = sysm.work.copy()
-    assert sysm.field(0.0, np.ascontiguousarray(x, float), sysm.prm, work, dx, J, dp, -1) == 0
+    work = copy_work(sysm.work)
+    assert sysm.field(0.0, np.ascontiguousarray(x, float), sysm.model, sysm.prm, work, dx, J, dp, -1) == 0
     return np.concatenate([x, dx[n // 2 :]])
 
 
@@ -83,7 +84,7 @@ def strobe(eom, s0, periods, rtol=1e-11, atol=1e-12):
     st = integ.start(eom, s0)
     t_out = T * np.arange(1, periods + 1)
     out = np.empty((periods, s0.size))
-    n, code = integ.advance(eom.params(), st, t_out[-1], t_out, out)
+    n, code = integ.advance(eom.model(), st, t_out[-1], t_out, out)
     assert code == 0 and n == periods
     return out
 

@@ -33,7 +33,7 @@ from cablesim.analyses.setup import build_equations, make_integrator
 from cablesim.analyses.static import run_static
 from cablesim.dynamics.steady import SteadyCriterion, steady_response
 from cablesim.orbits import OdeSystem, Shooting, cable_system, continue_branches, solve_orbit, trace_branches
-from cablesim.orbits.kernels import FIELD_SIG, SLACK
+from cablesim.orbits.kernels import SLACK
 from cablesim.orbits.switching import doubling_direction, start_factor
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
@@ -44,8 +44,8 @@ MC, MEPS, MALPHA, XMAX = 0.05, 0.4, 1.0, 1.2
 # ----------------------------------------------------------------------------------------------
 # 1. Mathieu-Duffing with a state limit and an oversized scale
 # ----------------------------------------------------------------------------------------------
-@njit(FIELD_SIG, cache=True)
-def limited_mathieu_field(theta, x, prm, work, dx, J, dp, ipar):
+@njit(cache=True)
+def limited_mathieu_field(theta, x, model, prm, work, dx, J, dp, ipar):
     c, eps, alpha, xmax = prm[0], prm[1], prm[2], prm[3]
     if abs(x[0]) > xmax:
         return SLACK

@@ -27,9 +27,9 @@ def test_slack_setting_defaults_to_continue_and_reaches_the_equations(paper_case
     assert case.slack == "continue"
     eom = build_equations(case, exact_static)
     assert eom.slack == "continue" and eom.continues_slack
-    assert eom.params()[15] == 1
+    assert eom.model().slack == 1
     stop = build_equations(case, exact_static, slack="stop")
-    assert not stop.continues_slack and stop.params()[15] == 0
+    assert not stop.continues_slack and stop.model().slack == 0
     paper_case["slack"] = "stop"
     case_stop = case_from_dict(paper_case)
     assert build_equations(case_stop, exact_static).slack == "stop"
@@ -338,10 +338,10 @@ def test_chattering_segment_is_held_not_stalled(forced_eom):
     # segment 3 is physically taut (the equilibrium) but now in the slack mode: the mismatch is
     # ignored during the hold and taken at its end
     s = st.s.copy()
-    te, k = locate_event(eom.params(), t + 2e-7, t + 1e-3, s, s, st.wk[0][4], st.extra["evw"])
+    te, k = locate_event(eom.model(), t + 2e-7, t + 1e-3, s, s, st.wk[0].taut, st.extra["evw"])
     assert k == 2 and te == pytest.approx(hold[2], abs=1e-15)
     # a step inside the hold finds nothing
-    te, k = locate_event(eom.params(), t + 2e-7, t + 1e-6, s, s, st.wk[0][4], st.extra["evw"])
+    te, k = locate_event(eom.model(), t + 2e-7, t + 1e-6, s, s, st.wk[0].taut, st.extra["evw"])
     assert k == -1
 
 

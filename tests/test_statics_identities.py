@@ -251,7 +251,10 @@ def check_approximate_identities(case: Case):
     assert rel(app.B.T @ (app.T * c.S / c.EA), u) < 1e-12
     assert rel(app.K @ u, P) < 1e-7
     assert rel(app.K @ app.N, np.eye(c.n_dof), np.sqrt(c.n_dof)) < 1e-7
-    assert rel(app.N, app.D + app.f) < 1e-14
+    # N, D and f are three separate O(n) products; D of a nearly taut cable is a small difference
+    # of terms of size S/T, so their agreement is at the round-off of those terms
+    noise = 1e-14 * np.abs(app.N).max() + 64 * np.finfo(float).eps * (c.S / app.T).max() * c.n_segments
+    assert np.abs(app.N - (app.D + app.f)).max() <= noise
     assert rel(app.y, app.x + u, case.chord) < 1e-14
 
 

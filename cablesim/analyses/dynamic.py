@@ -8,12 +8,12 @@ from typing import Callable
 import numpy as np
 
 from ..case import Case
-from ..dynamics import kernels as kn
 from ..dynamics.equations import EquationsOfMotion
 from ..dynamics.integrators import Integrator
 from ..dynamics.result import HistoryResult
 from ..dynamics.simulate import simulate
 from ..errors import CablesimError
+from ..statics import segment_geometry
 from .cost import Cost, history_cost
 from .setup import build_equations, make_integrator, mode_velocity, need_inextensible, output_interval
 from .static import StaticResult, run_static
@@ -188,8 +188,7 @@ def plan_free_vibration(
 def _check_taut_start(static: StaticResult, z0: np.ndarray) -> None:
     """Refuse an initial displacement that leaves a segment slack (the model needs tension)."""
     cable = static.cable
-    T = np.empty(cable.n_segments)
-    kn.exact_tensions(static.y0 + z0, cable.S, cable.EA, cable.L, cable.H, T)
+    T = segment_geometry(cable, static.y0 + z0)[2]
     k = int(np.argmin(T))
     if not T[k] > 0:
         raise CablesimError(

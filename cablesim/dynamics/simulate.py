@@ -18,22 +18,23 @@ from ..jit import njit
 
 from ..errors import CablesimError, SlackSegmentError
 from ..modal import fastest_rate
-from ..statics import inextensible_equilibrium, resisting_force
-from . import kernels as kn
+from ..statics import inextensible_equilibrium, resisting_force, segment_geometry
 from .interrupts import MAX_CHUNK_STEPS, MIN_CHUNK_STEPS, Deferred, received
-from .equations import EquationsOfMotion, approximate_workspace, equilibrium_factors, observe
+from ..mechanics.model import approximate_workspace
+from .equations import EquationsOfMotion
+from .field import equilibrium_factors, observe
 from .integrators import Integrator
 from .integrators.events import CHATTER_TEXT
 from .result import HistoryResult, SlackRecord
-from .status import Status
+from .status import INNER_SOLVE, NONFINITE, OK, SLACK, STEP_UNDERFLOW, Status
 
 
 @njit
-def _observe_all(prm, t, S, warm, zc, ze, T, residual, slack, awk, split):
+def _observe_all(model, t, S, warm, zc, ze, T, residual, slack, awk, split):
     seg = np.empty(1, dtype=np.int64)
-    k0 = equilibrium_factors(prm, warm, awk)
+    k0 = equilibrium_factors(model, warm, awk)
     for i in range(t.size):
-        residual[i] = observe(prm, t[i], S[i], warm, zc[i], ze[i], T[i], seg, awk, split, k0)
+        residual[i] = observe(model, t[i], S[i], warm, zc[i], ze[i], T[i], seg, awk, split, k0)
         slack[i] = seg[0]
 
 
@@ -44,7 +45,7 @@ def step_size(integrator: Integrator, state) -> float:
     return float(state.extra.get("h", 0.0)) or 1e-3
 
 
-def advance_in_chunks(integrator: Integrator, prm, state, t_end: float, t_out: np.ndarray, out: np.ndarray,
+def advance_in_chunks(integrator: Integrator, model, state, t_end: float, t_out: np.ndarray, out: np.ndarray,
                       max_steps: int = MAX_CHUNK_STEPS) -> tuple[int, int]:
     """``integrator.advance`` to ``t_end`` in calls of at most about ``max_steps`` steps each.
 
@@ -60,9 +61,9 @@ def advance_in_chunks(integrator: Integrator, prm, state, t_end: float, t_out: n
     written = 0
     while True:
         t_stop = min(t_end, state.t + max_steps * step_size(integrator, state))
-        n, code = integrator.advance(prm, state, t_stop, t_out[written:], out[written:])
+        n, code = integrator.advance(model, state, t_stop, t_out[written:], out[written:])
         written += n
-        if code != kn.OK or state.t >= t_end - 1e-12 * max(abs(t_end), 1.0) or t_stop >= t_end:
+        if code != OK or state.t >= t_end - 1e-12 * max(abs(t_end), 1.0) or t_stop >= t_end:
             return written, code
 
 
@@ -70,16 +71,17 @@ def failure_text(code: int, t: float, eom: EquationsOfMotion, integrator: Integr
     where = f"at t = {t:.6g} s"
     rate = fastest_rate(eom.frequencies, eom.a0, eom.a1)
     dt = getattr(integrator, "dt", None)
-    if integrator.name == "rk4" and dt is not None and dt * rate > 2.0:
+    limit = integrator.stability_limit
+    if integrator.fixed_step and limit is not None and dt is not None and dt * rate > 0.7 * limit:
         # An explicit step beyond its stability limit grows without bound; a segment usually
         # compresses (reads as slack) before anything turns non-finite, so say so first.
         return (
-            f"stopped {where}: {Status(code).text}, but the step dt = {dt:.3g} s exceeds rk4's "
-            f"stability limit (about 2.8 / {rate:.4g} 1/s = {2.8 / rate:.3g} s, set by the fastest "
+            f"stopped {where}: {Status(code).text}, but the step dt = {dt:.3g} s exceeds {integrator.name}'s "
+            f"stability limit (about {limit:g} / {rate:.4g} 1/s = {limit / rate:.3g} s, set by the fastest "
             "mode or, with stiffness-proportional damping, the fastest overdamped mode), which is "
             "the likely cause: use a smaller dt, dopri5, or the newmark or generalized-alpha integrator"
         )
-    if code == kn.INNER_SOLVE and not eom.exact:
+    if code == INNER_SOLVE and not eom.exact:
         seg = _slack_in_approximate(eom, t, state_s)
         if seg is not None:
             return (
@@ -87,21 +89,20 @@ def failure_text(code: int, t: float, eom: EquationsOfMotion, integrator: Integr
                 "taut (with a slack segment the inextensible state x(P) is not determined); the exact "
                 "analysis (analysis: exact) can continue through slack segments"
             )
-    if code == kn.SLACK:
-        T = np.empty(eom.cable.n_segments)
-        kn.exact_tensions(eom.y0 + state_s[: eom.n_dof], eom.cable.S, eom.cable.EA, eom.cable.L, eom.cable.H, T)
+    if code == SLACK:
+        T = segment_geometry(eom.cable, eom.y0 + state_s[: eom.n_dof])[2]
         k = int(np.argmin(T)) + 1
         return (
             f"stopped {where}: segment {k} went slack (its tension fell to zero; with slack: stop the run "
             "ends there). Use slack: continue (the default) to continue through slack segments, reduce "
             "the harmonic loads FL, or raise the sustained loads F0."
         )
-    if code in (kn.NONFINITE, kn.STEP_UNDERFLOW):
+    if code in (NONFINITE, STEP_UNDERFLOW):
         return (
             f"stopped {where}: {Status(code).text}; try a smaller step or tolerance, or the "
             "generalized-alpha integrator."
         )
-    if code == kn.INNER_SOLVE:
+    if code == INNER_SOLVE:
         return f"stopped {where}: the inner equilibrium solve failed ({_inner_diagnosis(eom, t, state_s)}); reduce FL or the step size."
     return f"stopped {where}: {Status(code).text}."
 
@@ -209,7 +210,7 @@ def simulate(
     """
     if s0 is None:
         s0 = eom.initial_state()
-    prm = eom.params()
+    model = eom.model()
     nd = eom.n_dof
     n_out = int(np.floor(duration / output_step + 1e-9))
     t_out = np.arange(1, n_out + 1) * output_step
@@ -217,11 +218,11 @@ def simulate(
     out[0] = s0
     state = integrator.start(eom, s0)
     written = 0
-    code = state.extra.get("code", kn.OK)
+    code = state.extra.get("code", OK)
     steps = float(MIN_CHUNK_STEPS)  # steps per chunk, adapted to about `chunk_seconds` of wall time
     status, message, t_stop = Status.COMPLETED, Status.COMPLETED.text, None
     with Deferred() as stop:
-        while code == kn.OK and state.t < duration - 1e-12 * max(duration, 1.0):
+        while code == OK and state.t < duration - 1e-12 * max(duration, 1.0):
             if stop.hit:
                 status, t_stop = Status.INTERRUPTED, state.t
                 by = " (SIGTERM)" if received() == signal.SIGTERM else ""
@@ -230,13 +231,13 @@ def simulate(
             h = step_size(integrator, state)
             t_end = min(state.t + min(steps * h, 50.0 * output_step + h, 10.0 + h), duration)
             wall = time.perf_counter()
-            n, code = integrator.advance(prm, state, t_end, t_out[written:], out[1 + written :])
+            n, code = integrator.advance(model, state, t_end, t_out[written:], out[1 + written :])
             written += n
             if progress is not None:
                 progress(min(state.t, duration))
             spent = time.perf_counter() - wall
             steps = float(np.clip(steps * np.clip(chunk_seconds / max(spent, 1e-4), 0.5, 4.0), 1.0, MAX_CHUNK_STEPS))
-    if code != kn.OK:
+    if code != OK:
         status, t_stop = Status(code), state.t
         message = failure_text(code, state.t, eom, integrator, state.s).rstrip(".")
     m = written + 1
@@ -247,7 +248,7 @@ def simulate(
     T = np.empty((m, eom.cable.n_segments))
     residual = np.empty(m)
     slack = np.empty(m, dtype=np.int64)
-    _observe_all(prm, t, S, np.array(eom.F1, dtype=float), zc, ze, T, residual, slack, approximate_workspace(eom.cable.n_nodes), split)
+    _observe_all(model, t, S, np.array(eom.F1, dtype=float), zc, ze, T, residual, slack, approximate_workspace(eom.cable.n_nodes, eom.cable.dim), split)
     split, bad = _bad_instants(eom, S, T, residual, zc, ze, split)
     if bad.any():
         first = int(np.argmax(bad))

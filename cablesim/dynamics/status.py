@@ -43,3 +43,11 @@ _TEXT = {
     Status.OUTPUT_NONFINITE: "derived outputs became non-finite (inner solve failed)",
     Status.UNKNOWN: "stopped early (the stored message says why)",
 }
+
+
+# The codes the compiled kernels return (plain integers, the values above).
+OK = int(Status.COMPLETED)
+NONFINITE = int(Status.NONFINITE)
+SLACK = int(Status.SLACK)
+INNER_SOLVE = int(Status.INNER_SOLVE)
+STEP_UNDERFLOW = int(Status.STEP_UNDERFLOW)

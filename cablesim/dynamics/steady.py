@@ -28,12 +28,11 @@ from typing import Callable
 
 import numpy as np
 
-from . import kernels as kn
 from .equations import EquationsOfMotion
 from .integrators import DOPRI5, Integrator
 from .simulate import advance_in_chunks, failure_text
 from .result import SlackRecord
-from .status import Status
+from .status import OK, Status
 
 #: Default forcing periods between two calls of a ``decide`` hook of :func:`steady_response`
 #: (:mod:`cablesim.orbits.accelerate` uses it as its longest interval).
@@ -182,7 +181,7 @@ def monodromy_multipliers(
     """
     nd = eom.n_dof
     T = 2.0 * np.pi / eom.omega
-    prm = eom.params()
+    model = eom.model()
     exact = eom.exact
     lo = 0 if exact else nd  # first component of the reduced state
     idx = np.arange(lo, lo + 2 * nd)
@@ -191,8 +190,8 @@ def monodromy_multipliers(
     def flow(s0: np.ndarray) -> np.ndarray:
         st = integrator.start(eom, s0)
         out = np.empty((1, s0.size))
-        n, code = advance_in_chunks(integrator, prm, st, p * T, np.array([p * T]), out)
-        if code != kn.OK or n != 1:
+        n, code = advance_in_chunks(integrator, model, st, p * T, np.array([p * T]), out)
+        if code != OK or n != 1:
             raise FloatingPointError("flow failed")
         return out[0]
 
@@ -215,9 +214,7 @@ def monodromy_multipliers(
 def _floquet_integrator(integrator: Integrator) -> Integrator:
     # An adaptive scheme chooses different steps for nearby starts; tighten it so that the
     # finite differences see the dynamics, not the step-size controller.
-    if isinstance(integrator, DOPRI5):
-        return DOPRI5(rtol=1e-11, atol=integrator.atol * 1e-3, dt_max=integrator.dt_max)
-    return integrator
+    return integrator.for_finite_differences()
 
 
 def steady_response(
@@ -278,7 +275,7 @@ def _steady(eom, integrator, channels, criterion, s0, decide, track, decide_ever
     T = 2.0 * np.pi / w
     crit = criterion
     spp = crit.samples_per_period
-    prm = eom.params()
+    model = eom.model()
     s0 = eom.initial_state() if s0 is None else np.array(s0, dtype=float)
     state = integrator.start(eom, s0)
     track.update(state=state, t0=state.t)
@@ -310,8 +307,8 @@ def _steady(eom, integrator, channels, criterion, s0, decide, track, decide_ever
         else:
             t_out = T * np.arange(k + 1, kk + 1)
         out = np.empty((t_out.size, 3 * nd))
-        n, code = advance_in_chunks(integrator, prm, state, t_out[-1], t_out, out)
-        if code != kn.OK:
+        n, code = advance_in_chunks(integrator, model, state, t_out[-1], t_out, out)
+        if code != OK:
             return _failed(eom, integrator, channels, out[:n], state, code, fine)
         if in_window:
             fine.append(out)
@@ -336,7 +333,7 @@ def _steady(eom, integrator, channels, criterion, s0, decide, track, decide_ever
                 # An unstable orbit: keep integrating; look again after it has had time to leave.
                 recheck_after = k + max(50, 10 * p)
                 continue
-        return _finish_steady(eom, integrator, prm, state, channels, p, k, T, spp, floquet)
+        return _finish_steady(eom, integrator, model, state, channels, p, k, T, spp, floquet)
 
     # the state at the last forcing phase 0 (the integrator's own state may have stepped past it)
     return _cap_reached(eom, channels, state, fine, spp, floquet, out[-1].copy(), float(t_out[-1]))
@@ -446,19 +443,19 @@ def periodic_response(
     T = 2.0 * np.pi / eom.omega
     k = int(round(t0 / T))
     state = integrator.start(eom, np.asarray(s0, dtype=float), t0)
-    r = _finish_steady(eom, integrator, eom.params(), state, channels, period, k, T, criterion.samples_per_period,
+    r = _finish_steady(eom, integrator, eom.model(), state, channels, period, k, T, criterion.samples_per_period,
                        floquet)
     r.decided = decided if not r.failed else "failed"
     r.multipliers = multipliers
     return r
 
 
-def _finish_steady(eom, integrator, prm, state, channels, p, k, T, spp, floquet) -> PointResult:
+def _finish_steady(eom, integrator, model, state, channels, p, k, T, spp, floquet) -> PointResult:
     nd = eom.n_dof
     t_out = T * (k + np.arange(1, p * spp + 1) / spp)
     out = np.empty((t_out.size, 3 * nd))
-    n, code = advance_in_chunks(integrator, prm, state, t_out[-1], t_out, out)
-    if code != kn.OK:
+    n, code = advance_in_chunks(integrator, model, state, t_out[-1], t_out, out)
+    if code != OK:
         return _failed(eom, integrator, channels, out[:n], state, code, [])
     z = out[:, :nd][:, channels]
     amp, half = _amplitudes(z, periodic=True)

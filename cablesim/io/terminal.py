@@ -138,7 +138,7 @@ class StatusLine:
         return False
 
 
-def compile_notice(note, cache: Path | None = None, pattern: str = "equations.rate-*.nbi") -> bool:
+def compile_notice(note, cache: Path | None = None, pattern: str = "field.rate-*.nbi") -> bool:
     """Tell ``note`` (a line to print) that the compiled kernels are not yet in numba's cache."""
     cache = cache if cache is not None else KERNEL_CACHE
     if any(cache.rglob(pattern)):
@@ -148,7 +148,7 @@ def compile_notice(note, cache: Path | None = None, pattern: str = "equations.ra
 
 
 @contextlib.contextmanager
-def compiling(note, pattern: str = "equations.rate-*.nbi", delay: float = 1.5):
+def compiling(note, pattern: str = "field.rate-*.nbi", delay: float = 1.5):
     """Say that the kernels are being compiled, if they are (cold cache) and it takes a while:
     a refusal found in the first moments is then never preceded by the notice."""
     timer = None

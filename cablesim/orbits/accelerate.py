@@ -192,7 +192,7 @@ def strobe_noise(eom: EquationsOfMotion, integrator: Integrator, u: np.ndarray, 
     Tp = p * 2.0 * np.pi / eom.omega
     state = integrator.start(eom, _third_order(eom, u))
     out = np.empty((1, 3 * eom.n_dof))
-    n, code = integrator.advance(eom.params(), state, Tp, np.array([Tp]), out)
+    n, code = integrator.advance(eom.model(), state, Tp, np.array([Tp]), out)
     if code != OK or n != 1:
         return np.inf
     return NOISE_FACTOR * _distance(out[0, : u.size], u, scale)
@@ -356,15 +356,13 @@ def accelerated_steady_response(
     """
     if not eom.exact or eom.n_dof > 40:
         return steady_response(eom, integrator, channels, criterion, s0=s0)
-    transient = integrator
-    if isinstance(integrator, DOPRI5) and integrator.rtol < TRANSIENT_RTOL:
-        # the transient only has to bring the response near its orbit; the orbit, once accepted,
-        # is measured with the sweep's own integrator. The absolute tolerance stays: loosened
-        # alike it would save a third of the transient's cost, but the integration-alone rules,
-        # which decide whatever shooting does not, then miss small periodic responses (1 rad/s
-        # on the paper example: never steady within the cap at atol 1e-8 chord, steady at 886 s
-        # at the default 1e-10 chord; see TRANSIENT_RTOL)
-        transient = DOPRI5(rtol=TRANSIENT_RTOL, atol=integrator.atol, dt_max=integrator.dt_max)
+    # the transient only has to bring the response near its orbit; the orbit, once accepted, is
+    # measured with the sweep's own integrator. An adaptive scheme's absolute tolerance stays:
+    # loosened alike it would save a third of the transient's cost, but the integration-alone
+    # rules, which decide whatever shooting does not, then miss small periodic responses (1 rad/s
+    # on the paper example: never steady within the cap at atol 1e-8 chord, steady at 886 s at the
+    # default 1e-10 chord; see TRANSIENT_RTOL)
+    transient = integrator.for_transient(TRANSIENT_RTOL)
     every = check_interval(eom)
     return steady_response(eom, transient, channels, criterion, s0=s0,
                            decide=_Shooter(eom, integrator, transient, channels, criterion, every), decide_every=every)

@@ -1,14 +1,17 @@
 """Compiled kernels of the shooting method: one flow segment with its variational equations.
 
-A *vector field* is a numba function with the signature :data:`FIELD_SIG`::
+A *vector field* is a compiled function::
 
-    field(theta, x, prm, work, dx, J, dp, ipar) -> status
+    field(theta, x, model, prm, work, dx, J, dp, ipar) -> status
 
 It fills ``dx = f(x, theta)``, the Jacobian ``J = df/dx`` and, when ``ipar >= 0``,
 ``dp = df/dprm[ipar]``; it returns :data:`OK` (0) or a failure code. Time enters only through
-the forcing phase ``theta = omega t``. ``prm`` holds the model's constants (a flat float
-array: a continuation parameter other than ``omega`` is one of its entries, set by the caller),
-``work`` is the field's scratch space (and warm starts of inner solves).
+the forcing phase ``theta = omega t``. ``model`` holds the system's constants (any value numba
+can pass: a named tuple for the cable, :class:`cablesim.mechanics.model.CableModel`), ``prm``
+its continuation parameters (a float array: a parameter other than ``omega`` is one of its
+entries, set by the caller), ``work`` its scratch space and the warm starts of inner solves (an
+array or a tuple of arrays). :func:`flow_segment` is compiled once per field and per type of
+these arguments, with the field's calls inlined.
 
 :func:`flow_segment` integrates ``x' = f(x, omega t)`` over a time interval with a fixed-step
 explicit Runge-Kutta scheme, together with
@@ -30,25 +33,16 @@ stays accurate when the monodromy is nearly singular (strongly damped modes).
 
 Cost: the variational product ``J Y`` at every stage is the largest part of a step; it is summed
 eight columns at a time in scalar accumulators (the same sums, in the same order, as one column
-at a time: the flow map is bitwise unchanged), and the cable field indexes its arrays without
-views (:mod:`cablesim.orbits.cablefield`). Measured on the stiff cable of
-``configs/paper/fig8a.yaml`` (8 states, 9 columns, rk8): 8.3 -> 6.7 us of CPU per step; the
-whole 0.4 .. 2 rad/s response (14.8 million steps) 123 -> 99 s of CPU, identical results.
+at a time: the flow map is bitwise unchanged).
 """
 
 from __future__ import annotations
 
+import numba
 import numpy as np
-from numba import types
 
+from ..dynamics.status import INNER_SOLVE, NONFINITE, OK, SLACK
 from ..jit import njit
-
-from ..dynamics import kernels as dk
-
-OK = dk.OK
-NONFINITE = dk.NONFINITE
-SLACK = dk.SLACK
-INNER_SOLVE = dk.INNER_SOLVE
 
 #: Parameter modes of :func:`flow_segment`.
 PARAM_NONE = 0
@@ -58,75 +52,34 @@ PARAM_PRM = 2
 #: Restart the propagated Jacobian when ``|int tr J dt|`` over a chunk exceeds this.
 CHUNK_DIVERGENCE = 2.0
 
-_f8 = types.float64
-_i8 = types.int64
-_v = types.float64[::1]
-_m = types.float64[:, ::1]
-
-#: Signature every vector field is compiled with.
-FIELD_SIG = _i8(_f8, _v, _v, _v, _v, _m, _v, _i8)
-FIELD_TYPE = types.FunctionType(FIELD_SIG)
-
-FLOW_SIG = _i8(
-    FIELD_TYPE,  # field
-    _v,  # prm
-    _v,  # work
-    _v,  # x0
-    _f8,  # theta0
-    _f8,  # omega
-    _f8,  # duration
-    _i8,  # nsteps
-    _m,  # A
-    _v,  # b
-    _v,  # c
-    _i8,  # ipar
-    _i8,  # pmode
-    types.boolean,  # jac
-    _v,  # xend (n)
-    _m,  # Mout (n, n)
-    _v,  # pout (n)
-    _v,  # xmax (n)
-    _v,  # xmin (n)
-    _m,  # rec (nsteps + 1, 2n) or (0, 0)
-    _v,  # info (4): divergence integral, log|det|, sign(det), chunks
-)
+__all__ = ["FlowCall", "INNER_SOLVE", "NONFINITE", "OK", "SLACK", "flow_segment", "copy_work"]
 
 
-class FieldAddress(types.WrapperAddressProtocol):
-    """A compiled vector field handed to :func:`flow_segment` by the address of its C wrapper,
-    looked up once. Given the dispatcher itself, numba looks the address up again at every call
-    of :func:`flow_segment`: measured (CPU, a one-step segment of the paper's cable) 0.14 ms a
-    call with the dispatcher against 0.04 ms with this, where a one-period evaluation with its
-    Jacobian costs about 0.6 ms. The flow map is the same function either way (bitwise
-    identical results).
-
-    Parameters
-    ----------
-    field : numba dispatcher
-        Compiled with :data:`FIELD_SIG`.
-    """
-
-    def __init__(self, field):
-        self.field = field
-        cres = field.get_compile_result(FIELD_SIG)
-        self._address = cres.library.get_pointer_to_function(cres.fndesc.llvm_cfunc_wrapper_name)
-
-    def __wrapper_address__(self) -> int:
-        return self._address
-
-    def signature(self):
-        return FIELD_SIG
+def copy_work(work):
+    """A deep copy of a field's scratch space (an array, or a tuple or named tuple of them)."""
+    if isinstance(work, np.ndarray):
+        return work.copy()
+    if isinstance(work, tuple):
+        items = [copy_work(w) for w in work]
+        return type(work)(*items) if hasattr(work, "_fields") else tuple(items)
+    return work
 
 
-_ADDRESSES: dict = {}
+class FlowCall:
+    """:func:`flow_segment` for one system, called through the entry point compiled for its
+    argument types: numba's type dispatch of a named-tuple argument costs about 20 us a call, a
+    tenth of a one-period evaluation of the paper's cable. The flow map is the same function
+    either way."""
 
+    def __init__(self):
+        self._entry = None
 
-def field_address(field) -> FieldAddress:
-    """The :class:`FieldAddress` of ``field``, made once per field and process."""
-    found = _ADDRESSES.get(field)
-    if found is None:
-        found = _ADDRESSES[field] = FieldAddress(field)
-    return found
+    def __call__(self, *args):
+        if self._entry is None:
+            sig = tuple(numba.typeof(a) for a in args)
+            flow_segment.compile(sig)
+            self._entry = flow_segment.overloads[sig].entry_point
+        return self._entry(*args)
 
 
 @njit
@@ -364,8 +317,8 @@ def _advance_jacobian(Yf, KYf, b, h):
                 Yf[i] += hb * KYf[st, i]
 
 
-@njit(FLOW_SIG)
-def flow_segment(field, prm, work, x0, theta0, omega, duration, nsteps, A, b, c, ipar, pmode, jac,
+@njit
+def flow_segment(field, model, prm, work, x0, theta0, omega, duration, nsteps, A, b, c, ipar, pmode, jac,
                  xend, Mout, pout, xmax, xmin, rec, info):
     """Integrate one segment (see the module docstring). Returns a status code.
 
@@ -408,7 +361,7 @@ def flow_segment(field, prm, work, x0, theta0, omega, duration, nsteps, A, b, c,
         for st in range(s if not last else 1):
             _stage_state(x, K, Yf, KYf, xs, Ysf, A, st, h, stage_jac)
             theta = theta0 + omega * h * (k + c[st])
-            code = field(theta, xs, prm, work, dx, J, dp, ipar_f)
+            code = field(theta, xs, model, prm, work, dx, J, dp, ipar_f)
             if code != OK:
                 return code
             for i in range(n):

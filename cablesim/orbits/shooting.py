@@ -184,7 +184,7 @@ class Shooting:
         self._A = np.ascontiguousarray(self.tableau.A)
         self._b = np.ascontiguousarray(self.tableau.b)
         self._c = np.ascontiguousarray(self.tableau.c)
-        self._field = ok.field_address(system.field)
+        self._flow = ok.FlowCall()
         self._ipar = -1 if parameter == "omega" else int(system.parameters[parameter])
         self._pmode = ok.PARAM_OMEGA if parameter == "omega" else ok.PARAM_PRM
         #: Counters: flow-segment integrations and Runge-Kutta steps taken.
@@ -239,10 +239,11 @@ class Shooting:
         xmin = np.empty(n)
         info = np.zeros(4)
         rec = np.empty((ns + 1, 2 * n)) if record else _EMPTY_REC
-        work = self.system.work.copy()
-        code = ok.flow_segment(
-            self._field, self._prm(lam), work, np.ascontiguousarray(x0, dtype=float), theta0, omega, dur,
-            ns, self._A, self._b, self._c, self._ipar, self._pmode, jac, xend, G, dp, xmax, xmin, rec, info,
+        work = ok.copy_work(self.system.work)
+        code = self._flow(
+            self.system.field, self.system.model, self._prm(lam), work, np.ascontiguousarray(x0, dtype=float),
+            float(theta0), float(omega), float(dur),
+            int(ns), self._A, self._b, self._c, self._ipar, self._pmode, bool(jac), xend, G, dp, xmax, xmin, rec, info,
         )
         self.calls += 1
         self.steps_taken += ns

@@ -1,7 +1,7 @@
 """Periodically forced first-order systems for the shooting method.
 
 An :class:`OdeSystem` bundles a compiled vector field (contract in :mod:`cablesim.orbits.kernels`)
-with its packed constants and what the shooting method needs to know about it: which entries
+with its constants and what the shooting method needs to know about it: which entries
 of ``prm`` are continuation parameters, how fast its fastest mode is (for the stability floor of
 the fixed step) and which components are displacements (for amplitudes). The shooting and
 continuation code never looks inside: :func:`cable_system` is the only place that knows about
@@ -17,6 +17,7 @@ import numpy as np
 
 from ..modal import fastest_rate
 from . import cablefield
+from .kernels import copy_work
 
 
 @dataclass(frozen=True)
@@ -26,14 +27,17 @@ class OdeSystem:
     Attributes
     ----------
     field : numba function
-        Compiled with :data:`cablesim.orbits.kernels.FIELD_SIG`.
+        The vector field (contract in :mod:`cablesim.orbits.kernels`).
     dim : int
         State dimension.
     prm : ndarray
-        Packed constants (copied; never modified in place by this object).
-    work : ndarray
+        The parameters (copied; never modified in place by this object).
+    work : ndarray or tuple of ndarray
         Initial content of the field's scratch space (warm starts); copied before every
         integration so the flow map does not depend on the call history.
+    model : object
+        The field's constants (for the cable, a :class:`~cablesim.mechanics.model.CableModel`;
+        an empty tuple for a system whose constants are all in ``prm``).
     omega : float
         Forcing frequency, rad/s (the continuation parameter may override it).
     parameters : dict
@@ -57,7 +61,7 @@ class OdeSystem:
     field: object
     dim: int
     prm: np.ndarray
-    work: np.ndarray
+    work: object
     omega: float
     parameters: dict = dc_field(default_factory=dict)
     fastest_rate: float = 0.0
@@ -65,10 +69,12 @@ class OdeSystem:
     divergence: float | None = None
     noise: object = 0.0
     names: tuple = ()
+    model: object = ()
 
     def __post_init__(self):
         object.__setattr__(self, "prm", np.ascontiguousarray(self.prm, dtype=float).copy())
-        object.__setattr__(self, "work", np.ascontiguousarray(self.work, dtype=float).copy())
+        work = np.ascontiguousarray(self.work, dtype=float) if isinstance(self.work, (list, np.ndarray)) else self.work
+        object.__setattr__(self, "work", copy_work(work))
         object.__setattr__(self, "displacements", np.asarray(self.displacements, dtype=int))
 
     def with_prm(self, index: int, value: float) -> "OdeSystem":
@@ -95,8 +101,8 @@ def cable_system(eom, gamma: float = 1.0) -> OdeSystem:
         State ``(z, v)`` of dimension ``2 n_dof``, with parameter ``"gamma"``.
     """
     nd = eom.n_dof
-    lay = cablefield.layout(nd)
-    prm = cablefield.pack(eom, gamma)
+    model = eom.model(dense_damping=True)
+    prm = np.array([float(gamma)])
     if eom.analysis == "exact":
         fld, work = cablefield.exact_field, cablefield.exact_work(eom)
     else:
@@ -123,16 +129,17 @@ def cable_system(eom, gamma: float = 1.0) -> OdeSystem:
     # would otherwise offset tiny orbits). The third-order time integration does the same: F0
     # enters it only through y''(0) = M^-1 (F(0) - P(y0) - C y'(0)).
     dx, J, dp = np.empty(nd2), np.zeros((nd2, nd2)), np.zeros(nd2)
-    code = fld(0.0, np.zeros(nd2), prm, work.copy(), dx, J, dp, -1)
+    code = fld(0.0, np.zeros(nd2), model, prm, copy_work(work), dx, J, dp, -1)
     if code == 0:
-        prm[lay.F0 : lay.F0 + nd] -= eom.mass * dx[nd:]
+        model = model._replace(F0=model.F0 - eom.mass * dx[nd:])
     return OdeSystem(
         field=fld,
         dim=nd2,
         prm=prm,
         work=work,
+        model=model,
         omega=float(eom.omega),
-        parameters={"gamma": lay.gamma},
+        parameters={"gamma": cablefield.GAMMA},
         fastest_rate=rate,
         displacements=np.arange(nd),
         divergence=-float(np.trace(eom.C / eom.mass[:, None])),

@@ -13,13 +13,13 @@ import numpy as np
 from ..analyses.setup import build_equations, default_dopri5
 from ..analyses.static import run_static
 from ..case import parse_case
-from ..dynamics import kernels as kn
+from ..dynamics.status import OK as COMPLETED
 from ..dynamics.integrators import DOPRI5, RK4, GeneralizedAlpha, Newmark
 from ..dynamics.simulate import simulate
 from ..dynamics.status import Status
 from ..errors import CablesimError
 from ..modal import fastest_rate as damped_fastest_rate
-from ..closure import CLOSURE_RTOL
+from ..mechanics.equilibrium import CLOSURE_RTOL
 from ..statics import inextensible_equilibrium, resisting_force, segment_geometry
 from .cases import (
     AGREE_SAFETY,
@@ -214,16 +214,16 @@ def _static_check(prep: _Prepared) -> tuple[bool, str]:
 
 def _raw_integrate(eom, integ, duration: float, output_step: float):
     """The integration simulate() performs, without its derived outputs (same trajectory)."""
-    prm = eom.params()
+    model = eom.model()
     nd = eom.n_dof
     n_out = int(np.floor(duration / output_step + 1e-9))
     t_out = np.arange(1, n_out + 1) * output_step
     out = np.empty((n_out, 3 * nd))
     state = integ.start(eom, eom.initial_state())
-    code = state.extra.get("code", kn.OK)
+    code = state.extra.get("code", COMPLETED)
     written = 0
-    while code == kn.OK and state.t < duration - 1e-12 * max(duration, 1.0):
-        n, code = integ.advance(prm, state, duration, t_out[written:], out[written:])
+    while code == COMPLETED and state.t < duration - 1e-12 * max(duration, 1.0):
+        n, code = integ.advance(model, state, duration, t_out[written:], out[written:])
         written += n
     return t_out[:written], out[:written], state, code
 
@@ -237,7 +237,7 @@ def _stop_state_tensions(prep: _Prepared, integ, duration: float, hist) -> dict:
     eom = prep.eom
     nd = eom.n_dof
     t_rows, rows, state, code = _raw_integrate(eom, integ, duration, prep.output_step)
-    if code != kn.OK:
+    if code != COMPLETED:
         t, s = state.t, state.s
     else:
         if hist.t_stop is None or not t_rows.size:

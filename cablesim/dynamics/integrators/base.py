@@ -54,18 +54,21 @@ class Integrator(ABC):
     order: ClassVar[int]
     #: One line for listings.
     description: ClassVar[str]
+    #: Largest stable ``h * rate`` (rate: the fastest damped root) of an explicit scheme; None
+    #: for an unconditionally stable one.
+    stability_limit: ClassVar[float | None] = None
 
     @abstractmethod
     def start(self, eom, s0: np.ndarray, t0: float = 0.0) -> IntegratorState:
         """State at ``t0`` from the initial ``s0 = (z, y', y'')``."""
 
     @abstractmethod
-    def advance(self, prm, state: IntegratorState, t_end: float, t_out: np.ndarray, out: np.ndarray):
+    def advance(self, model, state: IntegratorState, t_end: float, t_out: np.ndarray, out: np.ndarray):
         """Advance ``state`` to at least ``t_end``.
 
         Parameters
         ----------
-        prm : tuple
+        model : tuple
             :meth:`EquationsOfMotion.params`.
         state : IntegratorState
             Updated in place.
@@ -88,6 +91,18 @@ class Integrator(ABC):
     def settings(self) -> dict:
         """The settings, for result files."""
         return {k: v for k, v in self.__dict__.items() if not k.startswith("_")}
+
+    def for_finite_differences(self) -> "Integrator":
+        """A version whose flow map is smooth in the initial state (finite-difference monodromy):
+        a fixed-step scheme as it is; an adaptive one tightened so that its step-size controller
+        does not show in the differences."""
+        return self
+
+    def for_transient(self, rtol: float) -> "Integrator":
+        """A version for a transient that need only come near a steady state: an adaptive scheme
+        with its relative tolerance loosened to ``rtol`` (never tightened); a fixed-step one as
+        it is."""
+        return self
 
 
 @njit(inline="always")

@@ -1,6 +1,6 @@
 """Slack onsets and re-tightenings of the exact analysis, located inside the integrators.
 
-A segment is taut or slack (its *mode*, ``wk[4]`` of :func:`cablesim.dynamics.equations.workspace`):
+A segment is taut or slack (its *mode*, ``taut`` of the :class:`~cablesim.mechanics.model.Workspace`):
 within a step the vector field of the current modes is smooth, a taut segment acting as a linear
 spring and a slack one contributing nothing. After every step the gap ``g = l - S`` of each
 segment is sampled on the step's cubic Hermite interpolant of ``z`` (``NSAMP`` points). Where a
@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from ...jit import njit
 
-from .. import kernels as kn
+from ...mechanics import segments as sg
 from .base import hermite_weights
 
 #: Samples of the gaps per step.
@@ -36,28 +36,28 @@ CHATTER_TEXT = (
 
 
 @njit
-def _config_at(prm, t, ta, tb, sa, sb, y):
+def _config_at(model, t, ta, tb, sa, sb, y):
     """``y = y0 + z(t)`` from the cubic Hermite interpolant of z (values and velocities)."""
     nd = y.size
     h00, h10, h01, h11 = hermite_weights(ta, tb, t)
-    y0 = prm[10]
+    y0 = model.y0
     for i in range(nd):
         y[i] = y0[i] + h00 * sa[i] + h10 * sa[nd + i] + h01 * sb[i] + h11 * sb[nd + i]
 
 
 @njit
-def _signed_gap(prm, t, ta, tb, sa, sb, k, y, sign):
-    _config_at(prm, t, ta, tb, sa, sb, y)
-    return sign * kn.segment_gap(y, k, prm[1], prm[3], prm[4])
+def _signed_gap(model, t, ta, tb, sa, sb, k, y, sign):
+    _config_at(model, t, ta, tb, sa, sb, y)
+    return sign * sg.gap(y, k, model.S, model.A, model.B)
 
 
 @njit
-def _root(prm, ta, tb, sa, sb, k, lo, hi, y, sign):
+def _root(model, ta, tb, sa, sb, k, lo, hi, y, sign):
     """Illinois on ``sign * g_k`` (>= 0 at lo, < 0 at hi); returns the bracket's end past the root."""
-    flo = _signed_gap(prm, lo, ta, tb, sa, sb, k, y, sign)
+    flo = _signed_gap(model, lo, ta, tb, sa, sb, k, y, sign)
     if flo < 0.0:
         return lo  # already across at the start of the bracket (end of a chatter hold)
-    fhi = _signed_gap(prm, hi, ta, tb, sa, sb, k, y, sign)
+    fhi = _signed_gap(model, hi, ta, tb, sa, sb, k, y, sign)
     side = 0
     for _ in range(200):
         if hi - lo <= T_TOL:
@@ -65,7 +65,7 @@ def _root(prm, ta, tb, sa, sb, k, lo, hi, y, sign):
         c = (lo * fhi - hi * flo) / (fhi - flo)
         if not (lo < c < hi):
             c = 0.5 * (lo + hi)
-        fc = _signed_gap(prm, c, ta, tb, sa, sb, k, y, sign)
+        fc = _signed_gap(model, c, ta, tb, sa, sb, k, y, sign)
         if fc < 0.0:
             hi, fhi = c, fc
             if side == -1:
@@ -80,41 +80,41 @@ def _root(prm, ta, tb, sa, sb, k, lo, hi, y, sign):
 
 
 @njit
-def _update_peaks(prm, t, g, peak, peak_t):
-    S, EA = prm[1], prm[2]
+def _update_peaks(model, t, g, peak, peak_t):
+    S, EA = model.S, model.EA
     for k in range(S.size):
-        T = EA * max(g[k], 0.0) / S[k]
+        T = sg.tension_of_stretch(max(g[k], 0.0), S[k], EA)
         if T > peak[k]:
             peak[k] = T
             peak_t[k] = t
 
 
 @njit
-def locate_event(prm, ta, tb, sa, sb, taut, evw):
+def locate_event(model, ta, tb, sa, sb, taut, evw):
     """The first mode change in ``(ta, tb]`` on the step's interpolant: ``(t_event, segment)``,
     or ``(tb, -1)``. ``sa``, ``sb`` start with ``(z, y')``; ``evw`` is :func:`event_workspace`.
     Peak tensions ``EA max(g, 0) / S`` are tracked at the samples."""
     hold, y, g, peak, peak_t = evw
-    S, L, H = prm[1], prm[3], prm[4]
+    S, A, B = model.S, model.A, model.B
     t_prev = ta
     for i in range(1, NSAMP + 1):
         ts = tb if i == NSAMP else ta + (tb - ta) * i / NSAMP
-        _config_at(prm, ts, ta, tb, sa, sb, y)
-        kn.segment_gaps(y, S, L, H, g)
+        _config_at(model, ts, ta, tb, sa, sb, y)
+        sg.gaps(y, S, A, B, g)
         best_t = np.inf
         best_k = -1
         for k in range(S.size):
             sign = 1.0 if taut[k] > 0.5 else -1.0
             if hold[k] < ts and sign * g[k] < -1e-14 * S[k]:
-                te = _root(prm, ta, tb, sa, sb, k, max(t_prev, hold[k]), ts, y, sign)
+                te = _root(model, ta, tb, sa, sb, k, max(t_prev, hold[k]), ts, y, sign)
                 if te < best_t:
                     best_t, best_k = te, k
         if best_k >= 0:
-            _config_at(prm, best_t, ta, tb, sa, sb, y)
-            kn.segment_gaps(y, S, L, H, g)
-            _update_peaks(prm, best_t, g, peak, peak_t)
+            _config_at(model, best_t, ta, tb, sa, sb, y)
+            sg.gaps(y, S, A, B, g)
+            _update_peaks(model, best_t, g, peak, peak_t)
             return best_t, best_k
-        _update_peaks(prm, ts, g, peak, peak_t)
+        _update_peaks(model, ts, g, peak, peak_t)
         t_prev = ts
     return tb, -1
 
@@ -129,15 +129,17 @@ def event_workspace(n_segments: int, n_dof: int):
 def start_events(eom, state) -> bool:
     """Set up slack tracking in ``state`` (modes from the initial gaps); whether it is on."""
     c = eom.cable
-    taut = state.wk[0][4]
+    taut = state.wk[0].taut
     taut[:] = 1.0
     evw = event_workspace(c.n_segments, eom.n_dof)
     on = eom.continues_slack
     if on:
-        kn.tension_only_mask(eom.y0 + state.s[: eom.n_dof], c.S, c.L, c.H, taut)
+        A, B = c.support_A, c.support_B
+        y = eom.y0 + state.s[: eom.n_dof]
+        sg.taut_modes(y, c.S, A, B, taut)
         g = np.empty(c.n_segments)
-        kn.segment_gaps(eom.y0 + state.s[: eom.n_dof], c.S, c.L, c.H, g)
-        evw[3][:] = c.EA * np.maximum(g, 0.0) / c.S
+        sg.gaps(y, c.S, A, B, g)
+        evw[3][:] = [sg.tension_of_stretch(max(gk, 0.0), Sk, c.EA) for gk, Sk in zip(g, c.S)]
         evw[4][:] = state.t
     state.extra.update(track=on, evw=evw, events=[], last_event=np.full(c.n_segments, -np.inf),
                        chatter_holds=0, initially_slack=taut < 0.5)
@@ -147,7 +149,7 @@ def start_events(eom, state) -> bool:
 def transition(state, k: int, t: float) -> None:
     """Segment ``k`` (0-based) changes mode at ``t``: flip it, record the event, hold a chatterer."""
     ex = state.extra
-    taut = state.wk[0][4]
+    taut = state.wk[0].taut
     taut[k] = 0.0 if taut[k] > 0.5 else 1.0
     ex["events"].append((float(t), int(k), "taut" if taut[k] > 0.5 else "slack"))
     if t - ex["last_event"][k] < CHATTER_WINDOW:

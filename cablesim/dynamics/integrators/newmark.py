@@ -24,45 +24,48 @@ from dataclasses import dataclass
 import numpy as np
 from ...jit import njit
 
-from .. import banded as bd
-from .. import flexibility as fx
-from .. import kernels as kn
-from ..equations import approximate_stiffness
+from ...mechanics import assembly as asm
+from ...mechanics import banded as bd
+from ...mechanics import flexibility as fx
+from ...mechanics.linalg import solve_small
+from ...mechanics.model import STOP
+from ..field import approximate_stiffness
+from ..status import INNER_SOLVE, NONFINITE, OK, SLACK
 from .base import Integrator, IntegratorState, hermite
 from .events import locate_event, start_events, transition
 
 
 @njit
-def _internal(prm, z, P_n, z_n, warm, P1, K, first, wk, awk, check_slack):
+def _internal(model, z, P_n, z_n, warm, P1, K, first, wk, awk, check_slack):
     """Internal force at the step end and its tangent; returns a status code.
 
     Newton iterates may pass through configurations with a segment shorter than its natural
     length (for a stiff cable the margin is microns): only the converged state is checked
     (``check_slack``); during the iteration such a segment acts as a linear spring.
     """
-    S, EA, L, H = prm[1], prm[2], prm[3], prm[4]
     nd = z.size
-    y, Pm = wk[0], wk[3]
+    y, Pm = wk.y, wk.v
     if awk is None:
         for i in range(nd):
-            y[i] = prm[10][i] + z[i]
-        if kn.exact_force_and_stiffness(y, S, EA, L, H, P1, K, wk[4]) >= 0 and check_slack and prm[15] == 0:
-            return kn.SLACK
-        return kn.OK
+            y[i] = model.y0[i] + z[i]
+        if asm.force_and_stiffness(y, model.S, model.EA, model.A, model.B, wk.taut, P1, K) >= 0 and check_slack \
+                and model.slack == STOP:
+            return SLACK
+        return OK
     # Implicit midpoint for the rate law P' = K(P) y': a few fixed-point sweeps on P_{n+1}.
     for i in range(nd):
         Pm[i] = P_n[i] if first else 0.5 * (P_n[i] + P1[i])
     scale = 0.0
     for i in range(nd):
         scale = max(scale, abs(P_n[i]))
-    dz, Kdz = wk[1], wk[2]
+    dz, Kdz = wk.P, wk.Kv
     for i in range(nd):
         dz[i] = z[i] - z_n[i]
     for _ in range(4):
-        st = approximate_stiffness(prm, Pm, warm, awk)
-        if st != kn.OK:
+        st = approximate_stiffness(model, Pm, warm, awk)
+        if st != OK:
             return st
-        fx.stiffness_product(awk[4], awk[5], dz, Kdz, awk[6])  # O(n): K = N^-1 is never inverted
+        fx.stiffness_product(awk.fac, awk.gi, dz, Kdz, awk.scratch, model.A)  # O(n): K = N^-1 is never inverted
         change = 0.0
         for i in range(nd):
             P1[i] = P_n[i] + Kdz[i]
@@ -71,7 +74,7 @@ def _internal(prm, z, P_n, z_n, warm, P1, K, first, wk, awk, check_slack):
             Pm[i] = new
         if change <= 1e-13 * scale:
             break
-    return kn.OK  # awk holds the factors of K at the last midpoint's loads, for the Newton matrix
+    return OK  # awk holds the factors of K at the last midpoint's loads, for the Newton matrix
 
 
 @njit
@@ -84,14 +87,14 @@ def _store(s, z, v, a):
 
 
 @njit
-def _equilibrium_acceleration(prm, t, v, P, a_out, Cv):
+def _equilibrium_acceleration(model, t, v, P, a_out, Cv):
     """``y'' = M^-1 (F(t) - C y' - P)`` (eq. 15) from the internal force ``P`` the scheme carries.
 
     For the saved states of the approximate analysis, whose outputs (tensions, ``z_c``, ``z_e``)
     follow from eq. 15: the scheme's own acceleration variable approximates ``y''`` at
     ``t + (alpha_m - alpha_f) h``, which would make them first order in the step."""
-    m, F0, FL, w = prm[5], prm[7], prm[8], prm[9]
-    bd.damping_product(prm[6], prm[13], v, 0, Cv)
+    m, F0, FL, w = model.mass, model.F0, model.FL, model.omega
+    bd.damping_product(model.C, model.Cr, v, 0, Cv)
     sw = np.sin(w * t)
     for q in range(m.size):
         a_out[q] = (F0[q] + FL[q] * sw - Cv[q] - P[q]) / m[q]
@@ -122,14 +125,14 @@ def _write_outputs(ta, tb, h, z, v, a, z1, v1, a1, sa, sb, da, db, t_out, out, j
 
 
 @njit
-def _dense_newton(prm, z, v, a, z1, v1, a1, P_n, P1, K, J, R, warm, wk, awk, coef, c_m, c_c, sf, first):
+def _dense_newton(model, z, v, a, z1, v1, a1, P_n, P1, K, J, R, warm, wk, awk, coef, c_m, c_c, sf, first):
     """Residual ``R`` (minus the generalized-alpha equilibrium) and dense Newton matrix ``J``;
     a status code."""
-    m, C, F0, FL = prm[5], prm[6], prm[7], prm[8]
+    m, C, F0, FL = model.mass, model.C, model.F0, model.FL
     am, af = coef[0], coef[1]
     nd = m.size
-    st = _internal(prm, z1, P_n, z, warm, P1, K, first, wk, awk, False)
-    if st != kn.OK:
+    st = _internal(model, z1, P_n, z, warm, P1, K, first, wk, awk, False)
+    if st != OK:
         return st
     for q in range(nd):
         acc = m[q] * ((1.0 - am) * a1[q] + am * a[q]) + (1.0 - af) * P1[q] + af * P_n[q]
@@ -139,72 +142,73 @@ def _dense_newton(prm, z, v, a, z1, v1, a1, P_n, P1, K, J, R, warm, wk, awk, coe
             J[q, r] = (1.0 - af) * K[q, r] + c_c * C[q, r]
         J[q, q] += c_m * m[q]
         R[q] = -acc
-    return kn.OK
+    return OK
 
 
 @njit
-def _band_newton(prm, z, v, a, z1, v1, a1, P_n, P1, Kb, J, R, Cv, wk, coef, c_m, c_c, sf, check_slack):
+def _band_newton(model, z, v, a, z1, v1, a1, P_n, P1, Kb, J, R, Cv, wk, coef, c_m, c_c, sf, check_slack):
     """:func:`_dense_newton` in banded storage (exact analysis, banded damping), O(n): ``Kb``
-    receives the tangent stiffness of the segment modes ``wk[4]``, ``Cv`` is scratch."""
-    S, EA, L, H = prm[1], prm[2], prm[3], prm[4]
-    y = wk[0]
-    for q in range(prm[5].size):
-        y[q] = prm[10][q] + z1[q]
-    if kn.exact_force_and_stiffness_band(y, S, EA, L, H, P1, Kb, wk[4]) >= 0 and check_slack and prm[15] == 0:
-        return kn.SLACK
-    _band_system(prm, v, a, v1, a1, P_n, P1, Kb, J, R, Cv, coef, c_m, c_c, sf)
-    return kn.OK
+    receives the tangent stiffness of the segment modes ``wk.taut``, ``Cv`` is scratch."""
+    y = wk.y
+    for q in range(model.mass.size):
+        y[q] = model.y0[q] + z1[q]
+    if asm.force_and_stiffness_band(y, model.S, model.EA, model.A, model.B, wk.taut, P1, Kb) >= 0 and check_slack \
+            and model.slack == STOP:
+        return SLACK
+    _band_system(model, v, a, v1, a1, P_n, P1, Kb, J, R, Cv, coef, c_m, c_c, sf)
+    return OK
 
 
 @njit
-def _band_system(prm, v, a, v1, a1, P_n, P1, Kb, J, R, Cv, coef, c_m, c_c, sf):
+def _band_system(model, v, a, v1, a1, P_n, P1, Kb, J, R, Cv, coef, c_m, c_c, sf):
     """The generalized-alpha residual ``R`` and the banded part of the Newton matrix
     ``J = c_m M + c_c C + (1 - af) K`` from the internal force ``P1`` and the banded ``Kb``."""
-    m, C, F0, FL = prm[5], prm[6], prm[7], prm[8]
+    m, C, F0, FL = model.mass, model.C, model.F0, model.FL
     am, af = coef[0], coef[1]
     nd = m.size
     for q in range(nd):
         R[q] = (1.0 - af) * v1[q] + af * v[q]  # the velocity C multiplies, for now
-    bd.damping_product(C, prm[13], R, 0, Cv)
+    bd.damping_product(C, model.Cr, R, 0, Cv)
     for q in range(nd):
         acc = m[q] * ((1.0 - am) * a1[q] + am * a[q]) + (1.0 - af) * P1[q] + af * P_n[q] + Cv[q]
         R[q] = F0[q] + FL[q] * sf - acc
-    for d in range(bd.BAND_ROWS):
+    for d in range(J.shape[0]):
         for q in range(nd):
             J[d, q] = (1.0 - af) * Kb[d, q] + c_c * C[d, q]
+    hb = bd.half_band(J)
     for q in range(nd):
-        J[bd.BAND_HALF, q] += c_m * m[q]
+        J[hb, q] += c_m * m[q]
 
 
 @njit
-def _approximate_newton(prm, z, v, a, z1, v1, a1, P_n, P1, Kb, J, R, Cv, warm, wk, awk, coef, c_m, c_c, sf, first,
+def _approximate_newton(model, z, v, a, z1, v1, a1, P_n, P1, Kb, J, R, Cv, warm, wk, awk, coef, c_m, c_c, sf, first,
                         V, U, D):
     """:func:`_dense_newton` for the approximate analysis in O(n): the Newton matrix is the band
     ``J`` minus ``V^T D V`` of rank 4 (``V = [Cr, U]``: the low-rank parts of ``C`` and of
     ``K = B - U Gamma^-1 U^T``, see :mod:`cablesim.dynamics.flexibility`), for
     :func:`solve_band_low_rank`."""
-    Cr = prm[13]
+    Cr = model.Cr
     af = coef[1]
-    nd = prm[5].size
-    st = _internal(prm, z1, P_n, z, warm, P1, Kb, first, wk, awk, False)
-    if st != kn.OK:
+    nd = model.mass.size
+    dim = len(model.A)
+    st = _internal(model, z1, P_n, z, warm, P1, Kb, first, wk, awk, False)
+    if st != OK:
         return st
-    fx.stiffness_band(awk[4], awk[5], Kb, U)
-    _band_system(prm, v, a, v1, a1, P_n, P1, Kb, J, R, Cv, coef, c_m, c_c, sf)
+    fx.stiffness_band(awk.fac, awk.gi, Kb, U, model.A)
+    _band_system(model, v, a, v1, a1, P_n, P1, Kb, J, R, Cv, coef, c_m, c_c, sf)
     D[:, :] = 0.0
     r = Cr.shape[1]
     for c in range(r):  # c_c C = c_c C_band - U (c_c G) U^T
         V[c, :] = Cr[:nd, c]
         for d in range(r):
             D[c, d] = c_c * Cr[nd + c, d]
-    gi = awk[5]
-    for c in range(2):  # (1 - af) K = (1 - af) B - (1 - af) U Gamma^-1 U^T
+    gi = awk.gi
+    for c in range(dim):  # (1 - af) K = (1 - af) B - (1 - af) U Gamma^-1 U^T
         V[r + c, :] = U[:, c]
-    D[r, r], D[r, r + 1], D[r + 1, r], D[r + 1, r + 1] = gi[0], gi[1], gi[1], gi[2]
-    for i in range(r, r + 2):
-        for j in range(r, r + 2):
-            D[i, j] *= 1.0 - af
-    return kn.OK
+    for i in range(dim):
+        for j in range(dim):
+            D[r + i, r + j] = (1.0 - af) * gi[dim * i + j]
+    return OK
 
 
 @njit
@@ -233,7 +237,7 @@ def solve_band_low_rank(J, V, D, R, out, LU, Z, small):
             for m in range(k):
                 acc += D[i, m] * VZ[m, j]
             A[i, j] = (1.0 if i == j else 0.0) - acc
-    if not kn.solve_small(A, rhs, w, LUs):
+    if not solve_small(A, rhs, w, LUs):
         return False
     for c in range(k):
         out += w[c] * Z[c]
@@ -249,7 +253,7 @@ def _newmark_update(z, v, a, z1, v1, a1, h, beta, gamma):
 
 
 @njit
-def _galpha_step(prm, z, v, a, P_n, warm, wk, awk, tb, h, coef, ztol, maxit, z1, v1, a1, P1, scratch):
+def _galpha_step(model, z, v, a, P_n, warm, wk, awk, tb, h, coef, ztol, maxit, z1, v1, a1, P1, scratch):
     """One step of size h ending at ``tb`` from ``(z, v, a, P_n)`` into ``(z1, v1, a1, P1)``.
 
     With banded damping every Newton iteration assembles and solves a banded system, O(n) (in
@@ -258,11 +262,11 @@ def _galpha_step(prm, z, v, a, P_n, warm, wk, awk, tb, h, coef, ztol, maxit, z1,
     am, af, beta, gamma = coef[0], coef[1], coef[2], coef[3]
     R, dz, K, J, LU, V, Z, U, D, Cv, small = scratch
     nd = z.size
-    banded = awk is None and bd.is_band(prm[6])
-    approx_band = awk is not None and bd.is_band(prm[6])
+    banded = awk is None and bd.is_band(model.C)
+    approx_band = awk is not None and bd.is_band(model.C)
     c_m = (1.0 - am) / (beta * h * h)
     c_c = (1.0 - af) * gamma / (beta * h)
-    sf = np.sin(prm[9] * (tb - af * h))
+    sf = np.sin(model.omega * (tb - af * h))
     for q in range(nd):
         z1[q] = z[q] + h * v[q] + 0.5 * h * h * a[q]  # predictor: constant acceleration
         P1[q] = P_n[q]
@@ -270,19 +274,19 @@ def _galpha_step(prm, z, v, a, P_n, warm, wk, awk, tb, h, coef, ztol, maxit, z1,
     for it in range(maxit):
         _newmark_update(z, v, a, z1, v1, a1, h, beta, gamma)
         if banded:
-            _band_newton(prm, z, v, a, z1, v1, a1, P_n, P1, K, J, R, dz, wk, coef, c_m, c_c, sf, False)
+            _band_newton(model, z, v, a, z1, v1, a1, P_n, P1, K, J, R, dz, wk, coef, c_m, c_c, sf, False)
             solved = bd.solve_band(J, R, dz, LU)
         elif approx_band:
-            st = _approximate_newton(prm, z, v, a, z1, v1, a1, P_n, P1, K, J, R, Cv, warm, wk, awk, coef, c_m, c_c,
+            st = _approximate_newton(model, z, v, a, z1, v1, a1, P_n, P1, K, J, R, Cv, warm, wk, awk, coef, c_m, c_c,
                                      sf, it == 0, V, U, D)
-            if st != kn.OK:
+            if st != OK:
                 return st
             solved = solve_band_low_rank(J, V, D, R, dz, LU, Z, small)
         else:
-            st = _dense_newton(prm, z, v, a, z1, v1, a1, P_n, P1, K, J, R, warm, wk, awk, coef, c_m, c_c, sf, it == 0)
-            if st != kn.OK:
+            st = _dense_newton(model, z, v, a, z1, v1, a1, P_n, P1, K, J, R, warm, wk, awk, coef, c_m, c_c, sf, it == 0)
+            if st != OK:
                 return st
-            solved = kn.solve_small(J, R, dz, LU)
+            solved = solve_small(J, R, dz, LU)
         if not solved:
             break
         big, step = 0.0, 0.0
@@ -298,25 +302,26 @@ def _galpha_step(prm, z, v, a, P_n, warm, wk, awk, tb, h, coef, ztol, maxit, z1,
     if not converged:
         for q in range(nd):
             if not np.isfinite(z1[q]):
-                return kn.NONFINITE
-        return kn.INNER_SOLVE
+                return NONFINITE
+        return INNER_SOLVE
     _newmark_update(z, v, a, z1, v1, a1, h, beta, gamma)
     if banded:
-        return _band_newton(prm, z, v, a, z1, v1, a1, P_n, P1, K, J, R, dz, wk, coef, c_m, c_c, sf, True)
-    return _internal(prm, z1, P_n, z, warm, P1, K, False, wk, awk, True)
+        return _band_newton(model, z, v, a, z1, v1, a1, P_n, P1, K, J, R, dz, wk, coef, c_m, c_c, sf, True)
+    return _internal(model, z1, P_n, z, warm, P1, K, False, wk, awk, True)
 
 
 @njit
-def _galpha_advance(prm, s, P_n, warm, wk, awk, evw, track, t0, h, i, i_end, t, coef, t_out, out, ztol, maxit):
+def _galpha_advance(model, s, P_n, warm, wk, awk, evw, track, t0, h, i, i_end, t, coef, t_out, out, ztol, maxit):
     """Steps on the grid ``t0 + i h`` up to step ``i_end`` from ``t``, split where a segment
     changes mode; returns ``(i, t, written, status, segment)`` as the explicit schemes do."""
-    nd = prm[5].size
+    nd = model.mass.size
+    dim = len(model.A)
     z, v, a = s[:nd].copy(), s[nd : 2 * nd].copy(), s[2 * nd :].copy()
     z1, v1, a1, P1 = np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd)
-    rows = bd.BAND_ROWS if bd.is_band(prm[6]) else nd  # banded Newton matrices: O(n)
-    k = prm[13].shape[1] + 2  # rank of the approximate analysis' correction (damping, stiffness)
+    rows = model.C.shape[0] if bd.is_band(model.C) else nd  # banded Newton matrices: O(n)
+    k = model.Cr.shape[1] + dim  # rank of the approximate analysis' correction (damping, stiffness)
     scratch = (np.empty(nd), np.empty(nd), np.empty((rows, nd)), np.empty((rows, nd)), np.empty((rows, nd)),
-               np.empty((k, nd)), np.empty((k, nd)), np.empty((nd, 2)), np.empty((k, k)), np.empty(nd),
+               np.empty((k, nd)), np.empty((k, nd)), np.empty((nd, dim)), np.empty((k, k)), np.empty(nd),
                (np.empty((k, k)), np.empty((k, k))))
     sa, sb, da, db = np.empty(3 * nd), np.empty(3 * nd), np.empty(3 * nd), np.empty(3 * nd)
     ae, ae1 = np.empty(nd), np.empty(nd)
@@ -329,21 +334,21 @@ def _galpha_advance(prm, s, P_n, warm, wk, awk, evw, track, t0, h, i, i_end, t, 
                 j += 1
             t, i = tb, i + 1
             continue
-        st = _galpha_step(prm, z, v, a, P_n, warm, wk, awk, tb, tb - t, coef, ztol, maxit, z1, v1, a1, P1, scratch)
-        if st != kn.OK:
+        st = _galpha_step(model, z, v, a, P_n, warm, wk, awk, tb, tb - t, coef, ztol, maxit, z1, v1, a1, P1, scratch)
+        if st != OK:
             _store(s, z, v, a)
             return i, t, j, st, -1
         k = -1
         if track:
             _store(sa, z, v, a)
             _store(sb, z1, v1, a1)
-            te, k = locate_event(prm, t, tb, sa, sb, wk[4], evw)
+            te, k = locate_event(model, t, tb, sa, sb, wk.taut, evw)
             if k >= 0 and te <= t:  # across already at the start (end of a chatter hold)
                 _store(s, z, v, a)
-                return i, t, j, kn.OK, k
+                return i, t, j, OK, k
             if k >= 0:  # redo the step up to the event, in the modes valid there
-                st = _galpha_step(prm, z, v, a, P_n, warm, wk, awk, te, te - t, coef, ztol, maxit, z1, v1, a1, P1, scratch)
-                if st != kn.OK:
+                st = _galpha_step(model, z, v, a, P_n, warm, wk, awk, te, te - t, coef, ztol, maxit, z1, v1, a1, P1, scratch)
+                if st != OK:
                     _store(s, z, v, a)
                     return i, t, j, st, -1
             tb = te
@@ -351,17 +356,17 @@ def _galpha_advance(prm, s, P_n, warm, wk, awk, evw, track, t0, h, i, i_end, t, 
             if awk is None:
                 j = _write_outputs(t, tb, tb - t, z, v, a, z1, v1, a1, sa, sb, da, db, t_out, out, j)
             else:  # saved y'' from the carried internal force (see _equilibrium_acceleration)
-                _equilibrium_acceleration(prm, t, v, P_n, ae, scratch[9])
-                _equilibrium_acceleration(prm, tb, v1, P1, ae1, scratch[9])
+                _equilibrium_acceleration(model, t, v, P_n, ae, scratch[9])
+                _equilibrium_acceleration(model, tb, v1, P1, ae1, scratch[9])
                 j = _write_outputs(t, tb, tb - t, z, v, ae, z1, v1, ae1, sa, sb, da, db, t_out, out, j)
         z[:], v[:], a[:], P_n[:] = z1, v1, a1, P1
         t = tb
         if k >= 0:
             _store(s, z, v, a)
-            return i, t, j, kn.OK, k
+            return i, t, j, OK, k
         i += 1
     _store(s, z, v, a)
-    return i, t, j, kn.OK, -1
+    return i, t, j, OK, -1
 
 
 @dataclass(frozen=True)
@@ -399,23 +404,25 @@ class GeneralizedAlpha(Integrator):
         if eom.exact:
             c = eom.cable
             P, Kv = np.empty(nd), np.empty(nd)  # no dense K: O(n) for heavy cables
-            kn.exact_force_and_Kv(eom.y0 + st.s[:nd], np.zeros(nd), c.S, c.EA, c.L, c.H, P, Kv, st.wk[0][4])
+            zr = (0.0,) * c.dim  # fixed supports
+            asm.force_and_rate(eom.y0 + st.s[:nd], np.zeros(nd), c.S, c.EA, c.support_A, c.support_B, zr, zr,
+                               st.wk[0].taut, P, Kv)
             return P
         return eom.internal_force(st.t, st.s)
 
-    def advance(self, prm, state, t_end, t_out, out):
+    def advance(self, model, state, t_end, t_out, out):
         ex = state.extra
         coef = np.array(self._coefficients())
         i_end = max(int(np.ceil((t_end - ex["t0"]) / self.dt - 1e-9)), ex["i"])
         written = 0
         while True:
             i, t, j, code, k = _galpha_advance(
-                prm, state.s, ex["P"], state.warm, *state.wk, ex["evw"], ex["track"], ex["t0"], self.dt, ex["i"], i_end,
+                model, state.s, ex["P"], state.warm, *state.wk, ex["evw"], ex["track"], ex["t0"], self.dt, ex["i"], i_end,
                 state.t, coef, t_out[written:], out[written:], ex["ztol"], 25,
             )
             written += j
             ex["i"], state.t = i, t
-            if code != kn.OK or k < 0:
+            if code != OK or k < 0:
                 return written, code
             transition(state, k, t)
             ex["P"][:] = self._force(ex["eom"], state)

@@ -1,11 +1,14 @@
-"""Banded storage for heavy cables: the damping and Newton matrices of a finely divided cable.
+"""Banded storage: the stiffness, damping and Newton matrices of a finely divided cable.
 
-The tangent stiffness of the exact analysis couples each node to its neighbours only, so it
-is block-tridiagonal with 2x2 blocks (bandwidth 3), and so are the Rayleigh damping
-``C = a0 M + a1 K0`` and the Newton matrices of the implicit schemes. Stored as LAPACK's general
-band layout, ``A_band[BAND_HALF + i - j, j] = A[i, j]`` (shape (:data:`BAND_ROWS`, 2n)), their
-products and solves cost O(n) instead of O(n^2) and O(n^3). The compiled kernels take either a
-dense or a banded damping matrix (:func:`damping_row`); :func:`is_band` tells them apart.
+The tangent stiffness couples each node to its neighbours only, so it is block-tridiagonal with
+``DIM x DIM`` blocks (half bandwidth ``2 DIM - 1``: 3 for a planar cable, 5 for a spatial one),
+and so are the Rayleigh damping ``C = a0 M + a1 K0`` and the Newton matrices of the implicit
+schemes. Stored as LAPACK's general band layout, ``A_band[h + i - j, j] = A[i, j]`` with ``h``
+the half bandwidth (shape ``(2 h + 1, n_dof)``, :func:`band_rows`), their products and solves
+cost O(n) instead of O(n^2) and O(n^3). The half bandwidth is read from the array's shape
+(:func:`half_band`). The compiled kernels take either a dense or a banded matrix
+(:func:`damping_row`); :func:`is_band` tells them apart (a dense matrix is square; a band never
+is, since its row count ``4 DIM - 1`` is not a multiple of ``DIM``).
 """
 
 from __future__ import annotations
@@ -13,28 +16,38 @@ from __future__ import annotations
 import numpy as np
 from ..jit import njit
 
-#: Rows of a damping matrix in banded storage (bandwidth 3: block-tridiagonal 2x2 blocks):
-#: ``C_band[3 + i - j, j] = C[i, j]`` (LAPACK's general band layout). The DOF count is even, so a
-#: (7, 2n) band is never mistaken for a square dense matrix.
-BAND_ROWS = 7
-BAND_HALF = 3
+def band_half(dim: int) -> int:
+    """Half bandwidth of a block-tridiagonal matrix of ``dim x dim`` blocks: ``2 dim - 1``."""
+    return 2 * dim - 1
+
+
+def band_rows(dim: int) -> int:
+    """Rows of its general band storage, ``2 band_half(dim) + 1``."""
+    return 2 * band_half(dim) + 1
+
+
+@njit(inline="always")
+def half_band(A):
+    """The half bandwidth of a matrix in general band storage (``(A.shape[0] - 1) / 2``)."""
+    return (A.shape[0] - 1) // 2
 
 
 @njit
 def is_band(A):
-    """Whether ``A`` is in banded storage (shape (BAND_ROWS, nd)) rather than dense (nd, nd)."""
-    return A.shape[0] == BAND_ROWS and A.shape[1] != BAND_ROWS
+    """Whether ``A`` is in banded storage, shape ``(2 h + 1, nd)``, rather than dense (nd, nd)."""
+    return A.shape[0] != A.shape[1]
 
 
 @njit
 def damping_row(C, s, off, i):
     """Row ``i`` of ``C`` times ``s[off:off + nd]``: C dense (nd, nd), O(n), or banded
-    (:data:`BAND_ROWS`, nd), O(1)."""
+    (2 h + 1, nd), O(h)."""
     nd = C.shape[1]
     acc = 0.0
     if is_band(C):
-        for j in range(max(0, i - BAND_HALF), min(nd, i + BAND_HALF + 1)):
-            acc += C[BAND_HALF + i - j, j] * s[off + j]
+        hb = half_band(C)
+        for j in range(max(0, i - hb), min(nd, i + hb + 1)):
+            acc += C[hb + i - j, j] * s[off + j]
     else:
         for j in range(nd):
             acc += C[i, j] * s[off + j]
@@ -42,22 +55,24 @@ def damping_row(C, s, off, i):
 
 
 def band_storage(lower: np.ndarray) -> np.ndarray:
-    """The (:data:`BAND_ROWS`, nd) banded storage of a symmetric matrix given in lower band form
-    (``lower[d, j] = A[j + d, j]``, d = 0..3)."""
+    """The ``(2 h + 1, nd)`` general band storage of a symmetric matrix given in lower band form
+    (``lower[d, j] = A[j + d, j]``, ``d = 0 .. h``)."""
+    hb = lower.shape[0] - 1
     nd = lower.shape[1]
-    C = np.zeros((BAND_ROWS, nd))
+    C = np.zeros((2 * hb + 1, nd))
     for d in range(min(lower.shape[0], nd)):
-        C[BAND_HALF + d, : nd - d] = lower[d, : nd - d]  # below the diagonal: A[j + d, j]
-        C[BAND_HALF - d, d:] = lower[d, : nd - d]  # above: A[j, j + d]
+        C[hb + d, : nd - d] = lower[d, : nd - d]  # below the diagonal: A[j + d, j]
+        C[hb - d, d:] = lower[d, : nd - d]  # above: A[j, j + d]
     return C
 
 
 def band_product(A: np.ndarray, x: np.ndarray) -> np.ndarray:
     """``A x`` for ``A`` in banded storage (as :func:`damping_row`), O(n), vectorised."""
     nd = x.size
+    hb = (A.shape[0] - 1) // 2
     y = np.zeros(nd)
-    for r in range(BAND_ROWS):
-        d = r - BAND_HALF  # row index minus column index of this diagonal
+    for r in range(A.shape[0]):
+        d = r - hb  # row index minus column index of this diagonal
         if abs(d) >= nd:  # a diagonal outside a small matrix (one node: 2 DOF)
             continue
         if d >= 0:
@@ -71,9 +86,10 @@ def band_product(A: np.ndarray, x: np.ndarray) -> np.ndarray:
 def band_row(A, x, i):
     """Row ``i`` of the banded ``A`` (storage as :func:`damping_row`) times ``x``."""
     nd = A.shape[1]
+    hb = half_band(A)
     acc = 0.0
-    for j in range(max(0, i - BAND_HALF), min(nd, i + BAND_HALF + 1)):
-        acc += A[BAND_HALF + i - j, j] * x[j]
+    for j in range(max(0, i - hb), min(nd, i + hb + 1)):
+        acc += A[hb + i - j, j] * x[j]
     return acc
 
 
@@ -86,7 +102,7 @@ def factor_band(A, LU):
     (``c_m M + c_c C + K`` of a taut cable). Returns False on a zero or non-finite pivot.
     """
     nd = A.shape[1]
-    hb = BAND_HALF
+    hb = half_band(A)
     LU[:, :] = A
     for k in range(nd):
         piv = LU[hb, k]
@@ -105,7 +121,7 @@ def factor_band(A, LU):
 def solve_factored(LU, b, out):
     """Solve ``A out = b`` with the factors of :func:`factor_band`, O(n)."""
     nd = b.size
-    hb = BAND_HALF
+    hb = half_band(LU)
     out[:] = b
     for k in range(nd):
         for i in range(k + 1, min(nd, k + hb + 1)):

@@ -1,0 +1,115 @@
+"""An independent reference for the cable's mechanics in any number of components per node.
+
+Written from docs/theory.md alone, with numpy and scipy: the resisting force of a configuration
+(eq. 2 with the tension-only law), the inextensible and elastic closure problems solved by
+scipy's root finder on the closure error, the elastic displacements ``u = dOmega_e/dP`` by a
+complex step, and derivatives by central differences. Nothing here calls cablesim's mechanics.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import root
+
+
+def nodes(y, chord, dim):
+    """Coordinates of A, the interior nodes and B, shape (n + 2, dim)."""
+    pts = np.zeros((len(y) // dim + 2, dim), dtype=np.result_type(y, float))
+    pts[1:-1] = np.reshape(y, (-1, dim))
+    pts[-1] = chord
+    return pts
+
+
+def resisting_force(y, S, EA, chord, dim, taut=None):
+    """``P_r = T_r e_r - T_(r+1) e_(r+1)``, ``T = EA (l - S) / S`` for the taut segments."""
+    d = np.diff(nodes(y, chord, dim), axis=0)
+    l = np.sqrt((d * d).sum(axis=1))
+    T = EA * (l - S) / S
+    if taut is not None:
+        T = T * taut
+    F = (T / l)[:, None] * d
+    return (F[:-1] - F[1:]).ravel()
+
+
+def jacobian(fun, x, h):
+    """Central differences of ``fun`` at ``x`` with step ``h`` (a scalar or per component)."""
+    x = np.asarray(x, float)
+    h = np.broadcast_to(h, x.shape)
+    cols = []
+    for j in range(x.size):
+        e = np.zeros_like(x)
+        e[j] = h[j]
+        cols.append((fun(x + e) - fun(x - e)) / (2.0 * h[j]))
+    return np.column_stack(cols)
+
+
+def segment_forces(F1, P, dim):
+    """``F_k = F_1 - sum_{j<k} P_j`` (n + 1, dim), complex-safe."""
+    Pn = np.reshape(P, (-1, dim))
+    Fk = np.empty((Pn.shape[0] + 1, dim), dtype=np.result_type(F1, P))
+    Fk[0] = F1
+    Fk[1:] = F1 - np.cumsum(Pn, axis=0)
+    return Fk
+
+
+def closure_error(F1, P, S, chord, dim, EA=np.inf):
+    """``sum_k l_k e_k - chord`` with ``l_k = S_k (1 + T_k / EA)`` (complex-safe: no abs)."""
+    Fk = segment_forces(F1, P, dim)
+    T = np.sqrt((Fk * Fk).sum(axis=1))
+    lk = S * (1.0 + T / EA)
+    return (lk[:, None] * Fk / T[:, None]).sum(axis=0) - chord
+
+
+def solve_closure(P, S, chord, dim, EA=np.inf, F_start=None):
+    """The segment-1 force of the closed polygon, by scipy's hybrid root finder (then Newton with
+    complex-step Jacobians to round-off)."""
+    F = np.asarray(F_start if F_start is not None else np.asarray(chord, float) * np.abs(P).sum() / np.linalg.norm(chord), float)
+    sol = root(lambda f: closure_error(f, P, S, chord, dim, EA).real, F, method="hybr", tol=1e-14)
+    F = sol.x
+    for _ in range(3):  # Newton with a complex-step Jacobian: quadratic, to round-off
+        h = 1e-30 * max(1.0, np.abs(F).max())
+        J = np.column_stack([closure_error(F + 1j * h * np.eye(dim)[j], P, S, chord, dim, EA).imag / h
+                             for j in range(dim)])
+        F = F - np.linalg.solve(J, closure_error(F, P, S, chord, dim, EA).real)
+    return F
+
+
+def inextensible_state(P, S, chord, dim, F_start=None):
+    """``(x(P), T(P), F_1)`` of the inextensible cable."""
+    F1 = solve_closure(P, S, chord, dim, F_start=F_start)
+    Fk = segment_forces(F1, P, dim)
+    T = np.sqrt((Fk * Fk).sum(axis=1))
+    x = np.cumsum(S[:, None] * Fk / T[:, None], axis=0)[:-1].ravel()
+    return x, T, F1
+
+
+def elastic_energy(P, S, EA, chord, dim, F1):
+    """``Omega_e = sum T_k^2 S_k / (2 EA)`` of the inextensible solution, complex-safe in P
+    (one Newton step in complex arithmetic from the real solution ``F1``)."""
+    h = 1e-30 * max(1.0, np.abs(F1).max())
+    J = np.column_stack([closure_error(F1 + 1j * h * np.eye(dim)[j], P.real, S, chord, dim).imag / h
+                         for j in range(dim)])
+    F = F1 - np.linalg.solve(J, closure_error(F1, P, S, chord, dim))  # exact to first order in Im P
+    Fk = segment_forces(F, P, dim)
+    T2 = (Fk * Fk).sum(axis=1)
+    return (T2 * S).sum() / (2.0 * EA)
+
+
+def elastic_displacement(P, S, EA, chord, dim, F1):
+    """``u = dOmega_e/dP`` (eq. 7) by complex steps."""
+    h = 1e-30 * max(1.0, np.abs(P).max())
+    return np.array([elastic_energy(P + 1j * h * np.eye(P.size)[j], S, EA, chord, dim, F1).imag / h
+                     for j in range(P.size)])
+
+
+def exact_equilibrium(P, S, EA, chord, dim, y_start):
+    """The deformed configuration with ``P(y) = P``, by scipy's root finder from ``y_start``."""
+    sol = root(lambda y: resisting_force(y, S, EA, chord, dim) - P, y_start, method="hybr", tol=1e-14)
+    assert sol.success, sol.message
+    return sol.x
+
+
+def rotation_about_vertical(a):
+    """Rotation by ``a`` about the vertical (v) axis of the (x, v, w) frame."""
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])

@@ -9,8 +9,18 @@ from __future__ import annotations
 
 #: Static models a time history can use (``analysis:`` in a case file, ``--analysis``).
 ANALYSES = ("exact", "approximate")
-#: Time-integration schemes (``integrator.name``, ``--integrator``).
-INTEGRATORS = ("rk4", "dopri5", "newmark", "generalized-alpha")
+#: Time-integration schemes (``integrator.name``, ``--integrator``) and the settings each takes
+#: (keys of the case file's ``integrator:`` section). Their defaults, and the rule that picks a
+#: scheme when a case names none, are in :mod:`cablesim.dynamics.integrators.settings`.
+INTEGRATOR_SETTINGS = {
+    "rk4": ("dt",),
+    "dopri5": ("rtol", "atol"),
+    "newmark": ("dt",),
+    "generalized-alpha": ("dt", "rho_inf"),
+}
+INTEGRATORS = tuple(INTEGRATOR_SETTINGS)
+#: Every setting some scheme takes.
+INTEGRATOR_KEYS = tuple(sorted({k for keys in INTEGRATOR_SETTINGS.values() for k in keys}))
 #: What the exact analysis does when a segment goes slack (``slack:`` in a case file, ``--slack``):
 #: continue through it (tension-only segments) or stop there.
 SLACK_POLICIES = ("continue", "stop")

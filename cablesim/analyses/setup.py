@@ -11,28 +11,16 @@ import numpy as np
 
 from ..case import Case, IntegratorSpec
 from ..dynamics.equations import EquationsOfMotion
-from ..dynamics.integrators import INTEGRATORS, DOPRI5, GeneralizedAlpha, Integrator, Newmark, RK4
+from ..dynamics.integrators import Integrator
+from ..dynamics.integrators.settings import (DEFAULT_ATOL_PER_CHORD, DEFAULT_RTOL, RK4_SAFE_STEP, SCHEMES,
+                                              STEPS_PER_PERIOD, STIFF_RATIO, STIFF_STEPS_PER_PERIOD, dividing_step,
+                                              ignored_keys, is_stiff, make, rk4_stable_step)
 from ..errors import CablesimError
 from ..modal import fastest_rate, modal_analysis_banded, rayleigh_coefficients
 from .static import StaticResult
 
 #: Saved instants per period of the highest frequency of interest, by default.
 SAMPLES_PER_PERIOD = 40
-#: Fixed steps per period of the highest frequency of interest, by default.
-STEPS_PER_PERIOD = 100
-#: The same for the default scheme of stiff cables (generalized-alpha): its error falls as dt^2,
-#: and 1600 steps per period give about 3e-5 (100 steps: 7e-3), see benchmarks/README.md.
-STIFF_STEPS_PER_PERIOD = 1600
-#: A cable is stiff when its fastest damped root (the highest mode, or for stiffness-proportional
-#: damping of a finely divided cable the overdamped root ~ a1 w_max^2, which grows as n^2) exceeds
-#: the frequency of interest this many times: an explicit step would then be set by modes that
-#: do not matter to the response, so cablesim integrates implicitly.
-STIFF_RATIO = 200.0
-#: Default tolerances of dopri5: relative, and absolute per metre of chord.
-DEFAULT_RTOL = 1e-8
-DEFAULT_ATOL_PER_CHORD = 1e-10
-#: Default rk4 steps stay inside this fraction of the stability limit 2.8 / rate.
-RK4_SAFE_STEP = 2.0
 
 
 def build_equations(
@@ -112,59 +100,11 @@ def frequency_of_interest(eom: EquationsOfMotion, omega: float = 0.0) -> float:
     return max(float(omega), float(eom.frequencies[0]))
 
 
-def dividing_step(dt: float, omega: float) -> float:
-    """The largest step not above ``dt`` that divides the forcing period ``2 pi / omega``.
-
-    Once-per-period samples of the steady-state test then fall on steps rather than between
-    them (interpolating a second-order scheme would add O(dt^2) jitter that masks periodicity).
-    Without forcing (``omega <= 0``) ``dt`` is returned unchanged.
-    """
-    if omega <= 0:
-        return dt
-    period = 2.0 * np.pi / omega
-    return period / np.ceil(period / dt - 1e-9)
-
-
-def is_stiff(eom: EquationsOfMotion, omega_interest: float) -> bool:
-    """Whether the fastest damped root of the linearised system (at least the highest mode, see
-    :func:`cablesim.modal.fastest_rate`) is more than :data:`STIFF_RATIO` times the frequency
-    of interest."""
-    return fastest_rate(eom.frequencies, eom.a0, eom.a1) / omega_interest > STIFF_RATIO
-
-
-def default_dopri5(eom: EquationsOfMotion, rtol: float | None = None, atol: float | None = None) -> DOPRI5:
-    """``dopri5`` with cablesim's default tolerances: rtol 1e-8, atol 1e-10 chord (m)."""
-    return DOPRI5(rtol=rtol or DEFAULT_RTOL, atol=atol or DEFAULT_ATOL_PER_CHORD * eom.cable.chord_length)
-
-
-def default_integrator(eom: EquationsOfMotion, omega_interest: float) -> Integrator:
-    """The scheme cablesim uses when the case names none.
-
-    Non-stiff cables: the adaptive ``dopri5`` (rtol 1e-8). Stiff cables (fastest damped root more
-    than :data:`STIFF_RATIO` times the frequency of interest, see :func:`is_stiff`): the implicit
-    ``generalized-alpha``, which damps the spurious high modes, with
-    :data:`STIFF_STEPS_PER_PERIOD` steps per period. Heavy cables with many nodes are stiff in
-    this sense (their highest mode grows as n, its damped root as n^2); in the exact analysis
-    each step then costs O(n) (banded Newton solves), so a simulated second costs O(n).
-    """
-    w_int = max(omega_interest, float(eom.frequencies[0]))
-    if is_stiff(eom, w_int):
-        # The non-stiff default step refined 16 times, each time divided into the forcing period.
-        dt = dividing_step(2.0 * np.pi / w_int / STEPS_PER_PERIOD, eom.omega)
-        dt = dividing_step(dt * STEPS_PER_PERIOD / STIFF_STEPS_PER_PERIOD, eom.omega)
-        return GeneralizedAlpha(dt=dt, rho_inf=0.8)
-    return default_dopri5(eom)
-
-
-def rk4_stable_step(eom: EquationsOfMotion) -> float:
-    """A step safely inside rk4's stability limit ``2.8 / rate`` (rate: fastest damped root)."""
-    return RK4_SAFE_STEP / fastest_rate(eom.frequencies, eom.a0, eom.a1)
-
-
 def make_integrator(
     spec: IntegratorSpec, eom: EquationsOfMotion, omega_interest: float, name: str | None = None
 ) -> Integrator:
-    """The integrator a case asks for, with defaults filled in.
+    """The integrator a case asks for, with defaults filled in (the table of
+    :mod:`cablesim.dynamics.integrators.settings`).
 
     Parameters
     ----------
@@ -183,42 +123,24 @@ def make_integrator(
     if name is not None and name != spec.name:
         check_override(spec, name)
     name = name or spec.name
-    w_int = max(omega_interest, float(eom.frequencies[0]))
-    if name is None:
-        chosen = default_integrator(eom, w_int)
-        if isinstance(chosen, DOPRI5):
-            return default_dopri5(eom, spec.rtol, spec.atol)
-        dt = spec.dt if spec.dt is not None else chosen.dt
-        return GeneralizedAlpha(dt=dt, rho_inf=spec.rho_inf if spec.rho_inf is not None else chosen.rho_inf)
-    if name not in INTEGRATORS:
-        raise CablesimError(f"integrator.name must be one of {', '.join(INTEGRATORS)}; got {name!r}.")
-    if name == "dopri5":
-        return default_dopri5(eom, spec.rtol, spec.atol)
-    dt = spec.dt
-    if dt is None:
-        dt = dividing_step(2.0 * np.pi / w_int / STEPS_PER_PERIOD, eom.omega)
-    if name == "rk4":
-        if spec.dt is None and dt > rk4_stable_step(eom):
-            dt = rk4_stable_step(eom)
-            if eom.omega > 0:
-                period = 2.0 * np.pi / eom.omega
-                dt = period / np.ceil(period / dt)
-        return RK4(dt=dt)
-    if name == "newmark":
-        return Newmark(dt=dt)
-    return GeneralizedAlpha(dt=dt, rho_inf=spec.rho_inf if spec.rho_inf is not None else 0.8)
+    if name is not None and name not in SCHEMES:
+        raise CablesimError(f"integrator.name must be one of {', '.join(SCHEMES)}; got {name!r}.")
+    return make(name, eom, max(omega_interest, float(eom.frequencies[0])), spec.settings())
+
+
+def default_dopri5(eom: EquationsOfMotion, rtol: float | None = None, atol: float | None = None) -> Integrator:
+    """``dopri5`` with cablesim's default tolerances (rtol 1e-8, atol 1e-10 chord, m)."""
+    return make("dopri5", eom, float(eom.frequencies[0]), {"rtol": rtol, "atol": atol})
 
 
 def check_override(spec: IntegratorSpec, name: str) -> None:
     """Refuse an ``--integrator`` that would silently ignore settings of the case file."""
-    given = [k for k in ("rtol", "atol", "dt", "rho_inf") if getattr(spec, k) is not None]
-    applies = {"dopri5": ("rtol", "atol"), "rk4": ("dt",), "newmark": ("dt",), "generalized-alpha": ("dt", "rho_inf")}
-    ignored = [k for k in given if k not in applies.get(name, ())]
+    ignored = ignored_keys(name, spec.settings())
     if ignored:
         keys = " and ".join(f"integrator.{k}" for k in ignored)
         raise CablesimError(
             f"--integrator {name} conflicts with the case file: {keys} would be ignored ({name} uses "
-            f"{', '.join(applies[name])}). Remove {keys} (e.g. --set integrator.{ignored[0]}=null), or choose "
+            f"{', '.join(SCHEMES[name].keys)}). Remove {keys} (e.g. --set integrator.{ignored[0]}=null), or choose "
             "the integrator in the case file with its settings.",
             field="integrator",
         )

@@ -9,7 +9,7 @@ import numpy as np
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, field_validator, model_validator
 from pydantic_core import PydanticCustomError
 
-from ..names import CONTINUATION_PARAMETERS, DIRECTIONS, INTEGRATORS
+from ..names import CONTINUATION_PARAMETERS, DIRECTIONS, INTEGRATOR_KEYS, INTEGRATOR_SETTINGS, INTEGRATORS
 from .numbers import (
     DAMPING_RATIO,
     DURATION,
@@ -296,14 +296,20 @@ class IntegratorSpec(StrictModel):
     atol: real(1e-16, 1e3, "m") | None = Field(default=None, description="absolute displacement tolerance, m (dopri5)")
     rho_inf: real(0.0, 1.0) | None = Field(default=None, description="spectral radius (generalized-alpha)")
 
+    def settings(self) -> dict:
+        """The settings given (``{key: value}``, None left out)."""
+        return {k: getattr(self, k) for k in INTEGRATOR_KEYS if getattr(self, k) is not None}
+
     @model_validator(mode="after")
     def _fits(self):
-        if self.name in ("rk4", "newmark", "generalized-alpha") and (self.rtol or self.atol):
-            raise ValueError(f"integrator.rtol and atol apply to dopri5, not {self.name} (it uses dt)")
-        if self.name == "dopri5" and self.dt is not None:
-            raise ValueError("dopri5 adapts its step; give rtol/atol instead of integrator.dt")
-        if self.rho_inf is not None and self.name not in (None, "generalized-alpha"):
-            raise ValueError("integrator.rho_inf applies to generalized-alpha only")
+        if self.name is not None:
+            keys = INTEGRATOR_SETTINGS[self.name]
+            bad = [k for k in self.settings() if k not in keys]
+            if bad:
+                taken = " and ".join(f"integrator.{k}" for k in keys)
+                verb = "does" if len(bad) == 1 else "do"
+                raise ValueError(f"{' and '.join(f'integrator.{k}' for k in bad)} {verb} not apply to {self.name}, "
+                                 f"which takes {taken}")
         return self
 
 

@@ -135,11 +135,11 @@ class Scheme:
 
     @property
     def label(self) -> str:
-        if self.kind == "rk4":
-            return f"rk4 dt={self.factor:g}x limit"
-        if self.kind in ("generalized-alpha", "newmark"):
+        if self.factor is not None:  # an explicit fixed step, relative to the stability limit
+            return f"{self.kind} dt={self.factor:g}x limit"
+        if self.steps is not None:  # an implicit fixed step
             return f"{self.kind} {self.steps}/period"
-        return "dopri5 rtol=1e-8"
+        return f"{self.kind} rtol=1e-8"  # an adaptive scheme at cablesim's default tolerances
 
 
 @dataclass(frozen=True)

@@ -10,11 +10,12 @@ from dataclasses import dataclass, field, replace
 import joblib
 import numpy as np
 
-from ..analyses.setup import build_equations, default_dopri5
+from ..analyses.setup import build_equations
 from ..analyses.static import run_static
 from ..case import parse_case
 from ..dynamics.status import OK as COMPLETED
-from ..dynamics.integrators import DOPRI5, RK4, GeneralizedAlpha, Newmark
+from ..dynamics.integrators import DOPRI5, RK4
+from ..dynamics.integrators.settings import SCHEMES
 from ..dynamics.simulate import simulate
 from ..dynamics.status import Status
 from ..errors import CablesimError
@@ -60,15 +61,16 @@ def _output_step(omega_hi: float, duration: float) -> float:
 
 
 def _make_integrator(scheme: Scheme, prep: _Prepared):
-    w_max = prep.static.modes.highest
-    if scheme.kind == "dopri5":  # cablesim's default settings of the scheme
-        return default_dopri5(prep.eom)
-    if scheme.kind == "rk4":
-        return RK4(dt=scheme.factor * RK4_LIMIT / w_max)
-    dt = 2.0 * np.pi / prep.omega_hi / scheme.steps
-    if scheme.kind == "newmark":
-        return Newmark(dt=dt)
-    return GeneralizedAlpha(dt=dt, rho_inf=0.8)
+    """The scheme at the stress case's step (cablesim's defaults for everything else): an
+    adaptive scheme at its default tolerances, an explicit fixed-step one at ``factor`` times its
+    stability limit over ``omega_max``, an implicit one at ``steps`` per period."""
+    row = SCHEMES[scheme.kind]
+    given = {}
+    if row.cls.fixed_step:
+        limit = row.cls.stability_limit
+        given["dt"] = (scheme.factor * limit / prep.static.modes.highest if limit is not None
+                       else 2.0 * np.pi / prep.omega_hi / scheme.steps)
+    return row.build(prep.eom, prep.omega_hi, given)
 
 
 def fastest_rate(static) -> float:
@@ -107,9 +109,10 @@ def _agreement_tol(scheme: Scheme, hist, half, ref) -> float:
     scheme's own truncation error does not explain (an answer that does not converge to the
     reference) is silently wrong, and so is any answer more than 5 % off.
     """
-    if scheme.kind == "dopri5" or half is None:
+    cls = SCHEMES[scheme.kind].cls
+    if not cls.fixed_step or half is None:
         return AGREE_TOL_FLOOR
-    p = 4 if scheme.kind == "rk4" else 2
+    p = cls.order
     m = min(hist.t.size, half.t.size, ref.t.size)
     scale = float(np.max(np.abs(ref.z[:m]))) if m else 0.0
     if scale == 0.0:
@@ -286,7 +289,9 @@ def run_one(case: StressCase, analysis: str, scheme: Scheme, cache: dict | None 
         row["wall"] = time.perf_counter() - t0
         if hist.status is Status.INTERRUPTED:
             raise KeyboardInterrupt
-        ref_kind = "dopri5-tight" if scheme.kind == "rk4" else "rk4-fine"
+        # an independent reference: a tight adaptive run for explicit fixed-step schemes, fine rk4 otherwise
+        explicit_fixed = integ.fixed_step and integ.stability_limit is not None
+        ref_kind = "dopri5-tight" if explicit_fixed else "rk4-fine"
         ref, ref_integ, ref_wall = _reference(ref_kind, prep, case.duration)
         row["reference"] = f"{ref_integ.name} " + ", ".join(
             f"{k}={v:.3g}" for k, v in ref_integ.settings().items() if isinstance(v, float) and math.isfinite(v)
@@ -296,7 +301,7 @@ def run_one(case: StressCase, analysis: str, scheme: Scheme, cache: dict | None 
         row["message"] = "" if hist.completed else hist.message
         row["t_stop"] = hist.t_stop if hist.t_stop is not None else row["t_end"]
         half = None
-        if hist.completed and scheme.kind != "dopri5":
+        if hist.completed and integ.fixed_step:
             # The same scheme at half the step: measures its own truncation error.
             half = simulate(prep.eom, replace(integ, dt=integ.dt / 2.0), case.duration, prep.output_step)
             row["richardson"] = True
@@ -336,7 +341,7 @@ def _classify(row, hist, ref, half, scheme, integ, prep, case, static_ok, static
     reported, drift = _drift(hist)
     row["drift"] = reported
     row["drift_pos"] = drift
-    explicit = scheme.kind in ("rk4", "dopri5")
+    explicit = integ.stability_limit is not None
     row["drift_tol"] = DRIFT_TOL_EXPLICIT if explicit else DRIFT_TOL_IMPLICIT
     row["agreement"] = agree = _agreement(hist, ref)
     row["agree_tol"] = _agreement_tol(scheme, hist, half, ref)

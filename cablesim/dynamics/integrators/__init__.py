@@ -17,5 +17,6 @@ from .rk import DOPRI5, RK4
 INTEGRATORS: dict[str, type[Integrator]] = {
     cls.name: cls for cls in (RK4, DOPRI5, Newmark, GeneralizedAlpha)
 }
+#: The table of settings, defaults and the default rule: :mod:`cablesim.dynamics.integrators.settings`.
 
 __all__ = ["INTEGRATORS", "Integrator", "IntegratorState", "RK4", "DOPRI5", "Newmark", "GeneralizedAlpha"]

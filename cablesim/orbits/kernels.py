@@ -2,11 +2,14 @@
 
 A *vector field* is a compiled function::
 
-    field(theta, x, model, prm, work, dx, J, dp, ipar) -> status
+    field(theta, omega, x, model, prm, work, dx, J, dp, ipar) -> status
 
-It fills ``dx = f(x, theta)``, the Jacobian ``J = df/dx`` and, when ``ipar >= 0``,
-``dp = df/dprm[ipar]``; it returns :data:`OK` (0) or a failure code. Time enters only through
-the forcing phase ``theta = omega t``. ``model`` holds the system's constants (any value numba
+It fills ``dx = f(x, theta; omega)``, the Jacobian ``J = df/dx`` and, when ``ipar >= 0``,
+``dp = df/dprm[ipar]`` (when ``ipar`` is :data:`IPAR_OMEGA`, ``dp = df/domega`` at fixed
+``theta``: zero for a field in which ``omega`` appears only through ``theta``, leave ``dp``
+alone then); it returns :data:`OK` (0) or a failure code. Time enters through the forcing phase
+``theta = omega t`` (and, for a field whose terms are rates of a prescribed motion, through
+``omega`` itself). ``model`` holds the system's constants (any value numba
 can pass: a named tuple for the cable, :class:`cablesim.mechanics.model.CableModel`), ``prm``
 its continuation parameters (a float array: a parameter other than ``omega`` is one of its
 entries, set by the caller), ``work`` its scratch space and the warm starts of inner solves (an
@@ -18,9 +21,10 @@ explicit Runge-Kutta scheme, together with
 
 - the variational equations ``Y' = J Y`` (``Y(0) = I``): the Jacobian of the discrete map;
 - the derivative with respect to the parameter: ``eta' = J eta + g`` with ``g = dp`` for a
-  parameter in ``prm``, or ``g = -f / omega`` for ``omega`` itself (the segment spans a fixed
-  fraction of the forcing period, so ``omega`` acts by scaling time: ``t = tau T(omega)``,
-  ``dT/domega = -T/omega``);
+  parameter in ``prm``, or ``g = -f / omega + df/domega`` for ``omega`` itself (the segment
+  spans a fixed fraction of the forcing period, so ``omega`` acts by scaling time:
+  ``t = tau T(omega)``, ``dT/domega = -T/omega``; ``df/domega`` at fixed ``theta`` is the field's
+  own, explicit dependence);
 - the divergence integral ``q = int tr J dt`` (Liouville: ``det Y = exp q`` for the exact flow);
 - the extremes of every component over the segment, from the cubic Hermite interpolant
   between steps (the samples and their rates).
@@ -48,11 +52,13 @@ from ..jit import njit
 PARAM_NONE = 0
 PARAM_OMEGA = 1
 PARAM_PRM = 2
+#: ``ipar`` asking a field for ``df/domega`` at fixed ``theta``.
+IPAR_OMEGA = -2
 
 #: Restart the propagated Jacobian when ``|int tr J dt|`` over a chunk exceeds this.
 CHUNK_DIVERGENCE = 2.0
 
-__all__ = ["FlowCall", "INNER_SOLVE", "NONFINITE", "OK", "SLACK", "flow_segment", "copy_work"]
+__all__ = ["FlowCall", "INNER_SOLVE", "IPAR_OMEGA", "NONFINITE", "OK", "SLACK", "flow_segment", "copy_work"]
 
 
 def copy_work(work):
@@ -267,8 +273,7 @@ def _variational_rate(J, Ys, dx, dp, KYst, omega, pmode):
         for i in range(n):
             if pmode == PARAM_OMEGA:
                 KYst[i, n] -= dx[i] / omega
-            else:
-                KYst[i, n] += dp[i]
+            KYst[i, n] += dp[i]
     return tr
 
 
@@ -332,7 +337,7 @@ def flow_segment(field, model, prm, work, x0, theta0, omega, duration, nsteps, A
     s = b.size
     h = duration / nsteps
     ncol = n + 1 if (jac and pmode != PARAM_NONE) else n
-    ipar_f = ipar if pmode == PARAM_PRM else -1
+    ipar_f = ipar if pmode == PARAM_PRM else (IPAR_OMEGA if pmode == PARAM_OMEGA else -1)
     x = x0.copy()
     xs = np.empty(n)
     K = np.empty((s, n))
@@ -361,7 +366,7 @@ def flow_segment(field, model, prm, work, x0, theta0, omega, duration, nsteps, A
         for st in range(s if not last else 1):
             _stage_state(x, K, Yf, KYf, xs, Ysf, A, st, h, stage_jac)
             theta = theta0 + omega * h * (k + c[st])
-            code = field(theta, xs, model, prm, work, dx, J, dp, ipar_f)
+            code = field(theta, omega, xs, model, prm, work, dx, J, dp, ipar_f)
             if code != OK:
                 return code
             for i in range(n):

@@ -19,6 +19,7 @@ import numpy as np
 from ...jit import njit
 
 from ...mechanics import segments as sg
+from ...mechanics.supports import support_positions
 from .base import hermite_weights
 
 #: Samples of the gaps per step.
@@ -48,7 +49,8 @@ def _config_at(model, t, ta, tb, sa, sb, y):
 @njit
 def _signed_gap(model, t, ta, tb, sa, sb, k, y, sign):
     _config_at(model, t, ta, tb, sa, sb, y)
-    return sign * sg.gap(y, k, model.S, model.A, model.B)
+    A, B = support_positions(model, t)
+    return sign * sg.gap(y, k, model.S, A, B)
 
 
 @njit
@@ -95,11 +97,12 @@ def locate_event(model, ta, tb, sa, sb, taut, evw):
     or ``(tb, -1)``. ``sa``, ``sb`` start with ``(z, y')``; ``evw`` is :func:`event_workspace`.
     Peak tensions ``EA max(g, 0) / S`` are tracked at the samples."""
     hold, y, g, peak, peak_t = evw
-    S, A, B = model.S, model.A, model.B
+    S = model.S
     t_prev = ta
     for i in range(1, NSAMP + 1):
         ts = tb if i == NSAMP else ta + (tb - ta) * i / NSAMP
         _config_at(model, ts, ta, tb, sa, sb, y)
+        A, B = support_positions(model, ts)
         sg.gaps(y, S, A, B, g)
         best_t = np.inf
         best_k = -1
@@ -111,6 +114,7 @@ def locate_event(model, ta, tb, sa, sb, taut, evw):
                     best_t, best_k = te, k
         if best_k >= 0:
             _config_at(model, best_t, ta, tb, sa, sb, y)
+            A, B = support_positions(model, best_t)
             sg.gaps(y, S, A, B, g)
             _update_peaks(model, best_t, g, peak, peak_t)
             return best_t, best_k
@@ -134,7 +138,7 @@ def start_events(eom, state) -> bool:
     evw = event_workspace(c.n_segments, eom.n_dof)
     on = eom.continues_slack
     if on:
-        A, B = c.support_A, c.support_B
+        A, B = support_positions(eom.model(), float(state.t))
         y = eom.y0 + state.s[: eom.n_dof]
         sg.taut_modes(y, c.S, A, B, taut)
         g = np.empty(c.n_segments)

@@ -486,7 +486,7 @@ BAD = [
     ("S-too-many", _set("cable", "S", [130.0, 100.0, 110.0, 10.0]), [], ["cable.masses", "cable.S has 4"]),
     ("S-single", _set("cable", "S", [340.0]), [], ["`cable.S`"]),
     ("F0-too-short", _set("loads", "F0", [1.0, 2.0, 3.0]), [], ["loads.F0 has 3 values", "2n = 4"]),
-    ("F0-too-long", _set("loads", "F0", [1.0] * 6), [], ["loads.F0 has 6 values", "2n = 4"]),
+    ("F0-too-long", _set("loads", "F0", [1.0] * 7), [], ["loads.F0 has 7 values", "2n = 4", "3n = 6"]),
     ("F0-n-not-2n", _set("loads", "F0", [300e3, 1100e3]), [], ["loads.F0 has 2 values"]),
     ("FL-too-long", _set("loads", "FL", [1.0] * 5), [], ["loads.FL has 5 values", "2n = 4"]),
     ("FL-empty", _set("loads", "FL", []), [], ["loads.FL has 0 values"]),

@@ -8,6 +8,7 @@ from typing import Callable
 import numpy as np
 
 from ..case import Case
+from ..case.model import node_components
 from ..dynamics.equations import EquationsOfMotion
 from ..dynamics.integrators import Integrator
 from ..dynamics.result import HistoryResult
@@ -165,8 +166,9 @@ def plan_free_vibration(
     if mode is not None:
         z0, v0, w_int = _mode_start(static, mode, peak_velocity)
     else:
-        v0 = None if fv.v0 is None else np.array(fv.v0)
-        z0 = None if fv.z0 is None else np.array(fv.z0)
+        n, dim = case.cable.n_nodes, case.dim
+        v0 = None if fv.v0 is None else node_components(fv.v0, n, dim)
+        z0 = None if fv.z0 is None else node_components(fv.z0, n, dim)
         if z0 is not None and static.analysis == "approximate":
             raise CablesimError(
                 "free_vibration.z0 needs the exact analysis: the approximate analysis defines the "

@@ -17,7 +17,7 @@ from ..dynamics.integrators.settings import (DEFAULT_ATOL_PER_CHORD, DEFAULT_RTO
                                               ignored_keys, is_stiff, make, rk4_stable_step)
 from ..errors import CablesimError
 from ..modal import fastest_rate, modal_analysis_banded, rayleigh_coefficients
-from .static import StaticResult
+from .static import StaticResult, damping_modes
 
 #: Saved instants per period of the highest frequency of interest, by default.
 SAMPLES_PER_PERIOD = 40
@@ -41,7 +41,8 @@ def build_equations(
     omega : float
         Forcing frequency, rad/s.
     load_scale : float
-        Multiplies ``FL`` (``gamma`` of the paper's Fig. 4; 0 for free vibration).
+        Multiplies ``FL`` and the supports' motion (``gamma`` of the paper's Fig. 4; 0 for free
+        vibration).
     damping_ratio : float, optional
         Overrides the case's damping ratio (same two modes).
     slack : str, optional
@@ -57,11 +58,12 @@ def build_equations(
     if damping_ratio is None:
         a0, a1 = static.a0, static.a1
     else:
-        i, j = case.damping.modes
+        i, j = damping_modes(case, static.modes)
         w = static.modes.omega
-        a0, a1 = rayleigh_coefficients(w[i - 1], w[j - 1], damping_ratio)
+        a0, a1 = rayleigh_coefficients(w[i], w[j], damping_ratio)
     banded = static.K0_band is not None  # exact analysis: K0 is block-tridiagonal, so is C
     inext = static.inextensible
+    uA, uB, phA, phB = case.support_motion()  # scaled with FL by load_scale, like the loads
     x0 = inext.x
     return EquationsOfMotion(
         cable=cable,
@@ -81,6 +83,10 @@ def build_equations(
         slack=slack or case.slack,
         K0_band=static.K0_band.copy() if banded else None,
         K0_dense=None if banded else static.K0.copy(),
+        uA=uA * load_scale,
+        uB=uB * load_scale,
+        phA=phA,
+        phB=phB,
     )
 
 

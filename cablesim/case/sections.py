@@ -91,6 +91,7 @@ class CableSpec(StrictModel):
 
     L: real(0.0, 1e5, "m", lo_open=True) = Field(description="horizontal distance A->B, m")
     H: real(-1e5, 1e5, "m") = Field(description="vertical distance A->B, m, positive = B below A")
+    W: real(-1e5, 1e5, "m") = Field(default=0.0, description="out-of-plane distance A->B, m (a spatial cable)")
     S: tuple[Load, ...] | None = Field(default=None, description="natural segment lengths, m (n+1)")
     length: real(0.0, 1e6, "m", lo_open=True) | None = Field(
         default=None, description="total natural length, m (with nodes)")
@@ -208,14 +209,17 @@ class PointLoad(StrictModel):
     """Loads and an extra mass at one interior node (an item of ``loads.point``)."""
 
     node: integer(1, MAX_NODES) = Field(description="interior node, counted from 1 at support A")
-    F: tuple[Load, Load] | None = Field(default=None, description="sustained load (horizontal, vertical), N")
-    FL: tuple[Load, Load] | None = Field(default=None, description="peak harmonic load (horizontal, vertical), N")
+    F: tuple[Load, ...] | None = Field(default=None, description="sustained load (x, v) or (x, v, w), N")
+    FL: tuple[Load, ...] | None = Field(default=None, description="peak harmonic load (x, v) or (x, v, w), N")
     mass: real(0.0, MASS_RANGE[1], "kg") | None = Field(default=None, description="extra lumped mass, kg")
 
     @field_validator("F", "FL")
     @classmethod
     def _range(cls, v):
         if v is not None:
+            if len(v) not in (2, 3):
+                raise ValueError(f"has {len(v)} values; give 2 (horizontal, vertical) or, for a spatial case, 3 "
+                                 "(x, v, w) in N")
             in_range(v, *LOAD_RANGE, what="load")
         return v
 
@@ -224,13 +228,16 @@ class LoadsSpec(StrictModel):
     """Sustained and harmonic nodal loads (section ``loads:``), N, 2n values each.
 
     ``F0`` may be left out or completed by the shorthand: ``gravity`` (m/s^2: every node's
-    weight, vertical, down) and ``point`` (loads and extra masses at chosen nodes); the case
-    expands them into ``F0`` and ``FL``.
+    weight, vertical, down), ``per_length`` (a sustained load per metre of natural length, such
+    as wind or current, lumped like the mass: half of each adjacent segment) and ``point`` (loads
+    and extra masses at chosen nodes); the case expands them into ``F0`` and ``FL``.
     """
 
     F0: tuple[Load, ...] | None = Field(default=None, description="sustained nodal loads, N")
     FL: tuple[Load, ...] | None = Field(default=None, description="peak harmonic loads, N")
     gravity: real(0.0, 1e3, "m/s^2") | None = Field(default=None, description="acceleration of gravity, m/s^2")
+    per_length: tuple[Load, ...] | None = Field(
+        default=None, description="sustained load per m of natural length (x, v) or (x, v, w), N/m: wind, current")
     point: tuple[PointLoad, ...] | None = Field(default=None, description="loads and masses by node")
 
     @model_validator(mode="before")
@@ -250,10 +257,19 @@ class LoadsSpec(StrictModel):
             in_range(v, *LOAD_RANGE, what="load")
         return v
 
+    @field_validator("per_length")
+    @classmethod
+    def _per_length(cls, v):
+        if v is not None:
+            if len(v) not in (2, 3):
+                raise ValueError(f"has {len(v)} values; give 2 (x, v) or, for a spatial case, 3 (x, v, w) in N/m")
+            in_range(v, -1e9, 1e9, "N/m", what="load per length")
+        return v
+
     @property
     def shorthand(self) -> bool:
-        """True if gravity or point loads were given."""
-        return self.gravity is not None or self.point is not None
+        """True if gravity, loads per length or point loads were given."""
+        return self.gravity is not None or self.point is not None or self.per_length is not None
 
 
 class DampingSpec(StrictModel):

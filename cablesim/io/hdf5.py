@@ -207,6 +207,9 @@ def _write_static_modal(f: h5py.File, r) -> None:
     put(m, "shapes", r.modes.shapes, "1/sqrt(kg)", "mass-normalised mode shapes (columns)")
     put(m, "damping_ratio", r.damping_ratios, "1", "Rayleigh damping ratio of each mode")
     put(m, "inextensible_omega", r.inextensible_omega, "rad/s", "finite frequencies of the inextensible cable")
+    if r.modes.kinds:  # a spatial cable
+        m.create_dataset("kind", data=np.array(r.modes.kinds, dtype="S"))
+        m["kind"].attrs["description"] = "in-plane, out-of-plane (of a planar equilibrium's plane) or coupled"
     m.attrs["analysis"] = r.analysis
     m.attrs["a0"] = r.a0
     m.attrs["a1"] = r.a1

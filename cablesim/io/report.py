@@ -63,7 +63,8 @@ def static_summary(case, result, full: bool = False) -> str:
     if result.exact is not None:
         header.append("y exact")
         cols.append(result.exact.y)
-    rows = _rows(_shown(2 * n, full, 2 * SUMMARY_ENDS), lambda i: [f"{'xy'[i % 2]}{i // 2 + 1} ({i + 1})",
+    dim = c.dim
+    rows = _rows(_shown(dim * n, full, 2 * SUMMARY_ENDS), lambda i: [f"{('xy' if dim == 2 else 'xvw')[i % dim]}{i // dim + 1} ({i + 1})",
                  _g(result.P[i] / 1e3, 6)] + [_g(col[i], 8) for col in cols], len(header))
     out.append(_table(header, rows))
 
@@ -88,14 +89,20 @@ def static_summary(case, result, full: bool = False) -> str:
     which = "" if m.complete else f"; the lowest {m.omega.size} of {c.n_dof}, highest {_g(m.omega_max, 7)} rad/s"
     out += ["", f"Linear modes about the equilibrium ({result.analysis} tangent stiffness{which}):"]
     modes = range(m.omega.size) if full else range(min(m.omega.size, 2 * SUMMARY_ENDS))
+    kind = (lambda k: [m.kinds[k]]) if m.kinds else (lambda k: [])
     rows = [
         [str(k + 1), _g(m.omega[k], 7), _g(m.frequency_hz[k], 6), _g(m.period[k], 6), f"{result.damping_ratios[k]:.4g}"]
+        + kind(k)
         for k in modes
     ]
     if len(modes) < m.omega.size:
         rows.append([f"... {m.omega.size - len(modes)} more, up to", _g(m.omega[-1], 7), _g(m.frequency_hz[-1], 6),
-                     _g(m.period[-1], 6), f"{result.damping_ratios[-1]:.4g}"])
-    out.append(_table(["mode", "omega (rad/s)", "f (Hz)", "period (s)", "damping ratio"], rows))
+                     _g(m.period[-1], 6), f"{result.damping_ratios[-1]:.4g}"] + kind(m.omega.size - 1))
+    out.append(_table(["mode", "omega (rad/s)", "f (Hz)", "period (s)", "damping ratio"] + (["kind"] if m.kinds else []),
+                      rows))
+    if m.kinds:
+        out.append("Modes are in-plane or out-of-plane (of the plane of a planar equilibrium) or coupled; "
+                   "damping.modes counts the modes that are not out of the plane.")
     out.append(f"Rayleigh damping C = a0 M + a1 K0: a0 = {result.a0:.6g} 1/s, a1 = {result.a1:.6g} s")
     if result.inextensible_omega.size:
         w = ", ".join(_g(v, 7) for v in result.inextensible_omega[:8])

@@ -34,9 +34,9 @@ def plot_cable(result, path: str | Path, title: str) -> Path:
     fig, ax = plt.subplots(figsize=(FIGURE_WIDTH, 4.8), layout="constrained")
     loads = SERIES_LOADS
     y = result.y0
-    pts = nodes_with_supports(cable, y)
+    pts = nodes_with_supports(cable, y)[:, :2]  # a spatial cable: its elevation (x, v)
     if result.inextensible is not None:
-        nat = nodes_with_supports(cable, result.inextensible.x)
+        nat = nodes_with_supports(cable, result.inextensible.x)[:, :2]
         ax.plot(nat[:, 0], nat[:, 1], "--", color=COLOURS["reference"], lw=1.2,
                 label="natural state $x(F_0)$ (inextensible)")
         dmax = np.abs(y - result.inextensible.x).max()
@@ -54,7 +54,7 @@ def plot_cable(result, path: str | Path, title: str) -> Path:
     label_nodes(ax, pts)  # node numbers: all of a short cable, a readable subset of a long one
 
     # Load arrows, the largest one 15% of the span long.
-    P = result.P.reshape(-1, 2)
+    P = result.P.reshape(-1, cable.dim)[:, :2]
     pmax = np.abs(P).max()
     span = max(cable.L, np.ptp(pts[:, 1]), 1e-9)
     if pmax > 0:

@@ -91,15 +91,15 @@ def snapshot_figure(hist, cable: Cable, title: str, count: int = 6):
     plt = pyplot()
     fig, (shape_ax, disp_ax) = plt.subplots(2, 1, figsize=(FIGURE_WIDTH, 6.6), layout="constrained",
                                             gridspec_kw=dict(height_ratios=(3, 2)))
-    base = nodes_with_supports(cable, hist.y0)
+    base = nodes_with_supports(cable, hist.y0)[:, :2]  # a spatial cable: its elevation (x, v)
     shape_ax.plot(base[:, 0], base[:, 1], "--", color=COLOURS["reference"], lw=1.2, label="static equilibrium $y_0$")
     label_nodes(shape_ax, base)
     picks = snapshot_indices(hist.t.size, count)
     colours = plt.get_cmap("viridis")(np.linspace(0.0, 0.9, picks.size))
     vertical = np.zeros((hist.t.size, cable.n_nodes + 2))  # zero at the supports
-    vertical[:, 1:-1] = hist.z[:, 1::2]
+    vertical[:, 1:-1] = hist.z[:, 1::cable.dim]
     for colour, i in zip(colours, picks):
-        pts = nodes_with_supports(cable, hist.y0 + hist.z[i])
+        pts = nodes_with_supports(cable, hist.y0 + hist.z[i])[:, :2]
         shape_ax.plot(pts[:, 0], pts[:, 1], "-", color=colour, lw=1.4, label=f"t = {hist.t[i]:.4g} s")
         disp_ax.plot(base[:, 0], vertical[i], "-", color=colour, lw=1.4)
     disp_ax.fill_between(base[:, 0], vertical.min(axis=0), vertical.max(axis=0), color="0.85",

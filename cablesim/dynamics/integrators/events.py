@@ -19,6 +19,7 @@ import numpy as np
 from ...jit import njit
 
 from .. import kernels as kn
+from ..peaks import step_peaks
 from .base import hermite_weights
 
 #: Samples of the gaps per step.
@@ -80,20 +81,11 @@ def _root(prm, ta, tb, sa, sb, k, lo, hi, y, sign):
 
 
 @njit
-def _update_peaks(prm, t, g, peak, peak_t):
-    S, EA = prm[1], prm[2]
-    for k in range(S.size):
-        T = EA * max(g[k], 0.0) / S[k]
-        if T > peak[k]:
-            peak[k] = T
-            peak_t[k] = t
-
-
-@njit
 def locate_event(prm, ta, tb, sa, sb, taut, evw):
     """The first mode change in ``(ta, tb]`` on the step's interpolant: ``(t_event, segment)``,
     or ``(tb, -1)``. ``sa``, ``sb`` start with ``(z, y')``; ``evw`` is :func:`event_workspace`.
-    Peak tensions ``EA max(g, 0) / S`` are tracked at the samples."""
+    Peak tensions ``EA max(g, 0) / S`` up to the event are located on the interpolant
+    (:func:`cablesim.dynamics.peaks.step_peaks`)."""
     hold, y, g, peak, peak_t = evw
     S, L, H = prm[1], prm[3], prm[4]
     t_prev = ta
@@ -110,12 +102,10 @@ def locate_event(prm, ta, tb, sa, sb, taut, evw):
                 if te < best_t:
                     best_t, best_k = te, k
         if best_k >= 0:
-            _config_at(prm, best_t, ta, tb, sa, sb, y)
-            kn.segment_gaps(y, S, L, H, g)
-            _update_peaks(prm, best_t, g, peak, peak_t)
+            step_peaks(ta, best_t, tb, sa, sb, prm[10], S, prm[2], L, H, peak, peak_t)
             return best_t, best_k
-        _update_peaks(prm, ts, g, peak, peak_t)
         t_prev = ts
+    step_peaks(ta, tb, tb, sa, sb, prm[10], S, prm[2], L, H, peak, peak_t)
     return tb, -1
 
 

@@ -28,7 +28,10 @@ STIFF_STEPS_PER_PERIOD = 1600
 #: the frequency of interest this many times: an explicit step would then be set by modes that
 #: do not matter to the response, so cablesim integrates implicitly.
 STIFF_RATIO = 200.0
-#: Default tolerances of dopri5: relative, and absolute per metre of chord.
+#: Default tolerances of dopri5: relative, and absolute per metre of chord at that rtol. An atol
+#: not given follows rtol (``atol = DEFAULT_ATOL_PER_CHORD * chord * rtol / DEFAULT_RTOL``): a
+#: fixed atol would dominate the error test once rtol is tightened (the paper example's
+#: displacements are metres, atol 3e-8 m), and halving rtol would change nothing.
 DEFAULT_RTOL = 1e-8
 DEFAULT_ATOL_PER_CHORD = 1e-10
 #: Default rk4 steps stay inside this fraction of the stability limit 2.8 / rate.
@@ -133,8 +136,19 @@ def is_stiff(eom: EquationsOfMotion, omega_interest: float) -> bool:
 
 
 def default_dopri5(eom: EquationsOfMotion, rtol: float | None = None, atol: float | None = None) -> DOPRI5:
-    """``dopri5`` with cablesim's default tolerances: rtol 1e-8, atol 1e-10 chord (m)."""
-    return DOPRI5(rtol=rtol or DEFAULT_RTOL, atol=atol or DEFAULT_ATOL_PER_CHORD * eom.cable.chord_length)
+    """``dopri5`` with cablesim's default tolerances.
+
+    rtol 1e-8 unless given; atol, unless given, ``1e-10 * chord * (rtol / 1e-8)`` (m): it follows
+    rtol, so that a tightened rtol tightens the run (see :data:`DEFAULT_ATOL_PER_CHORD`).
+    """
+    rtol = rtol or DEFAULT_RTOL
+    return DOPRI5(rtol=rtol, atol=atol or default_atol(eom.cable.chord_length, rtol))
+
+
+def default_atol(chord: float, rtol: float) -> float:
+    """dopri5's absolute tolerance on displacements (m) when the case gives none: it scales with
+    ``rtol``, ``1e-10`` of the chord at the default rtol 1e-8."""
+    return DEFAULT_ATOL_PER_CHORD * chord * (rtol / DEFAULT_RTOL)
 
 
 def default_integrator(eom: EquationsOfMotion, omega_interest: float) -> Integrator:
@@ -246,3 +260,14 @@ def mode_velocity(static: StaticResult, mode: int, peak_velocity: float) -> np.n
     phi = shapes[:, mode - 1]
     k = int(np.argmax(np.abs(phi)))
     return phi * (peak_velocity / phi[k])
+
+
+def integrator_record(integ: Integrator) -> dict:
+    """What a sweep's file and summary state about its integrator: the name and, for the
+    adaptive scheme, the effective tolerances (``integrator_rtol``, ``integrator_atol`` in m,
+    ``integrator_dt_max`` in s), the same at every point. A fixed step is chosen per point (to
+    divide its forcing period), so it is not stated once for the sweep."""
+    out: dict = {"integrator": integ.name}
+    if not integ.fixed_step:
+        out.update({f"integrator_{k}": float(v) for k, v in integ.settings().items()})
+    return out

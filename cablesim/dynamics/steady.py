@@ -17,7 +17,10 @@ before it jumps (the paper's Figs. 3b and 8c). Such a point is integrated on, an
 not steady if the cap is reached first.
 
 When steady, ``p`` more periods are sampled finely for the peak ``|z_i|`` from the equilibrium,
-the half peak-to-peak range and the dominant response frequency. When the cap is reached first,
+the half peak-to-peak range and the dominant response frequency (the extremes located between
+the samples on the quintic Hermite interpolant of ``z``, ``y'``, ``y''``:
+:mod:`cablesim.dynamics.extremes`; dopri5's steps held to the sample spacing over that orbit,
+its dense output being a cubic interpolant). When the cap is reached first,
 the same quantities come from the last ``window`` seconds and the point is flagged not steady.
 """
 

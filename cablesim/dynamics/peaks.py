@@ -85,23 +85,47 @@ def _locate_max(ta, tb, sa, sb, y0, S, L, H, k, lo, g_lo, r_lo, hi, g_hi, r_hi):
 def step_peaks(ta, t_end, tb, sa, sb, y0, S, EA, L, H, peak, peak_t):
     """Raise ``peak[k]`` (N) and ``peak_t[k]`` (s) with segment k's largest tension over
     ``[ta, t_end]`` of the step ``[ta, tb]`` (``t_end <= tb``: the step may end at an event),
-    located on the step's interpolant (module docstring)."""
+    located on the step's interpolant (module docstring). At each sample the nodes are
+    interpolated once, each segment's gap and rate following from its two ends."""
     if not t_end > ta:
         return
-    for k in range(S.size):
-        t0 = ta
-        g0, r0 = gap_and_rate(ta, tb, sa, sb, y0, S, L, H, k, ta)
-        for i in range(1, PEAK_SAMPLES + 1):
-            t1 = t_end if i == PEAK_SAMPLES else ta + (t_end - ta) * i / PEAK_SAMPLES
-            g1, r1 = gap_and_rate(ta, tb, sa, sb, y0, S, L, H, k, t1)
-            tm, gm = (t1, g1) if g1 >= g0 else (t0, g0)
-            if r0 > 0.0 and r1 <= 0.0 and max(g0, g1) > 0.0:
-                tm, gm = _locate_max(ta, tb, sa, sb, y0, S, L, H, k, t0, g0, r0, t1, g1, r1)
-            T = EA * max(gm, 0.0) / S[k]
-            if T > peak[k]:
-                peak[k] = T
-                peak_t[k] = tm
-            t0, g0, r0 = t1, g1, r1
+    nd = y0.size
+    n = S.size - 1
+    h = tb - ta
+    prev = np.empty((2, S.size))  # g and g' of every segment at the previous sample
+    t0 = ta
+    for i in range(PEAK_SAMPLES + 1):
+        t1 = ta if i == 0 else (t_end if i == PEAK_SAMPLES else ta + (t_end - ta) * i / PEAK_SAMPLES)
+        s = (t1 - ta) / h
+        s2 = s * s
+        s3 = s2 * s
+        w0, w1, w2, w3 = 2.0 * s3 - 3.0 * s2 + 1.0, (s3 - 2.0 * s2 + s) * h, -2.0 * s3 + 3.0 * s2, (s3 - s2) * h
+        d0, d1, d2, d3 = (6.0 * s2 - 6.0 * s) / h, 3.0 * s2 - 4.0 * s + 1.0, (-6.0 * s2 + 6.0 * s) / h, 3.0 * s2 - 2.0 * s
+        xa = ya = ua = va = 0.0  # support A
+        for k in range(S.size):
+            if k == n:
+                xb, yb, ub, vb = L, H, 0.0, 0.0  # support B
+            else:
+                p, q = 2 * k, 2 * k + 1
+                xb = y0[p] + w0 * sa[p] + w1 * sa[nd + p] + w2 * sb[p] + w3 * sb[nd + p]
+                yb = y0[q] + w0 * sa[q] + w1 * sa[nd + q] + w2 * sb[q] + w3 * sb[nd + q]
+                ub = d0 * sa[p] + d1 * sa[nd + p] + d2 * sb[p] + d3 * sb[nd + p]
+                vb = d0 * sa[q] + d1 * sa[nd + q] + d2 * sb[q] + d3 * sb[nd + q]
+            dx, dy = xb - xa, yb - ya
+            l = np.sqrt(dx * dx + dy * dy)
+            g1, r1 = l - S[k], (dx * (ub - ua) + dy * (vb - va)) / l
+            if i > 0:
+                g0, r0 = prev[0, k], prev[1, k]
+                tm, gm = (t1, g1) if g1 >= g0 else (t0, g0)
+                if r0 > 0.0 and r1 <= 0.0 and max(g0, g1) > 0.0:
+                    tm, gm = _locate_max(ta, tb, sa, sb, y0, S, L, H, k, t0, g0, r0, t1, g1, r1)
+                T = EA * max(gm, 0.0) / S[k]
+                if T > peak[k]:
+                    peak[k] = T
+                    peak_t[k] = tm
+            prev[0, k], prev[1, k] = g1, r1
+            xa, ya, ua, va = xb, yb, ub, vb
+        t0 = t1
 
 
 def tension_rates(y: np.ndarray, v: np.ndarray, S: np.ndarray, EA: float, L: float, H: float) -> np.ndarray:

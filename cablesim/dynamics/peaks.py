@@ -7,7 +7,9 @@ velocities at the step's ends (the interpolant the slack events are located on,
 changes sign from positive to negative between two samples the maximum of ``g`` is located on
 the interpolant by iterating :func:`cablesim.dynamics.extremes.hermite_extreme` on
 ``(g, g')`` over a shrinking bracket (each iterate is the vertex of the cubic through the
-bracket's ends, a safeguarded secant-like step of high order), to :data:`T_TOL_PEAK` s. The
+bracket's ends, a safeguarded secant-like step of high order), to :data:`T_TOL_PEAK` s. A step
+whose end values show no turn of ``g`` is searched further only where the cubic through them
+turns inside it (:func:`step_peaks`). The
 peak tension is ``EA g / S`` there: the snap load and its time are then as accurate as the
 interpolant, not limited to the samples.
 """
@@ -82,50 +84,75 @@ def _locate_max(ta, tb, sa, sb, y0, S, L, H, k, lo, g_lo, r_lo, hi, g_hi, r_hi):
 
 
 @njit
+def _end_gap(y0, sv, nd, n, S, L, H, k):
+    """``(g, g')`` of segment k in the state ``sv`` (starting with ``(z, y')``) itself."""
+    if k == 0:
+        xa = ya = ua = va = 0.0
+    else:
+        p, q = 2 * k - 2, 2 * k - 1
+        xa, ya, ua, va = y0[p] + sv[p], y0[q] + sv[q], sv[nd + p], sv[nd + q]
+    if k == n:
+        xb, yb, ub, vb = L, H, 0.0, 0.0
+    else:
+        p, q = 2 * k, 2 * k + 1
+        xb, yb, ub, vb = y0[p] + sv[p], y0[q] + sv[q], sv[nd + p], sv[nd + q]
+    dx, dy = xb - xa, yb - ya
+    l = np.sqrt(dx * dx + dy * dy)
+    return l - S[k], (dx * (ub - ua) + dy * (vb - va)) / l
+
+
+@njit
+def _raise(peak, peak_t, k, EA, S, t, g):
+    T = EA * max(g, 0.0) / S[k]
+    if T > peak[k]:
+        peak[k] = T
+        peak_t[k] = t
+
+
+@njit
 def step_peaks(ta, t_end, tb, sa, sb, y0, S, EA, L, H, peak, peak_t):
     """Raise ``peak[k]`` (N) and ``peak_t[k]`` (s) with segment k's largest tension over
     ``[ta, t_end]`` of the step ``[ta, tb]`` (``t_end <= tb``: the step may end at an event),
-    located on the step's interpolant (module docstring). At each sample the nodes are
-    interpolated once, each segment's gap and rate following from its two ends."""
+    located on the step's interpolant (module docstring).
+
+    The ends first: where ``g'`` falls through zero between them the maximum is located at once;
+    where the cubic through ``(g, g')`` at the ends has an interior maximum (the gap may turn
+    within the step without the ends showing it) the step is searched at
+    :data:`PEAK_SAMPLES` samples; otherwise ``g`` is monotone over the step and its ends are
+    its extremes (so most steps cost two evaluations a segment, from the states themselves).
+    """
     if not t_end > ta:
         return
     nd = y0.size
     n = S.size - 1
-    h = tb - ta
-    prev = np.empty((2, S.size))  # g and g' of every segment at the previous sample
-    t0 = ta
-    for i in range(PEAK_SAMPLES + 1):
-        t1 = ta if i == 0 else (t_end if i == PEAK_SAMPLES else ta + (t_end - ta) * i / PEAK_SAMPLES)
-        s = (t1 - ta) / h
-        s2 = s * s
-        s3 = s2 * s
-        w0, w1, w2, w3 = 2.0 * s3 - 3.0 * s2 + 1.0, (s3 - 2.0 * s2 + s) * h, -2.0 * s3 + 3.0 * s2, (s3 - s2) * h
-        d0, d1, d2, d3 = (6.0 * s2 - 6.0 * s) / h, 3.0 * s2 - 4.0 * s + 1.0, (-6.0 * s2 + 6.0 * s) / h, 3.0 * s2 - 2.0 * s
-        xa = ya = ua = va = 0.0  # support A
-        for k in range(S.size):
-            if k == n:
-                xb, yb, ub, vb = L, H, 0.0, 0.0  # support B
+    for k in range(S.size):
+        g0, r0 = _end_gap(y0, sa, nd, n, S, L, H, k)
+        if t_end == tb:
+            g1, r1 = _end_gap(y0, sb, nd, n, S, L, H, k)
+        else:
+            g1, r1 = gap_and_rate(ta, tb, sa, sb, y0, S, L, H, k, t_end)
+        if max(g0, g1) > 0.0 and r0 > 0.0 and r1 <= 0.0:
+            tm, gm = _locate_max(ta, tb, sa, sb, y0, S, L, H, k, ta, g0, r0, t_end, g1, r1)
+            _raise(peak, peak_t, k, EA, S, tm, gm)
+            continue
+        _raise(peak, peak_t, k, EA, S, t_end, g1)
+        w = t_end - ta
+        slope = (g1 - g0) / w
+        if slope != 0.0 and 0.0 <= r0 / slope <= 3.0 and 0.0 <= r1 / slope <= 3.0:
+            continue  # the cubic is monotone (Fritsch and Carlson's sufficient condition)
+        s, _v = hermite_extreme(g0, g1, r0, r1, np.nan, np.nan, w, 1.0)
+        if s < 0.0:
+            continue
+        t0 = ta
+        for i in range(1, PEAK_SAMPLES + 1):
+            t1 = t_end if i == PEAK_SAMPLES else ta + (t_end - ta) * i / PEAK_SAMPLES
+            ga, ra = (g1, r1) if i == PEAK_SAMPLES else gap_and_rate(ta, tb, sa, sb, y0, S, L, H, k, t1)
+            if max(g0, ga) > 0.0 and r0 > 0.0 and ra <= 0.0:
+                tm, gm = _locate_max(ta, tb, sa, sb, y0, S, L, H, k, t0, g0, r0, t1, ga, ra)
+                _raise(peak, peak_t, k, EA, S, tm, gm)
             else:
-                p, q = 2 * k, 2 * k + 1
-                xb = y0[p] + w0 * sa[p] + w1 * sa[nd + p] + w2 * sb[p] + w3 * sb[nd + p]
-                yb = y0[q] + w0 * sa[q] + w1 * sa[nd + q] + w2 * sb[q] + w3 * sb[nd + q]
-                ub = d0 * sa[p] + d1 * sa[nd + p] + d2 * sb[p] + d3 * sb[nd + p]
-                vb = d0 * sa[q] + d1 * sa[nd + q] + d2 * sb[q] + d3 * sb[nd + q]
-            dx, dy = xb - xa, yb - ya
-            l = np.sqrt(dx * dx + dy * dy)
-            g1, r1 = l - S[k], (dx * (ub - ua) + dy * (vb - va)) / l
-            if i > 0:
-                g0, r0 = prev[0, k], prev[1, k]
-                tm, gm = (t1, g1) if g1 >= g0 else (t0, g0)
-                if r0 > 0.0 and r1 <= 0.0 and max(g0, g1) > 0.0:
-                    tm, gm = _locate_max(ta, tb, sa, sb, y0, S, L, H, k, t0, g0, r0, t1, g1, r1)
-                T = EA * max(gm, 0.0) / S[k]
-                if T > peak[k]:
-                    peak[k] = T
-                    peak_t[k] = tm
-            prev[0, k], prev[1, k] = g1, r1
-            xa, ya, ua, va = xb, yb, ub, vb
-        t0 = t1
+                _raise(peak, peak_t, k, EA, S, t1, ga)
+            t0, g0, r0 = t1, ga, ra
 
 
 def tension_rates(y: np.ndarray, v: np.ndarray, S: np.ndarray, EA: float, L: float, H: float) -> np.ndarray:

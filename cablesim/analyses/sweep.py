@@ -27,12 +27,13 @@ import numpy as np
 
 from ..case import Case, parse_case
 from ..channels import channel_index
+from ..dynamics.integrators import Integrator
 from ..dynamics.status import Status
 from ..dynamics.steady import SteadyCriterion, steady_response
 from ..orbits.accelerate import accelerated_steady_response
 from ..errors import CablesimError
 from .cost import Cost, sweep_cost
-from .setup import build_equations, make_integrator
+from .setup import build_equations, integrator_record, make_integrator
 from .static import run_static
 
 FLOAT_FIELDS = ("amplitude", "halfrange", "response_frequency")
@@ -471,7 +472,7 @@ def run_sweep(
                         None if start is None else tuple(start), os.getpid())
 
     config, parallel, client = _parallel(n_jobs, backend, scheduler)  # settings errors first
-    _warm_up(case_text, analysis, integrator, idx)
+    res.settings.update(integrator_record(_warm_up(case_text, analysis, integrator, idx)))
     recorder.begin()
 
     def done(rec):
@@ -500,10 +501,12 @@ def run_sweep(
     return res
 
 
-def _warm_up(case_text, analysis, integrator, idx) -> None:
-    """Compile (or load from numba's cache) the kernels once before forking workers."""
+def _warm_up(case_text, analysis, integrator, idx) -> Integrator:
+    """Compile (or load from numba's cache) the kernels once before forking workers; returns
+    the integrator (at the first mode's frequency)."""
     case, static = _static_for(case_text, analysis)
     w = float(static.modes.omega[0])
     eom = build_equations(case, static, omega=w)
     integ = make_integrator(case.integrator, eom, w, integrator)
     steady_response(eom, integ, np.array(idx), SteadyCriterion(cap=4 * 2 * np.pi / w, window=2 * 2 * np.pi / w))
+    return integ

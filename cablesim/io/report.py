@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..dynamics.extremes import peak_and_half_range
 from ..dynamics.spectra import spectrum_peaks
 from ..version import __version__
 
@@ -140,10 +141,13 @@ def history_summary(case, hist, integ, wall: float, full: bool = False) -> str:
     def row(i):
         z = hist.z[:, i]
         peaks = spectrum_peaks(hist.t, z, 0.5, max_peaks=2) if hist.t.size > 16 else []
+        # extremes between the saved instants, from z and its velocity (cablesim.dynamics.extremes)
+        peak, _ = peak_and_half_range(hist.t, z, hist.v[:, i])
+        _, half_range = peak_and_half_range(hist.t[half:], z[half:], hist.v[half:, i])
         return [
             f"z{hist.dof_numbers[i]}",
-            _g(np.abs(z).max(), 5),
-            _g(0.5 * np.ptp(z[half:]), 5) if half > 0 else "-",
+            _g(float(peak[0]), 5),
+            _g(float(half_range[0]), 5) if half > 0 else "-",
             ", ".join(f"{p:.4g}" for p in peaks) or "-",
         ]
 
@@ -151,8 +155,10 @@ def history_summary(case, hist, integ, wall: float, full: bool = False) -> str:
     rows = _rows(_shown(channels, full or channels <= 2 * SUMMARY_NODES, 2 * SUMMARY_ENDS), row, 4)
     lines.append(_table(["DOF", "max |z| (m)", "half range, 2nd half (m)", "response peaks (rad/s)"], rows))
     dT = hist.T - hist.T0
+    # the peak tensions located between the saved instants, where recorded
+    top = dT.max() if hist.slack is None else max(dT.max(), float((hist.slack.peak_tension - hist.T0).max()))
     lines.append(
-        f"tension change: min {dT.min() / 1e3:.4g} kN, max {dT.max() / 1e3:.4g} kN "
+        f"tension change: min {dT.min() / 1e3:.4g} kN, max {top / 1e3:.4g} kN "
         f"(static {', '.join(f'{t / 1e3:.5g}' for t in hist.T0[:6])} kN)"
     )
     lines.append(f"largest drift of eq. 15 (relative to |F0|): {np.max(hist.residual):.2e}")
@@ -194,6 +200,11 @@ def sweep_summary(case, res, wall: float) -> str:
         f"{res.omega.min():.4g} to {res.omega.max():.4g} rad/s, {len(res.curves)} curve(s), "
         f"{res.n_done} of {res.n_total} points in {wall:.3g} s wall time",
     ]
+    st = res.settings
+    if "integrator" in st:
+        tols = "" if "integrator_rtol" not in st else (
+            f" (rtol = {st['integrator_rtol']:g}, atol = {st['integrator_atol']:.3g} m at every point)")
+        lines.append(f"integrator {st['integrator']}{tols}")
     rows = []
     for k, c in enumerate(res.curves):
         d = res.data[k]

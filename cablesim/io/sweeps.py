@@ -54,7 +54,8 @@ def write_sweep(path: str | Path, res, fingerprint: str | None = None) -> Path:
         g.attrs["direction"] = res.direction
         g.attrs["channels"] = np.array(res.channels, dtype="S")
         g.attrs["case_name"] = res.case_name
-        for k in ("cap", "window", "tol", "max_period", "floquet_check", "accelerate"):
+        for k in ("cap", "window", "tol", "max_period", "floquet_check", "accelerate", "integrator", "integrator_rtol",
+                  "integrator_atol", "integrator_dt_max"):
             if k in res.settings:
                 g.attrs[k] = res.settings[k]
         g.attrs["complete"] = res.complete
@@ -254,7 +255,8 @@ def read_sweep(h5_path) -> StoredSweep:
             raise bad(f"the attribute channels names {len(channels)} channels but the results hold {n_chan}")
         channels = [normalise_channel(c) or c for c in channels]
         analysis = attr_text(f.attrs.get("analysis", g.attrs.get("analysis", "unknown")))
-        attrs = {k: g.attrs[k] for k in ("case_name", "integrator", "cap", "window") if k in g.attrs}
+        attrs = {k: g.attrs[k] for k in ("case_name", "integrator", "integrator_rtol", "integrator_atol", "cap", "window")
+                 if k in g.attrs}
         modal = np.empty(0)
         if "modal" in f and "omega" in f["modal"]:
             modal = np.sort(np.asarray(f["modal"]["omega"][()], dtype=float).ravel())

@@ -35,6 +35,8 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_heavy.py
 	$(PY) benchmarks/bench_approximate.py
 	$(PY) benchmarks/bench_tolerances.py
+	$(PY) benchmarks/bench_spatial.py
+	$(if $(AGAINST),$(PY) benchmarks/bench_revisions.py --against $(AGAINST))
 
 # numba's cache of the compiled kernels lives in cablesim/__pycache__/kernels-<hash of the compiled
 # sources> (cablesim/jit.py): an edited kernel starts a fresh cache by itself; `make clean` only

@@ -339,6 +339,12 @@ class FreeVibrationSpec(StrictModel):
         return self
 
 
+#: Halvings of a sweep grid's step where neighbouring points disagree (``sweep.refine``): the
+#: default for a grid, and the most allowed.
+REFINE_LEVELS = 5
+REFINE_MOST = 10
+
+
 class OmegaGrid(StrictModel):
     """An evenly spaced frequency grid, rad/s: ``num`` points from ``start`` to ``stop``."""
 
@@ -366,6 +372,9 @@ class SweepSpec(StrictModel):
     max_period: integer(1, 50) = Field(default=6, description="largest response period sought")
     floquet: bool = Field(default=True, description="check the stability of periodic responses")
     accelerate: bool = Field(default=True, description="decide steady points by shooting from the transient")
+    refine: bool | integer(0, REFINE_MOST) | None = Field(
+        default=None, description="halvings of the grid step where neighbouring points disagree (true: "
+        f"{REFINE_LEVELS}, false or 0: none; default: {REFINE_LEVELS} for a grid, none for a list)")
 
     @field_validator("omega", mode="before")
     @classmethod
@@ -415,6 +424,15 @@ class SweepSpec(StrictModel):
                 "the window is the final part of each point's run, so shorten it"
             )
         return self
+
+    @property
+    def refine_levels(self) -> int:
+        """How many times the grid step may be halved where neighbouring points disagree."""
+        if self.refine is None:
+            return REFINE_LEVELS if isinstance(self.omega, OmegaGrid) and self.omega.num > 1 else 0
+        if isinstance(self.refine, bool):
+            return REFINE_LEVELS if self.refine else 0
+        return int(self.refine)
 
     def frequencies(self) -> np.ndarray:
         """The frequency grid, rad/s (ascending for up/down sweeps)."""

@@ -189,37 +189,37 @@ def sweep_summary(case, res, wall: float) -> str:
     ]
     rows = []
     for k, c in enumerate(res.curves):
-        d = res.data[k]
+        d = res.table(k)
         label = c.direction + ("" if res.gamma is None else f", gamma = {res.gamma[c.gamma_index]:g}")
-        done = d["done"]
+        done = d.done
         if not done.any():
             continue
-        good = done & ~d["failed"]
+        good = done & ~d.failed
         for j, name in enumerate(res.channels):
-            a = np.where(good & np.isfinite(d["amplitude"][:, j]), d["amplitude"][:, j], -np.inf)
+            a = np.where(good & np.isfinite(d.amplitude[:, j]), d.amplitude[:, j], -np.inf)
             if np.isfinite(a).any():
                 i = int(np.argmax(a))
-                rows.append([label, name, f"{res.omega[i]:.4g}", _g(d["amplitude"][i, j], 5)])
+                rows.append([label, name, f"{res.omega[i]:.4g}", _g(d.amplitude[i, j], 5)])
             else:
                 rows.append([label, name, "-", "no point ran to its end"])
-        steady = d["steady"][done]
-        failed = d["failed"][done]
+        steady = d.steady[done]
+        failed = d.failed[done]
         capped = ~steady & ~failed
-        sub = d["period"][done] >= 2
+        sub = d.period[done] >= 2
         lines.append(
             f"  {label}: {steady.sum()} of {done.sum()} points steady"
             + (f", {sub.sum()} subharmonic (period >= 2)" if sub.any() else "")
             + (f", {capped.sum()} reached the cap" if capped.any() else "")
             + (f", {failed.sum()} FAILED (stopped early; listed below, left out of the peaks)" if failed.any() else "")
         )
-        frac = d.get("slack_fraction")
-        if frac is not None and np.any(frac[done] > 0):
+        frac = d.slack_fraction
+        if frac.size and np.any(frac[done] > 0):
             slack = np.any(frac > 0, axis=1) & done
             worst = np.nanmax(frac[done], axis=0)
             lines.append(
                 f"    {slack.sum()} point(s) with slack episodes; largest slack fraction per segment "
                 + ", ".join(f"{100.0 * x:.3g} %" for x in worst)
-                + "; largest peak tension " + ", ".join(f"{x / 1e3:.4g}" for x in np.nanmax(d["peak_tension"][done], axis=0)) + " kN"
+                + "; largest peak tension " + ", ".join(f"{x / 1e3:.4g}" for x in np.nanmax(d.peak_tension[done], axis=0)) + " kN"
             )
     lines.append(_table(["curve", "channel", "peak at (rad/s)", "peak amplitude (m)"], rows))
     failures = res.failures()

@@ -66,9 +66,9 @@ def _draw_overlay(ax, sweep, c_name: str) -> set:
     c = sweep.channels.index(c_name)
     for curve in sweep.curves:
         ok = curve.valid
-        y = curve.data["amplitude"][:, c]
-        for kind, mask, colour in (("steady", ok & curve.data["steady"], COLOURS["annotation"]),
-                                   ("not steady", ok & ~curve.data["steady"], COLOURS["failure"])):
+        y = curve.data.amplitude[:, c]
+        for kind, mask, colour in (("steady", ok & curve.data.steady, COLOURS["annotation"]),
+                                   ("not steady", ok & ~curve.data.steady, COLOURS["failure"])):
             if mask.any():
                 drawn.add(kind)
                 ax.plot(sweep.omega[mask], y[mask], "o", ms=3.2, mfc="none", mec=colour, mew=0.7, zorder=5)

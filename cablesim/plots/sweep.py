@@ -87,8 +87,8 @@ def draw_curve(ax, omega, curve, c: int, quantity: str, color, marked: bool, lw:
     subharmonic points as black diamonds labelled ``1/p``. Returns which markers were drawn:
     ``(not steady, subharmonic, stopped early, went slack)``."""
     valid = curve.valid
-    steady = valid & curve.data["steady"]
-    period = curve.data["period"]
+    steady = valid & curve.data.steady
+    period = curve.data.period
     values = curve.data[quantity][:, c]
     y = np.where(steady, values, np.nan)
     # break the line between responses of different period (different branches)
@@ -97,7 +97,7 @@ def draw_curve(ax, omega, curve, c: int, quantity: str, color, marked: bool, lw:
     st = DIRECTION_STYLE[curve.direction]
     ax.plot(x_line, y_line, ls=st["ls"], marker=st["marker"] if marked else "none", ms=st["ms"], color=color,
             lw=lw, zorder=2)
-    unsteady = valid & ~curve.data["steady"] & np.isfinite(values)
+    unsteady = valid & ~curve.data.steady & np.isfinite(values)
     if unsteady.any():
         ax.plot(omega[unsteady], values[unsteady], ls="none", marker="o", ms=7, mfc="none",
                 mec=COLOURS["failure"], mew=1.1, zorder=4)
@@ -105,7 +105,7 @@ def draw_curve(ax, omega, curve, c: int, quantity: str, color, marked: bool, lw:
     if failed.any():
         ax.plot(omega[failed], values[failed], ls="none", marker="x", ms=6, color=COLOURS["failed_point"], mew=1.2,
                 zorder=4)
-    went_slack = valid & curve.data["went_slack"] & np.isfinite(values)
+    went_slack = valid & curve.data.went_slack & np.isfinite(values)
     if went_slack.any():
         ax.plot(omega[went_slack], values[went_slack], ls="none", marker="s", ms=6, mfc="none",
                 mec=COLOURS["failure"], mew=0.9, zorder=4)
@@ -229,7 +229,7 @@ def plot_sweep(h5_path, png_path=None, channels=None, quantity: str = "amplitude
     axes[-1, 0].set_xlabel("forcing frequency $\\omega$ (rad/s)")
     legend_below(fig, _legend(sweep, gammas, colors, markers, modal_k, marked), ncol=2)
     warn = _incomplete_note(sweep, notes)
-    if not any(int(cv.data["done"].sum()) for cv in sweep.curves):
+    if not any(int(cv.data.done.sum()) for cv in sweep.curves):
         axes[0, 0].text(0.5, 0.5, "no computed points", transform=axes[0, 0].transAxes, ha="center",
                         va="center", color=COLOURS["failure"], fontsize=10)
     first = title if title is not None else f"{attr_text(sweep.attrs.get('case_name', sweep.path.stem))}: frequency response"
@@ -262,11 +262,11 @@ def _incomplete_note(sweep: StoredSweep, notes: list) -> bool:
     """Put the note of an incomplete sweep first in ``notes``; whether the sweep is incomplete."""
     P = sweep.omega.size
     total = P * len(sweep.curves)
-    done = sum(int(cv.data["done"].sum()) for cv in sweep.curves)
+    done = sum(int(cv.data.done.sum()) for cv in sweep.curves)
     if done >= total:
         return False
     text = f"incomplete sweep: {done} of {total} points"
-    short = [f"{cv.label}: {int(cv.data['done'].sum())} of {P}" for cv in sweep.curves if cv.data['done'].sum() < P]
+    short = [f"{cv.label}: {int(cv.data.done.sum())} of {P}" for cv in sweep.curves if cv.data.done.sum() < P]
     if len(sweep.curves) > 1:
         more = f"; and {len(short) - 4} more curves" if len(short) > 4 else ""
         text += " (" + "; ".join(short[:4]) + more + ")"

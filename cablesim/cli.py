@@ -349,7 +349,7 @@ def free_vibration(
     mode: Optional[int] = typer.Option(None, "--mode", help="Linear mode K giving the initial velocities, 1 to 2n (default: free_vibration.mode)."),
     peak_velocity: Optional[float] = typer.Option(None, "--peak-velocity", help="Largest initial velocity V, m/s (default: free_vibration.peak_velocity)."),
     damping_ratio: Optional[float] = typer.Option(None, "--damping-ratio", help="Override damping.ratio, 0 to below 1 (same two modes; default: free_vibration.damping_ratio, else damping:)."),
-    duration: Optional[float] = typer.Option(None, "--duration", help="Simulated time, s (default: free_vibration.duration, else 20)."),
+    duration: Optional[float] = typer.Option(None, "--duration", help="Simulated time, s (default: free_vibration.duration, else until the motion has decayed to 0.1 %, from the damping)."),
     output_step: Optional[float] = typer.Option(None, "--output-step", help="Interval between saved instants, s (default: free_vibration.output_step, else 40 per period)."),
     analysis: Optional[Analysis] = ANALYSIS_OPT,
     integrator: Optional[IntegratorName] = INTEGRATOR_OPT,
@@ -385,9 +385,10 @@ def free_vibration(
                                               integrator.value if integrator else None)
         say_warnings(planned.plan.static.warnings)
         _guard(planned.cost(), force, "Shorten --duration, raise --output-step or integrator.dt", out)
-        _effective(ctx, output=out, mode=k, peak_velocity=v, duration=dur, output_step=planned.plan.output_step,
+        _effective(ctx, output=out, mode=k, peak_velocity=v, duration=planned.plan.duration,
+                   output_step=planned.plan.output_step,
                    integrator={"name": planned.plan.integrator.name, **planned.plan.integrator.settings()})
-        run, wall = _simulate(planned, dur)
+        run, wall = _simulate(planned, planned.plan.duration)
     _finish_history(run, out, plot, chans, wall)
 
 

@@ -23,13 +23,13 @@ def test_check_prints_the_effective_case_and_each_commands_cost(invoke_cli, writ
     assert body["history"]["duration"] == 600.0 and body["sweep"]["tol"] == 1e-05  # defaults filled in
     assert "is valid" in res.stdout and "--set applied" in res.stdout
     out = flat(res.stdout)
-    assert "# sweep: at most" in out and "11 points" in out
-    assert "# history: cannot run with the case's settings alone: No forcing frequency" in out
+    assert "# sweep: at most" in out and "73 points (11 on the grid, up to 62 added where neighbouring" in out
+    assert "# history: about" in out
     assert result_like_files(tmp_path) == []
 
 
 def test_check_estimates_a_history_given_in_the_case(invoke_cli, write_case):
-    case = write_case(EXAMPLE + "history:\n  omega: 2.4\n  duration: 100.0\n")
+    case = write_case(EXAMPLE.replace("  duration: 600.0 ", "  duration: 100.0 ", 1))
     res = invoke_cli("check", case)
     assert res.returncode == 0
     assert "# history: about" in flat(res.stdout) and "saved instants" in res.stdout
@@ -99,7 +99,8 @@ def test_sweep_takes_omega_duration_and_channels_like_history(invoke_cli, tmp_pa
 
 
 def test_sweep_omega_grid_and_bad_spellings(invoke_cli, tmp_path):
-    res = invoke_cli("sweep", "--omega", "3:4:2", "--duration", "300", "--set", "sweep.window=100", "--jobs", "1",
+    res = invoke_cli("sweep", "--omega", "3:4:2", "--duration", "300", "--set", "sweep.window=100",
+                     "--set", "sweep.refine=false", "--jobs", "1",
                      "--no-plot", "-o", "g.h5")
     assert res.returncode == 0, res.stderr
     with h5py.File(tmp_path / "g.h5") as f:

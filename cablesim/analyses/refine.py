@@ -14,9 +14,11 @@ is halved (its midpoint computed next) where, on any curve,
    doubling may lie between them; multipliers are known where shooting decided the point),
    while the interval is at least eight times the finest step (the first halvings);
 
-until the step has been halved ``levels`` times (``sweep.refine``) or the sweep has gained as
-many points as its grid had. The rules read only results, so a resumed sweep adds exactly the
-points the uninterrupted one adds.
+until the step has been halved ``levels`` times (``sweep.refine``) or the sweep has gained
+:data:`BUDGET` times as many points as its grid had, and :data:`BUDGET_FLOOR` more (the widest
+flagged intervals first).
+The rules read only results, so a resumed sweep adds exactly the points the uninterrupted one
+adds.
 """
 
 from __future__ import annotations
@@ -32,6 +34,9 @@ PEAK_TOLERANCE = 0.005
 PEAK_FLOOR = 0.02
 #: A multiplier this close to +1 or -1 marks a possible bifurcation (rule 4).
 NEAR_UNIT = 0.05
+#: Refinement adds at most this many times the grid's points, and this many more.
+BUDGET = 2
+BUDGET_FLOOR = 40
 
 
 def finest_step(grid: np.ndarray, levels: int) -> float:
@@ -89,7 +94,8 @@ def refinements(omega: np.ndarray, tables, finest: float, budget: int) -> np.nda
     finest : float
         The smallest interval allowed (:func:`finest_step`), rad/s.
     budget : int
-        Most frequencies to add (the lowest midpoints first when more are flagged).
+        Most frequencies to add (the midpoints of the widest flagged intervals first when more
+        are flagged).
 
     Returns
     -------
@@ -106,4 +112,6 @@ def refinements(omega: np.ndarray, tables, finest: float, budget: int) -> np.nda
         flag |= _flagged(table, omega, wide)
     flag &= halvable
     mids = 0.5 * (omega[:-1] + omega[1:])
-    return mids[flag][:budget]
+    chosen = np.flatnonzero(flag)
+    chosen = chosen[np.argsort(-width[chosen], kind="stable")][:budget]
+    return np.sort(mids[chosen])

@@ -36,7 +36,7 @@ from ..errors import CablesimError
 from ..orbits.accelerate import accelerated_steady_response
 from . import pool
 from .cost import Cost, sweep_cost
-from .refine import finest_step, refinements
+from .refine import BUDGET, BUDGET_FLOOR, finest_step, refinements
 from .setup import build_equations, make_integrator
 from .static import StaticResult, run_static
 from .sweep_points import BadRecord, CurveTable, SweepPoint
@@ -293,13 +293,14 @@ def estimate_sweep(case: Case, analysis: str | None = None, integrator: str | No
         eom = build_equations(case, static, omega=float(w))
         points.append((eom, make_integrator(case.integrator, eom, max(float(w), w1), integrator), float(w)))
     sw = case.sweep
-    n = res.omega.size + refine_budget(res)
-    return sweep_cost(points, n, len(res.curves), sw.duration, sw.window, len(res.channels))
+    added = refine_budget(res)
+    return sweep_cost(points, res.omega.size + added, len(res.curves), sw.duration, sw.window, len(res.channels), added)
 
 
 def refine_budget(res: SweepResult) -> int:
-    """Most frequencies refinement may add: as many as the grid has (the cost at most doubles)."""
-    return int(res.settings["grid_points"]) if res.settings.get("refine") else 0
+    """Most frequencies refinement may add (:data:`cablesim.analyses.refine.BUDGET` times the
+    grid's and :data:`~cablesim.analyses.refine.BUDGET_FLOOR`)."""
+    return BUDGET * int(res.settings["grid_points"]) + BUDGET_FLOOR if res.settings.get("refine") else 0
 
 
 # ----------------------------------------------------------------------------------------------

@@ -137,7 +137,8 @@ def sweep_flag_overrides(omega: Optional[str], duration: Optional[float], channe
     return sets
 
 
-def parse_case(text: str, source: str = "<case>", default_name: str = "case", overrides=None) -> Case:
+def parse_case(text: str, source: str = "<case>", default_name: str = "case", overrides=None,
+               record_name: bool = False) -> Case:
     """Parse and validate the YAML text of a case file.
 
     Parameters
@@ -150,6 +151,9 @@ def parse_case(text: str, source: str = "<case>", default_name: str = "case", ov
         The case name if the file gives none.
     overrides : list of str, optional
         ``KEY=VALUE`` settings applied over the file (command-line ``--set``).
+    record_name : bool
+        If the text has no ``name:``, record ``default_name`` in the case's stored text (a case
+        file named after its file keeps that name when its stored text is read again).
 
     Returns
     -------
@@ -169,8 +173,9 @@ def parse_case(text: str, source: str = "<case>", default_name: str = "case", ov
     # Overrides recorded in a stored case text apply too, so a result file's case re-parses
     # to exactly what was run.
     apply_overrides(data, [*stored_overrides(text), *(overrides or ())], source)
-    if data.get("name") is None:  # absent, or a blank `name:` (YAML null)
-        data["name"] = default_name
+    named = data.get("name") is not None
+    if not named:  # absent, or a blank `name:` (YAML null): the stored name, else the default
+        data["name"] = stored_name(text) or default_name
     try:
         case = Case.model_validate(data)
     except ValidationError as err:
@@ -178,8 +183,26 @@ def parse_case(text: str, source: str = "<case>", default_name: str = "case", ov
     if _uses_shorthand(data):
         case.set_text(_expanded_text(text, data, case, overrides))
     else:
-        case.set_text(_with_overrides(text, overrides))
+        stored = text if named or stored_name(text) or not record_name else _with_name(text, case.name)
+        case.set_text(_with_overrides(stored, overrides))
     return case
+
+
+#: Marks the name a case took from its file (it has no ``name:``) in the text stored with
+#: results, so that the stored case re-reads under the same name.
+NAME_MARK = "# cablesim name (the case file's):"
+
+
+def _with_name(text: str, name: str) -> str:
+    return text.rstrip("\n") + f"\n{NAME_MARK} {name}\n"
+
+
+def stored_name(text: str) -> str | None:
+    """The name recorded in a stored case text for a case that took it from its file."""
+    for line in text.splitlines():
+        if line.startswith(NAME_MARK):
+            return line[len(NAME_MARK):].strip() or None
+    return None
 
 
 #: yaml's safe dumper, compiled (libyaml) when available.
@@ -218,13 +241,14 @@ def load_case(path: str | Path | None, overrides=None) -> tuple[Case, str]:
     """
     if path is None:
         text = example_text()
-        case = parse_case(text, source="(embedded paper example)", default_name="paper-example", overrides=overrides)
+        case = parse_case(text, source="(embedded paper example)", default_name="paper-example", overrides=overrides,
+                          record_name=True)
         return case, case.text
     p = Path(path)
     text = read_text_file(p, "Case file", MAX_CASE_BYTES)
     # A valid case name starts with a letter or digit; derive one from the file stem.
     stem = re.sub(r"[^A-Za-z0-9._-]", "-", p.stem).lstrip("._-") or "case"
-    case = parse_case(text, source=str(p), default_name=stem, overrides=overrides)
+    case = parse_case(text, source=str(p), default_name=stem, overrides=overrides, record_name=True)
     return case, case.text
 
 

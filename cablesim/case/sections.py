@@ -327,7 +327,8 @@ class FreeVibrationSpec(StrictModel):
     z0: tuple[real(-1e5, 1e5, "m"), ...] | None = Field(default=None, description="initial displacement from equilibrium, m")
     v0: tuple[real(-1e3, 1e3, "m/s"), ...] | None = Field(default=None, description="initial velocities, m/s")
     damping_ratio: DAMPING_RATIO | None = Field(default=None, description="overrides damping.ratio")
-    duration: DURATION = Field(default=20.0, description="simulated time, s")
+    duration: DURATION | None = Field(default=None, description="simulated time, s (default: until the motion "
+                                      "has decayed to 0.1 %, from the damping)")
     output_step: OUTPUT_STEP | None = Field(default=None, description="interval between saved instants, s")
     channels: tuple[str, ...] | None = Field(default=None, description="DOF to plot, e.g. [z2, z4]")
 
@@ -341,7 +342,7 @@ class FreeVibrationSpec(StrictModel):
 
 #: Halvings of a sweep grid's step where neighbouring points disagree (``sweep.refine``): the
 #: default for a grid, and the most allowed.
-REFINE_LEVELS = 5
+REFINE_LEVELS = 4
 REFINE_MOST = 10
 
 

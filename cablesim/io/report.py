@@ -179,6 +179,26 @@ def slack_lines(rec, duration: float, full: bool = True) -> list[str]:
     return out
 
 
+def grid_note(omega, refine, grid_points=None, finest=None) -> str:
+    """How a sweep's frequencies were chosen, in words: the grid, and its refinement or the
+    warning that it was not refined (a feature narrower than its step can fall between points).
+
+    ``refine`` is the number of halvings allowed (None: unknown, a file of an earlier version);
+    ``grid_points`` the points of the grid before refinement.
+    """
+    omega = np.unique(np.asarray(omega, dtype=float))
+    if refine is None or omega.size < 2:
+        return ""
+    n_grid = int(grid_points) if grid_points is not None else omega.size
+    added = omega.size - n_grid
+    if int(refine) > 0:
+        step = f" to {float(finest):.3g} rad/s" if finest is not None and np.isfinite(finest) else ""
+        return (f"grid of {n_grid} frequencies refined{step} where neighbouring points disagree "
+                f"({added} added)" if added else f"grid of {n_grid} frequencies; no neighbouring points disagree")
+    return (f"grid step up to {float(np.diff(omega).max()):.3g} rad/s, not refined (sweep.refine): "
+            "a narrower feature can fall between points")
+
+
 def sweep_summary(case, res, wall: float) -> str:
     """Summary of a sweep: points, steady fraction, resonance peaks per curve and channel, and
     every point that stopped early with why (such points hold partial values: never a peak)."""
@@ -187,6 +207,10 @@ def sweep_summary(case, res, wall: float) -> str:
         f"{res.omega.min():.4g} to {res.omega.max():.4g} rad/s, {len(res.curves)} curve(s), "
         f"{res.n_done} of {res.n_total} points in {wall:.3g} s wall time",
     ]
+    grid = grid_note(res.omega, res.settings.get("refine"), res.settings.get("grid_points"),
+                     res.settings.get("finest_step"))
+    if grid:
+        lines.append(f"  {grid}")
     rows = []
     for k, c in enumerate(res.curves):
         d = res.table(k)

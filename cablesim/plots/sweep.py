@@ -13,6 +13,7 @@ import numpy as np
 from ..channels import channel_description
 from ..errors import CablesimError
 from ..io.hdf5 import attr_text
+from ..io.report import grid_note
 from ..io.sweeps import StoredSweep, read_sweep, select_channels
 from .base import bottom_notes, figure_grid, legend_below, save_atomic, title_line
 from .style import COLOURS, SERIES, WORDS, channel_tex, styled
@@ -66,6 +67,10 @@ def sweep_conditions(sweep: StoredSweep) -> str:
     if "integrator" in sweep.attrs:
         analysis += f" ({attr_text(sweep.attrs['integrator'])})"
     parts = [analysis, dir_text]
+    grid = grid_note(sweep.omega, sweep.attrs.get("refine"), sweep.attrs.get("grid_points"),
+                     sweep.attrs.get("finest_step"))
+    if grid:
+        parts.append(grid)
     if "cap" in sweep.attrs:
         cap = f"at most {float(sweep.attrs['cap']):.4g} s per point"
         if "window" in sweep.attrs:

@@ -18,7 +18,8 @@ The package, from the bottom layer up (a module imports only from layers below i
 ``tests/test_architecture.py``):
 
 - ``names``, ``errors``, ``version``, ``channels`` -- the vocabulary; ``jit`` -- the decorator of
-  every compiled kernel, whose on-disk cache is keyed on a hash of the compiled sources;
+  every compiled kernel, whose on-disk cache is keyed on a hash of the compiled sources, and the
+  watch on what numba compiles; ``roots`` -- Brent's bracketed root (as scipy computes it);
 - ``cable``, ``closure``, ``statics``, ``modal`` -- the model: geometry, the closure problem on
   the complementary energy, the three static equilibria, modes and Rayleigh damping;
 - ``dynamics/`` -- compiled kernels, the equations of motion (``equations``), the integrators
@@ -29,10 +30,13 @@ The package, from the bottom layer up (a module imports only from layers below i
 - ``case`` -- YAML case files (strict YAML: ``strict_yaml``; numbers in stated ranges:
   ``numbers``) validated into a frozen :class:`~cablesim.case.Case`;
 - ``analyses/`` -- case in, result out: ``setup`` (equations, integrator and step rules, once),
-  ``static``, ``dynamic``, ``sweep``, ``continuation``, ``cost`` (estimates before a run); no
+  ``static``, ``dynamic``, ``sweep`` (its points: ``sweep_points``; its refinement: ``refine``;
+  its worker processes: ``pool``), ``continuation``, ``cost`` (estimates before a run); no
   drawing, no files;
 - ``io/`` -- HDF5 writers and readers (``hdf5``, the only h5py), sweep journal, text summaries,
-  output paths checked and locked (``paths``), the record of each run (``provenance``), progress;
+  output paths checked and locked (``paths``), default result names (``naming``), the record of
+  each run (``provenance``), progress and the compile notice (``terminal``), the steps the
+  time-history commands share (``finish``);
 - ``plots/`` -- every PNG (the only matplotlib);
 - ``stress/`` -- numerical stability across parameter ranges (``cablesim stress``);
 - ``api`` and ``cli`` -- the Python API and the ``cablesim`` command.
@@ -40,10 +44,15 @@ The package, from the bottom layer up (a module imports only from layers below i
 
 from .version import __version__
 
-_API = ("load_case", "static", "history", "free_vibration", "sweep", "continuation", "plot",
+_API = ("load_case", "static", "history", "free_vibration", "sweep", "continuation", "plot", "compile_kernels",
         "StaticRun", "HistoryRun", "SweepRun", "ContinuationRun")
 
 __all__ = ["__version__", *_API]
+
+
+def __dir__() -> list[str]:
+    # The API's names too, though they load only on first use.
+    return sorted({*globals(), *__all__})
 
 
 def __getattr__(name: str):

@@ -15,10 +15,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import brentq
 
 from .cable import Cable
 from .errors import ConvergenceError, SlackSegmentError
+from .roots import brentq
 
 #: Closure tolerance of the Newton solve, relative to the larger of chord and total length.
 CLOSURE_RTOL = 1e-12

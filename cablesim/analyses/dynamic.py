@@ -78,8 +78,8 @@ def plan_history(
     omega = omega if omega is not None else case.history.omega
     if omega is None or omega <= 0:
         raise CablesimError(
-            "No forcing frequency: give --omega W (rad/s) or history.omega in the case file.",
-            field="history.omega",
+            "No forcing frequency: give omega (rad/s; on the command line --omega W) or history.omega in the "
+            "case file.", field="history.omega",
         )
     if not np.any(case.FL):
         raise CablesimError(
@@ -189,9 +189,9 @@ def plan_free_vibration(
 
 
 #: A free vibration runs by default until its motion has decayed to this fraction ...
-DECAY_TO = 1e-3
+DECAY_TO = 1e-4
 #: ... and for at least this many periods of its mode (a spectrum needs a few), at most this many.
-DECAY_PERIODS = (8, 2000)
+DECAY_PERIODS = (4, 2000)
 
 
 def decay_duration(omega: np.ndarray, a0: float, a1: float, mode: int | None) -> float:

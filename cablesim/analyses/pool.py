@@ -23,6 +23,8 @@ import threading
 import time
 from concurrent.futures import FIRST_COMPLETED, wait
 
+from ..errors import CablesimError
+
 #: Seconds a forked worker costs to start (measured: under 0.05 s), and a loky one (it imports
 #: the package and loads the kernels: 3-8 s on a shared 2-core machine).
 START_COST = {"fork": 0.05, "loky": 5.0}
@@ -47,6 +49,14 @@ def cores() -> int:
         return len(os.sched_getaffinity(0))
     except (AttributeError, OSError):
         return os.cpu_count() or 1
+
+
+def check_jobs(jobs: int) -> None:
+    """Refuse a ``--jobs`` that is not a number of processes (1 to four per core) or -1."""
+    most = max(64, 4 * (os.cpu_count() or 1))
+    if jobs == 0 or jobs < -1 or jobs > most:
+        raise CablesimError(f"--jobs must be a number of processes from 1 to {most} (four per core), or -1 for "
+                            f"all cores; got {jobs}.")
 
 
 def choose_workers(requested: int, work_seconds: float, points: int, method: str | None = None) -> int:

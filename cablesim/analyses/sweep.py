@@ -293,8 +293,8 @@ def estimate_sweep(case: Case, analysis: str | None = None, integrator: str | No
         eom = build_equations(case, static, omega=float(w))
         points.append((eom, make_integrator(case.integrator, eom, max(float(w), w1), integrator), float(w)))
     sw = case.sweep
-    added = refine_budget(res)
-    return sweep_cost(points, res.omega.size + added, len(res.curves), sw.duration, sw.window, len(res.channels), added)
+    return sweep_cost(points, res.omega.size, len(res.curves), sw.duration, sw.window, len(res.channels),
+                      refine_budget(res))
 
 
 def refine_budget(res: SweepResult) -> int:

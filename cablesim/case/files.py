@@ -105,9 +105,10 @@ def apply_overrides(data: dict, overrides, source: str) -> dict:
     return data
 
 
-def sweep_flag_overrides(omega: Optional[str], duration: Optional[float], channels: Optional[str]) -> list[str]:
-    """``--omega``, ``--duration`` and ``--channels`` of ``sweep`` as ``--set`` overrides (so that
-    they are recorded with the case and checked like it)."""
+def sweep_flag_overrides(omega: Optional[str], duration: Optional[float], channels: Optional[str],
+                         window: Optional[float] = None) -> list[str]:
+    """``--omega``, ``--duration``, ``--channels`` and ``--window`` of ``sweep`` as ``--set``
+    overrides (so that they are recorded with the case and checked like it)."""
     sets = []
     if omega is not None:
         parts = omega.split(":") if ":" in omega else None
@@ -129,12 +130,31 @@ def sweep_flag_overrides(omega: Optional[str], duration: Optional[float], channe
     if duration is not None:
         check_flag(DURATION, duration, "--duration", "sweep.duration")
         sets.append(f"sweep.duration={duration!r}")
+    if window is not None:
+        check_flag(DURATION, window, "--window", "sweep.window")
+        sets.append(f"sweep.window={window!r}")
     if channels is not None:
         names = [c.strip() for c in channels.split(",") if c.strip()]
         if not names:
             raise CablesimError("--channels is empty; give DOF names such as z2,z4.", field="sweep.channels")
         sets.append(f"sweep.channels=[{', '.join(names)}]")
     return sets
+
+
+def sweep_flag_error(exc: CablesimError, duration: Optional[float], window: Optional[float]) -> CablesimError:
+    """A case-file error that ``--duration`` or ``--window`` caused, worded for the flags (the
+    case file is not at fault when a flag shortened the cap below its window)."""
+    found = re.search(r"sweep\.window \(([^ ]+) s\) is longer than sweep\.duration \(([^ ]+) s\)", str(exc))
+    if found is None or (duration is None and window is None):
+        return exc
+    w, d = found.groups()
+    cap = f"--duration {d} s" if duration is not None else f"the case's sweep.duration ({d} s)"
+    if window is not None:
+        return CablesimError(f"--window {w} s is longer than {cap}, the cap on each point's run, of which the window "
+                             f"is the final part: give a --window of at most {d} s.", field="sweep.window")
+    return CablesimError(f"--duration {d} s is shorter than the case's sweep.window ({w} s), the final part of each "
+                         f"point's run used for its amplitude when it does not become steady: give --window too (at "
+                         f"most {d} s, e.g. --window {float(d) / 4:g}), or a longer --duration.", field="sweep.window")
 
 
 def parse_case(text: str, source: str = "<case>", default_name: str = "case", overrides=None,
@@ -318,9 +338,24 @@ def read_text_file(path: Path, what: str, limit: int) -> str:
         raise CablesimError(f"{what} {path} cannot be read ({exc.strerror or exc.__class__.__name__}).") from None
 
 
-def example_text() -> str:
-    """The embedded default case (the paper's example), as commented YAML."""
-    return resources.files("cablesim").joinpath("data", EXAMPLE_RESOURCE).read_text()
+def example_cases() -> dict[str, str]:
+    """The case files shipped with cablesim: name -> what it is (the first line of its comments)."""
+    out = {}
+    for item in sorted(resources.files("cablesim").joinpath("data").iterdir(), key=lambda f: f.name):
+        if item.name.endswith(".yaml"):
+            first = item.read_text().splitlines()[0].lstrip("# ").removeprefix("cablesim case file: ")
+            out[item.name.removesuffix(".yaml")] = first
+    return out
+
+
+def example_text(name: str = EXAMPLE_RESOURCE.removesuffix(".yaml")) -> str:
+    """A case shipped with cablesim, as commented YAML: by default the paper's example (the
+    embedded default case, with every section); :func:`example_cases` lists the others."""
+    cases = example_cases()
+    if name not in cases:
+        raise CablesimError(f"There is no shipped case named {name!r}; the shipped cases are {', '.join(cases)} "
+                            "(`cablesim example --list` says what each is).", field="example")
+    return resources.files("cablesim").joinpath("data", f"{name}.yaml").read_text()
 
 
 def read_figure(path):

@@ -328,7 +328,7 @@ class FreeVibrationSpec(StrictModel):
     v0: tuple[real(-1e3, 1e3, "m/s"), ...] | None = Field(default=None, description="initial velocities, m/s")
     damping_ratio: DAMPING_RATIO | None = Field(default=None, description="overrides damping.ratio")
     duration: DURATION | None = Field(default=None, description="simulated time, s (default: until the motion "
-                                      "has decayed to 0.1 %, from the damping)")
+                                      "has decayed to 0.01 %, from the damping)")
     output_step: OUTPUT_STEP | None = Field(default=None, description="interval between saved instants, s")
     channels: tuple[str, ...] | None = Field(default=None, description="DOF to plot, e.g. [z2, z4]")
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..analyses.records import spectrum_part
 from ..dynamics.spectra import spectrum_peaks
 from ..version import __version__
 
@@ -115,6 +116,20 @@ def static_summary(case, result, full: bool = False) -> str:
     return "\n".join(out)
 
 
+def response_peaks(hist, z) -> list[float]:
+    """The two strongest frequencies of one channel, rad/s, over the part of the record a
+    spectrum reads (:func:`cablesim.analyses.records.spectrum_part`; none if it is too short)."""
+    t = np.asarray(hist.t, dtype=float)
+    forcing = hist.omega if hist.omega is not None and hist.omega > 0 else None
+    part = spectrum_part(t, z, forcing, hist.completed)
+    if part.short is not None:
+        return []
+    peaks = spectrum_peaks(t[part.start:part.stop], z[part.start:part.stop], 1.0, max_peaks=2)
+    if forcing is None and len(peaks) and spectrum_part(t, z, None, frequency=float(peaks[0])).short is not None:
+        return []
+    return list(peaks)
+
+
 def history_summary(case, hist, integ, wall: float, full: bool = False) -> str:
     """Summary of a time history: status, peak displacements, response frequencies, drift.
 
@@ -132,7 +147,7 @@ def history_summary(case, hist, integ, wall: float, full: bool = False) -> str:
 
     def row(i):
         z = hist.z[:, i]
-        peaks = spectrum_peaks(hist.t, z, 0.5, max_peaks=2) if hist.t.size > 16 else []
+        peaks = response_peaks(hist, z)
         return [
             f"z{hist.dof_numbers[i]}",
             _g(np.abs(z).max(), 5),
@@ -199,9 +214,12 @@ def grid_note(omega, refine, grid_points=None, finest=None) -> str:
             "a narrower feature can fall between points")
 
 
-def sweep_summary(case, res, wall: float) -> str:
+def sweep_summary(case, res, wall: float, full: bool = False) -> str:
     """Summary of a sweep: points, steady fraction, resonance peaks per curve and channel, and
-    every point that stopped early with why (such points hold partial values: never a peak)."""
+    every point that stopped early with why (such points hold partial values: never a peak).
+
+    More than 2 SUMMARY_NODES channels are shown as the first and last few unless ``full``;
+    so are more than 2 SUMMARY_NODES failed points."""
     lines = [
         f"cablesim {__version__}: sweep of '{case.name}', {res.omega.size} frequencies from "
         f"{res.omega.min():.4g} to {res.omega.max():.4g} rad/s, {len(res.curves)} curve(s), "
@@ -219,7 +237,12 @@ def sweep_summary(case, res, wall: float) -> str:
         if not done.any():
             continue
         good = done & ~d.failed
-        for j, name in enumerate(res.channels):
+        many = len(res.channels) > 2 * SUMMARY_NODES
+        for j in _shown(len(res.channels), full or not many):
+            if j is None:
+                rows.append(["...", f"({len(res.channels) - 2 * SUMMARY_ENDS} more channels)", "", ""])
+                continue
+            name = res.channels[j]
             a = np.where(good & np.isfinite(d.amplitude[:, j]), d.amplitude[:, j], -np.inf)
             if np.isfinite(a).any():
                 i = int(np.argmax(a))
@@ -249,7 +272,11 @@ def sweep_summary(case, res, wall: float) -> str:
     failures = res.failures()
     if failures:
         lines += ["", f"{len(failures)} point(s) failed (values partial, not used as peaks):"]
-        lines += [f"  {f}" for f in failures]
+        shown = _shown(len(failures), full or len(failures) <= 2 * SUMMARY_NODES)
+        lines += [f"  {failures[k]}" if k is not None else f"  ... ({len(failures) - 2 * SUMMARY_ENDS} more)"
+                  for k in shown]
+    if not full and (len(res.channels) > 2 * SUMMARY_NODES or len(failures) > 2 * SUMMARY_NODES):
+        lines.append("(the first and last rows; --verbose prints every one, /sweep in the file holds them all)")
     return "\n".join(lines)
 
 

@@ -146,10 +146,11 @@ def _legend(sweep: StoredSweep, gammas, colors, markers, modal_k, marked: bool) 
 
     handles = []
     if gammas:
-        shown = list(range(len(gammas))) if len(gammas) <= 12 else [0, len(gammas) - 1]
+        many = len(gammas) > 12
+        shown = [0, len(gammas) - 1] if many else list(range(len(gammas)))
         for r in shown:
             handles.append(Line2D([], [], color=colors[r], lw=2.5, label=f"$\\gamma$ = {gammas[r]:g}"))
-            if len(shown) == 2 and r == 0:
+            if many and r == 0:  # the colours run between the first and the last
                 handles.append(Line2D([], [], ls="none", label=f"... ({len(gammas) - 2} more)"))
     style_color = "0.3" if gammas else colors[0]
     for d in dict.fromkeys(cv.direction for cv in sweep.curves):

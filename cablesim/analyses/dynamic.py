@@ -17,7 +17,8 @@ from ..errors import CablesimError
 from ..modal import modal_damping_ratios
 from ..statics import segment_geometry
 from .cost import Cost, history_cost
-from .setup import build_equations, make_integrator, mode_velocity, need_inextensible, output_interval
+from .setup import (build_equations, disturbed_start, make_integrator, mode_velocity, need_inextensible,
+                    output_interval)
 from .static import StaticResult, run_static
 
 
@@ -82,10 +83,10 @@ def plan_history(
             "No forcing frequency: give omega (rad/s; on the command line --omega W) or history.omega in the "
             "case file.", field="history.omega",
         )
-    if not np.any(case.FL):
+    if not case.forced:
         raise CablesimError(
-            "loads.FL is zero, so there is no forcing; give peak harmonic loads FL in the case "
-            "file (or use free-vibration).",
+            "loads.FL is zero and no support moves, so there is no forcing; give peak harmonic loads FL "
+            "or a support amplitude (supports:) in the case file (or use free-vibration).",
             field="loads.FL",
         )
     duration = duration if duration is not None else case.history.duration
@@ -96,9 +97,9 @@ def plan_history(
     step = output_interval(output_step or case.history.output_step, w_int, duration)
     integ = make_integrator(case.integrator, eom, w_int, integrator)
     split = split_outputs(case, split)
-    s0 = eom.initial_state()
-    check_initial_state(s0, "loads.F0")
-    return HistoryPlan("history", static, eom, integ, w_int, duration, step, None, split)
+    check_initial_state(eom.initial_state(), "loads.F0")
+    s0 = disturbed_start(eom, static, case.history.disturbance, "history.disturbance")
+    return HistoryPlan("history", static, eom, integ, w_int, duration, step, s0, split)
 
 
 def run_history(

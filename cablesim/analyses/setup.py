@@ -16,7 +16,7 @@ from ..dynamics.integrators.settings import (DEFAULT_ATOL_PER_CHORD, DEFAULT_RTO
                                               STEPS_PER_PERIOD, STIFF_RATIO, STIFF_STEPS_PER_PERIOD, default_atol,
                                               dividing_step, ignored_keys, is_stiff, make, rk4_stable_step)
 from ..errors import CablesimError
-from ..modal import fastest_rate, modal_analysis_banded, rayleigh_coefficients
+from ..modal import fastest_rate, modal_analysis_banded, out_of_plane_shape, rayleigh_coefficients
 from .static import StaticResult, damping_modes
 
 #: Saved instants per period of the highest frequency of interest, by default.
@@ -185,3 +185,44 @@ def integrator_record(integ: Integrator) -> dict:
     if not integ.fixed_step:
         out.update({f"integrator_{k}": float(v) for k, v in integ.settings().items()})
     return out
+
+
+#: Default size of the out-of-plane disturbance of a spatial sweep's points, per m of chord.
+DISTURBANCE_PER_CHORD = 1e-6
+
+
+def sweep_disturbance(case: Case, analysis: str) -> float:
+    """The out-of-plane disturbance of each sweep point, m: ``sweep.disturbance``, else
+    :data:`DISTURBANCE_PER_CHORD` of the chord for a spatial cable in the exact ``analysis`` (the
+    one that can start displaced) and none otherwise."""
+    if case.sweep is not None and case.sweep.disturbance is not None:
+        return float(case.sweep.disturbance)
+    spatial_exact = case.dim == 3 and analysis == "exact"
+    return DISTURBANCE_PER_CHORD * case.to_cable().chord_length if spatial_exact else 0.0
+
+
+def disturbed_start(eom: EquationsOfMotion, static: StaticResult, size: float, field: str,
+                    s0: np.ndarray | None = None) -> np.ndarray | None:
+    """The state ``s0`` (or the equilibrium at rest) with the nodes moved out of the plane by at
+    most ``size`` m (:func:`cablesim.modal.out_of_plane_shape`), ``y''(0)`` from eq. 19 again;
+    ``s0`` unchanged when ``size`` is 0.
+
+    Raises
+    ------
+    CablesimError
+        For the approximate analysis, whose configuration cannot start displaced (``field``
+        names the setting).
+    """
+    if size <= 0.0:
+        return s0
+    if static.analysis != "exact":
+        raise CablesimError(
+            f"{field} = {size:g} m displaces the cable at the start, which only the exact analysis can do; "
+            f"set analysis: exact (or --analysis exact), or {field}: 0.", field=field)
+    cable = static.cable
+    d = size * out_of_plane_shape(static.y0, np.asarray(cable.support_A), np.asarray(cable.support_B))
+    nd = eom.n_dof
+    if s0 is None:
+        return eom.initial_state(d)
+    s0 = np.asarray(s0, dtype=float)
+    return eom.initial_state(s0[:nd] + d, s0[nd:2 * nd])

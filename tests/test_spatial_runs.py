@@ -1,0 +1,105 @@
+"""Spatial cases run end to end: histories and sweeps with out-of-plane channels, forcing by a
+moving support alone, and the out-of-plane disturbance that lets a planar response leave its
+plane."""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+import pytest
+import yaml
+
+from cablesim.analyses.dynamic import run_history
+from cablesim.analyses.sweep import run_sweep
+from cablesim.case import case_from_dict, parse_case
+from cablesim.errors import CablesimError
+from cablesim.modal import out_of_plane_shape, plane_basis
+
+PAPER = {
+    "cable": {"L": 300.0, "H": 20.0, "S": [130.0, 100.0, 110.0], "EA": 1.0e9, "masses": [8000.0, 14000.0]},
+    "loads": {"F0": [300.0e3, 1100.0e3, 450.0e3, 2000.0e3], "FL": [-6.0e3, 22.0e3, -18.0e3, 120.0e3]},
+    "damping": {"ratio": 0.01, "modes": [1, 2]},
+    "spatial": True,
+}
+
+
+def spatial(**sections):
+    data = copy.deepcopy(PAPER)
+    data.update(sections)
+    return data
+
+
+def test_a_spatial_history_takes_out_of_plane_channels_on_the_command_line(invoke_cli, tmp_path):
+    """`cablesim history` refused node2.w of a spatial case (its channels were checked as planar)."""
+    case = tmp_path / "space.yaml"
+    case.write_text(yaml.safe_dump(spatial(history={"omega": 2.4, "duration": 4.0, "disturbance": 0.01})))
+    r = invoke_cli("history", case, "--channels", "node2.w,node2.v", "-o", tmp_path / "h.h5", "--no-plot")
+    assert r.returncode == 0, r.stderr
+    assert "z6" in r.stdout and "z5" in r.stdout  # node2.w is z6, node2.v is z5 in a spatial cable
+
+
+def test_a_history_forced_only_by_a_moving_support_runs():
+    """A case whose only forcing is a support's motion was refused as having no forcing."""
+    data = spatial(loads={"F0": PAPER["loads"]["F0"]}, analysis="exact",
+                   supports={"B": {"amplitude": [0.0, 0.05, 0.0]}})
+    case = case_from_dict(data)
+    assert case.forced and not np.any(case.FL)
+    _, hist, _ = run_history(case, omega=2.4, duration=20.0)
+    assert hist.completed and np.abs(hist.z).max() > 1e-3  # the support drives the cable
+
+
+def test_the_disturbance_is_out_of_the_plane_of_a_turned_span_with_its_stated_size():
+    from cablesim.analyses.static import run_static
+
+    theta = 0.7
+    data = spatial()
+    data["cable"] = dict(data["cable"], W=300.0 * np.tan(theta))  # B moved out of the x-v plane
+    data["loads"] = {"gravity": 9.81}
+    data["cable"]["masses"] = [8000.0, 14000.0]
+    case = case_from_dict(data)
+    st = run_static(case)
+    cable = st.cable
+    d = out_of_plane_shape(st.y0, np.asarray(cable.support_A), np.asarray(cable.support_B))
+    assert np.abs(d).max() == pytest.approx(1.0, abs=1e-15)
+    nodes = np.vstack([cable.support_A, st.y0.reshape(-1, 3), cable.support_B])
+    normal = np.cross(nodes[-1] - nodes[0], nodes[1] - nodes[0])
+    normal /= np.linalg.norm(normal)
+    R = plane_basis(normal, nodes[-1] - nodes[0])
+    inplane = d.reshape(-1, 3) @ R[:, :2]
+    assert np.abs(inplane).max() < 1e-12  # wholly along the plane's normal
+
+
+def test_a_history_starts_disturbed_by_the_setting_and_a_stable_planar_response_recovers():
+    case = case_from_dict(spatial(history={"omega": 2.4, "duration": 60.0, "disturbance": 0.05}))
+    _, hist, _ = run_history(case)
+    w = hist.z.reshape(hist.z.shape[0], -1, 3)[:, :, 2]
+    assert np.abs(w[0]).max() == pytest.approx(0.05, rel=1e-12)
+    assert np.abs(w[-20:]).max() < 0.5 * 0.05  # the out-of-plane motion decays: this orbit is stable there
+    _, still, _ = run_history(case_from_dict(spatial(history={"omega": 2.4, "duration": 5.0})))
+    assert np.all(still.z.reshape(still.z.shape[0], -1, 3)[:, :, 2] == 0.0)  # no disturbance: exactly planar
+
+
+def test_the_disturbance_is_refused_where_it_cannot_apply():
+    planar = copy.deepcopy(PAPER)
+    planar.pop("spatial")
+    with pytest.raises(CablesimError, match="history.disturbance"):
+        parse_case(yaml.safe_dump(dict(planar, history={"omega": 2.4, "disturbance": 0.01})))
+    case = case_from_dict(spatial(history={"omega": 2.4, "duration": 1.0, "disturbance": 0.01}))
+    with pytest.raises(CablesimError, match="only the exact analysis") as err:
+        run_history(case, analysis="approximate")
+    assert err.value.field == "history.disturbance"
+
+
+def test_a_spatial_sweep_records_out_of_plane_channels_and_its_disturbance():
+    """A spatial sweep sized its per-segment columns as if the cable were planar."""
+    sweep = {"omega": [1.5, 2.4], "duration": 30.0, "window": 10.0, "channels": ["node2.w", "node2.v"],
+             "accelerate": False, "floquet": False}
+    case = case_from_dict(spatial(sweep=sweep))
+    res = run_sweep(case, case.text, n_jobs=1)
+    assert res.complete and res.n_segments == 3 and res.dim == 3
+    chord = float(np.hypot(300.0, 20.0))
+    assert res.settings["disturbance"] == pytest.approx(1e-6 * chord)
+    table = res.table(0)
+    assert table.peak_tension.shape == (2, 3)
+    assert np.all(table.amplitude[:, 0] < 1e-3 * table.amplitude[:, 1])  # w stays small: stable planar points

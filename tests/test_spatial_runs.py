@@ -103,3 +103,24 @@ def test_a_spatial_sweep_records_out_of_plane_channels_and_its_disturbance():
     table = res.table(0)
     assert table.peak_tension.shape == (2, 3)
     assert np.all(table.amplitude[:, 0] < 1e-3 * table.amplitude[:, 1])  # w stays small: stable planar points
+
+
+def test_spatial_figures_draw_the_motion_across_the_span_and_the_plan_view(tmp_path):
+    from cablesim.plots.cable import plot_cable
+    from cablesim.plots.history import plot_history
+    from cablesim.plots.spatial import across_nodes
+
+    data = spatial(history={"omega": 2.4, "duration": 6.0})
+    data["loads"] = {"F0": [300.0e3, 1100.0e3, 0.0, 450.0e3, 2000.0e3, 50.0e3],
+                     "FL": [-6.0e3, 22.0e3, 5.0e3, -18.0e3, 120.0e3, 0.0]}
+    st, hist, _ = run_history(case_from_dict(data))
+    nodes = across_nodes(hist)
+    assert [n for n, _, _ in nodes] == [1, 2]
+    for node, jv, jw in nodes:  # the columns are the node's v and w
+        assert hist.dof_numbers[jv] == 3 * node - 1 and hist.dof_numbers[jw] == 3 * node
+    paths = plot_history(hist, tmp_path / "h", "spatial")
+    assert paths[-1].name == "h-across.png" and paths[-1].stat().st_size > 0
+    assert plot_cable(st, tmp_path / "s.png", "spatial").stat().st_size > 0
+    _, flat, _ = run_history(case_from_dict(dict(copy.deepcopy(PAPER), spatial=False, history={"omega": 2.4,
+                                                                                               "duration": 2.0})))
+    assert across_nodes(flat) == []  # a planar history has no motion across the span

@@ -47,6 +47,7 @@ def test_a_history_forced_only_by_a_moving_support_runs():
     assert case.forced and not np.any(case.FL)
     _, hist, _ = run_history(case, omega=2.4, duration=20.0)
     assert hist.completed and np.abs(hist.z).max() > 1e-3  # the support drives the cable
+    assert hist.omega == 2.4  # a forced response (it was reported as a free vibration)
 
 
 def test_the_disturbance_is_out_of_the_plane_of_a_turned_span_with_its_stated_size():
@@ -124,3 +125,48 @@ def test_spatial_figures_draw_the_motion_across_the_span_and_the_plan_view(tmp_p
     _, flat, _ = run_history(case_from_dict(dict(copy.deepcopy(PAPER), spatial=False, history={"omega": 2.4,
                                                                                                "duration": 2.0})))
     assert across_nodes(flat) == []  # a planar history has no motion across the span
+
+
+def taut_string(nodes=6, **extra):
+    """A weightless stay 100 m long between its supports, 15 cm shorter than that: taut, with no
+    inextensible natural state."""
+    data = {"spatial": True, "analysis": "exact",
+            "cable": {"L": 80.0, "H": -60.0, "length": 99.85, "nodes": nodes, "EA": 2.0e9, "mass_per_length": 80.0},
+            "loads": {"gravity": 0.0}, "damping": {"a0": 0.0, "a1": 0.0}}
+    data.update(extra)
+    return data
+
+
+def test_a_taut_cable_vibrates_out_of_its_line_at_the_beaded_string_frequency():
+    """Dynamics refused every cable not longer than its chord; the exact analysis needs no
+    natural state. Reference: the beaded string, omega_1 = 2 sqrt(T / (m a)) sin(pi / (2 (n + 1)))."""
+    from cablesim.analyses.dynamic import run_free_vibration
+
+    n = 6
+    T = 2.0e9 * (100.0 - 99.85) / 99.85
+    m, a = 80.0 * 99.85 / (n + 1), 100.0 / (n + 1)
+    w1 = 2.0 * np.sqrt(T / (m * a)) * np.sin(np.pi / (2 * (n + 1)))
+    z0 = np.zeros(3 * n)
+    z0[2::3] = 1e-3 * np.sin(np.pi * np.arange(1, n + 1) / (n + 1))  # first out-of-plane shape, 1 mm
+    period = 2 * np.pi / w1
+    case = case_from_dict(taut_string(n, free_vibration={"z0": z0.tolist(), "duration": 6 * period,
+                                                         "output_step": period / 400}))
+    _, hist, _ = run_free_vibration(case)
+    assert hist.completed and hist.zc is None  # no configurational/elastic split without a natural state
+    w = hist.z[:, 3 * 3 - 1]  # node 3's w
+    up = np.flatnonzero((w[:-1] < 0) & (w[1:] >= 0))
+    t_up = hist.t[up] - w[up] * (hist.t[up + 1] - hist.t[up]) / (w[up + 1] - w[up])
+    measured = (t_up[-1] - t_up[0]) / (t_up.size - 1)
+    assert measured == pytest.approx(period, rel=1e-5)
+
+
+def test_a_taut_cable_refuses_the_split_and_the_approximate_analysis():
+    case = case_from_dict(taut_string(3, history={"omega": 12.0, "duration": 1.0},
+                                      supports={"A": {"amplitude": [0.004, -0.003, 0.0]}},
+                                      outputs={"split": True}))
+    with pytest.raises(CablesimError, match="outputs.split"):
+        run_history(case)
+    with pytest.raises(CablesimError, match="approximate analysis is built on it"):
+        run_history(case_from_dict(taut_string(3, history={"omega": 12.0, "duration": 1.0},
+                                               loads={"gravity": 0.0, "point": [{"node": 1, "FL": [0, 1.0, 0]}]})),
+                    analysis="approximate")

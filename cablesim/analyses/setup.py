@@ -64,7 +64,9 @@ def build_equations(
     banded = static.K0_band is not None  # exact analysis: K0 is block-tridiagonal, so is C
     inext = static.inextensible
     uA, uB, phA, phB = case.support_motion()  # scaled with FL by load_scale, like the loads
-    x0 = inext.x
+    # A taut cable (exact analysis only) has no natural state x(F0): x0 = y0, no elastic split.
+    x0 = inext.x if inext is not None else static.y0.copy()
+    F1 = inext.segments.F[0].copy() if inext is not None else _segment_one_force(static)
     return EquationsOfMotion(
         cable=cable,
         analysis=static.analysis,
@@ -76,7 +78,7 @@ def build_equations(
         x0=x0.copy(),
         u0=static.y0 - x0,
         T0=static.T0.copy(),
-        F1=inext.segments.F[0].copy(),
+        F1=F1,
         a0=float(a0),
         a1=float(a1),
         modal_omega=static.modes.omega_with_highest().copy(),  # with the highest: explicit steps need it
@@ -91,14 +93,30 @@ def build_equations(
 
 
 def need_inextensible(static: StaticResult) -> None:
-    """Refuse a pretensioned cable (no inextensible state) for dynamics, with the reason."""
-    if static.inextensible is None:
+    """Refuse a pretensioned cable (no inextensible state) for the dynamics of the approximate
+    analysis, which is built on that state, with the reason; the exact analysis needs none."""
+    if static.inextensible is None and static.analysis != "exact":
         raise CablesimError(
             "This cable is not longer than its chord (pretensioned, or within 1e-12 of it), so it "
             "has no inextensible natural state and the configurational/elastic split of the paper "
-            "does not exist; time histories need sum(cable.S) (or cable.length) greater than the chord.",
+            "does not exist; the approximate analysis is built on it. Use the exact analysis "
+            "(analysis: exact, or --analysis exact), or make sum(cable.S) greater than the chord.",
             field="cable.S",
         )
+
+
+def taut(static: StaticResult) -> bool:
+    """Whether the cable has no inextensible natural state (not longer than its chord), so its
+    displacements have no configurational/elastic split."""
+    return static.inextensible is None
+
+
+def _segment_one_force(static: StaticResult) -> np.ndarray:
+    """The force of segment 1 at the equilibrium, ``T_1`` along it (N): the warm start of
+    inner solves where no inextensible state gives one."""
+    cable = static.cable
+    d = np.asarray(static.y0[:cable.dim], dtype=float) - np.asarray(cable.support_A, dtype=float)
+    return float(static.T0[0]) * d / np.linalg.norm(d)
 
 
 def frequency_of_interest(eom: EquationsOfMotion, omega: float = 0.0) -> float:

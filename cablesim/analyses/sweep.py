@@ -37,7 +37,7 @@ from ..orbits.accelerate import accelerated_steady_response
 from . import pool
 from .cost import Cost, sweep_cost
 from .refine import BUDGET, BUDGET_FLOOR, finest_step, refinements
-from .setup import build_equations, disturbed_start, integrator_record, make_integrator, sweep_disturbance
+from .setup import build_equations, disturbed_start, need_inextensible, integrator_record, make_integrator, sweep_disturbance
 from .static import StaticResult, run_static
 from .sweep_points import BadRecord, CurveTable, SweepPoint
 
@@ -243,8 +243,7 @@ def _solve_remote(ctx: SweepContext, job: PointJob) -> SweepPoint:
 # Setting up: the statics once
 # ----------------------------------------------------------------------------------------------
 def _check_sweepable(case: Case, static) -> None:
-    if static.inextensible is None:
-        raise CablesimError("Sweeps need sum(cable.S) greater than the chord (see `history`).", field="cable.S")
+    need_inextensible(static)
     if not case.forced:
         raise CablesimError("loads.FL is zero and no support moves, so a sweep has nothing to force the cable with; "
                             "give peak harmonic loads FL or a support amplitude (supports:).", field="loads.FL")

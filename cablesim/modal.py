@@ -388,6 +388,21 @@ def equilibrium_plane(points: np.ndarray, chord: np.ndarray) -> np.ndarray | Non
     return -normal if normal[2] < 0 or (normal[2] == 0 and normal[0] < 0) else normal
 
 
+def out_of_plane_shape(y0: np.ndarray, support_A: np.ndarray, support_B: np.ndarray) -> np.ndarray:
+    """A displacement of the nodes out of the plane of the equilibrium ``y0`` (3n), largest
+    component 1: along the plane's normal (:func:`equilibrium_plane`; ``w`` if the equilibrium is
+    not planar), with the profile ``sin(pi xi) + sin(2 pi xi) / 2`` over the node number
+    ``xi = i / (n + 1)``, so that symmetric and antisymmetric out-of-plane motions are both seeded."""
+    nodes = np.reshape(np.asarray(y0, dtype=float), (-1, 3))
+    chord = np.asarray(support_B, dtype=float) - np.asarray(support_A, dtype=float)
+    normal = equilibrium_plane(np.vstack([support_A, nodes, support_B]), chord)
+    normal = np.array([0.0, 0.0, 1.0]) if normal is None else normal
+    xi = np.arange(1, nodes.shape[0] + 1) / (nodes.shape[0] + 1)
+    profile = np.sin(np.pi * xi) + 0.5 * np.sin(2 * np.pi * xi)
+    shape = np.outer(profile, normal).ravel()
+    return shape / np.abs(shape).max()
+
+
 def plane_basis(normal: np.ndarray, chord: np.ndarray) -> np.ndarray:
     """Columns ``(e1, e2, normal)``: ``e1`` along the chord's part in the plane, ``e2`` the
     third axis of a right-handed frame (3 x 3, orthonormal)."""

@@ -111,9 +111,9 @@ class ContinuationResult:
 
 
 def _channels(case: Case) -> tuple[list[str], np.ndarray]:
-    n_dof = 2 * case.cable.n_nodes
+    n_dof = case.dim * case.cable.n_nodes
     names = case.continuation.channels or case.history.channels or [f"z{i + 1}" for i in range(n_dof)]
-    idx = np.array([channel_index(c, n_dof) for c in names], dtype=int)
+    idx = np.array([channel_index(c, n_dof, case.dim) for c in names], dtype=int)
     return [f"z{i + 1}" for i in idx], idx
 
 
@@ -213,8 +213,9 @@ def run_continuation(
             "`continuation: {omega: {start: 0.5, stop: 6.0}, channels: [z2, z4]}`.",
             field="continuation",
         )
-    if not np.any(case.FL):
-        raise CablesimError("loads.FL is zero, so there is no forced response to continue.", field="loads.FL")
+    if not case.forced:
+        raise CablesimError("loads.FL is zero and no support moves, so there is no forced response to continue; "
+                            "give peak harmonic loads FL or a support amplitude (supports:).", field="loads.FL")
     static = run_static(case, analysis, all_models=False)
     rng, fixed = spec.range, spec.fixed
     omega0 = rng.start if spec.parameter == "omega" else fixed

@@ -600,7 +600,7 @@ def string_stiffness(c: LumpedCable, y, sA=None, sB=None) -> np.ndarray:
     return assemble((T / l)[:, None, None])
 
 
-def out_of_plane_monodromy(planar: Motion, x0) -> np.ndarray:
+def out_of_plane_monodromy(planar: Motion, x0, rtol=RTOL) -> np.ndarray:
     """Monodromy (2n x 2n) of ``M dw'' + (a0 M + a1 K0_ww) dw' + K_w(t) dw = 0`` along the planar
     orbit from ``x0`` (a planar state of ``planar``, the planar form), ``K_w(t)`` from
     :func:`string_stiffness`, integrated together with the planar state."""
@@ -622,7 +622,7 @@ def out_of_plane_monodromy(planar: Motion, x0) -> np.ndarray:
     scale = planar.atol()
     wscale = np.concatenate((scale[:n], scale[N : N + n]))
     atol = np.concatenate((scale, _variational_atol(wscale)))
-    sol = solve_ivp(rhs, (0.0, planar.period), z0, method="DOP853", rtol=RTOL, atol=atol)
+    sol = solve_ivp(rhs, (0.0, planar.period), z0, method="DOP853", rtol=rtol, atol=atol)
     return sol.y[2 * N :, -1].reshape(2 * n, 2 * n)
 
 

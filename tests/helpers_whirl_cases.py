@@ -114,7 +114,8 @@ class PlanarBranch:
     """Planar periodic responses of the planar form of ``cable`` at (omega, gamma), each solved
     from the nearest one solved before (state and Jacobian), starting from the static state."""
 
-    def __init__(self, cable: LumpedCable):
+    def __init__(self, cable: LumpedCable, tol: float = 1e-12, rtol: float = 1e-12):
+        self.tol, self.rtol = tol, rtol  # of the shooting (see periodic_orbit) and the Hill integration
         self.cable = cable.planar()
         self.y0 = static_equilibrium(self.cable)
         self.solved: list[tuple[float, float, Orbit]] = []
@@ -128,14 +129,14 @@ class PlanarBranch:
         if self.solved:
             near = min(self.solved, key=lambda s: abs(s[0] - omega) / omega + abs(s[1] - gamma) / gamma)
             guess, jac = near[2].x0, near[2].jacobian
-        orbit = periodic_orbit(motion, guess, jac, monodromy=False)
+        orbit = periodic_orbit(motion, guess, jac, monodromy=False, tol=self.tol)
         self.solved.append((omega, gamma, orbit))
         return orbit
 
     def out_of_plane(self, omega: float, gamma: float) -> np.ndarray:
         """Out-of-plane multipliers (Hill) of the planar orbit at (omega, gamma), largest first."""
         orbit = self.orbit(omega, gamma)
-        return floquet_multipliers(out_of_plane_monodromy(self.motion(omega, gamma), orbit.x0))
+        return floquet_multipliers(out_of_plane_monodromy(self.motion(omega, gamma), orbit.x0, self.rtol))
 
 
 @dataclass

@@ -257,12 +257,17 @@ def gamma_pitchfork():
     return pitchfork_amplitude(whirl_case())
 
 
+@pytest.fixture(scope="module")
+def omega_pitchfork():
+    return pitchfork_omega(whirl_case())
+
+
 @pytest.mark.slow
-def test_whirling_pitchfork_in_omega_and_in_gamma_agree(gamma_pitchfork):
+def test_whirling_pitchfork_in_omega_and_in_gamma_agree(gamma_pitchfork, omega_pitchfork):
     """The frequency at the case's amplitude and the amplitude at that frequency are one point;
     the multiplier there is +1, real, with the planar branch stable."""
     case = whirl_case()
-    at_omega = pitchfork_omega(case)
+    at_omega = omega_pitchfork
     assert abs(at_omega.multipliers[0] - 1.0) < 1e-9 and at_omega.multipliers.imag.max() == 0
     back = pitchfork_amplitude(case, bracket=(0.99, 1.01), omega=at_omega.value)
     assert abs(back.value - 1.0) < 1e-9
@@ -286,6 +291,17 @@ def test_whirling_orbits_follow_the_square_root_law(gamma_pitchfork):
     assert 3.0 < (ratio[1] - ratio[0]) / (ratio[2] - ratio[1]) < 5.0
     mw = [o.max_w for o in orbits]
     assert 1.9 < mw[0] / mw[1] < 2.1 and 1.9 < mw[1] / mw[2] < 2.1
+
+
+@pytest.mark.slow
+def test_whirling_orbits_in_omega_follow_the_square_root_law(omega_pitchfork):
+    """In omega the branch also leaves where the planar response is unstable (omega > omega_c),
+    max|w|^2 / (omega - omega_c) the same at two orbits to 0.2 %."""
+    wc = omega_pitchfork.value
+    orbits = [whirling_orbit(whirl_case(), omega_pitchfork, h) for h in (0.01, 0.005)]
+    assert all(o.value > wc for o in orbits)
+    ratio = [o.max_w**2 / (o.value - wc) for o in orbits]
+    assert abs(ratio[0] / ratio[1] - 1) < 2e-3
 
 
 # ----------------------------------------------------------------------------------------------

@@ -13,13 +13,14 @@ case files, and the damped Mathieu closed form of a taut stay excited at its anc
   :func:`mathieu_multipliers` the numerical Floquet of the damped Mathieu equation.
 
 Every function taking a case takes a ``cablesim.case.Case`` (``cablesim.api.load_case``), whose
-numbers only are read (:func:`helpers_whirl.cable_from_case`).
+numbers only are read (:func:`helpers_whirl.cable_from_case`); :func:`cable_from_yaml` reads a
+case file's raw numbers with the format's lumping rules written again.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import yaml
@@ -36,9 +37,9 @@ from helpers_whirl import (
     floquet_multipliers,
     out_of_plane_monodromy,
     periodic_orbit,
-    planar_indices,
     static_equilibrium,
     to_spatial,
+    with_damping,
 )
 
 WHIRL_CASE = """\
@@ -95,6 +96,55 @@ history:
 outputs:
   split: false
 """
+
+
+def _pad(values, n: int, dim: int) -> np.ndarray:
+    v = np.array(values, dtype=float).reshape(n, -1)
+    out = np.zeros((n, dim))
+    out[:, : v.shape[1]] = v
+    return out.ravel()
+
+
+def cable_from_yaml(data: dict) -> LumpedCable:
+    """A :class:`LumpedCable` from the raw numbers of a case file (a mapping, as YAML loads it),
+    lumped by the rules of the case format written again here: ``length`` / ``nodes`` give n+1
+    equal segments; ``mass_per_length`` gives node r half of each adjacent segment,
+    ``mu (S_r + S_(r+1)) / 2``; ``gravity`` adds ``g M_r`` along +v (point masses included);
+    ``per_length`` adds ``q (S_r + S_(r+1)) / 2``; ``point`` adds loads and masses at a node (1-based);
+    a planar list (x, v per node) is padded with w = 0 in a spatial case."""
+    cab, ld = data["cable"], data["loads"]
+    n = len(cab["S"]) - 1 if "S" in cab else int(cab["nodes"])
+    S = np.array(cab["S"], dtype=float) if "S" in cab else np.full(n + 1, float(cab["length"]) / (n + 1))
+    share = 0.5 * (S[:-1] + S[1:])
+    masses = np.array(cab["masses"], dtype=float) if "masses" in cab else float(cab["mass_per_length"]) * share
+    sp = data.get("supports") or {}
+    three = [len(p.get(k, ())) == 3 for p in ld.get("point", ()) for k in ("F", "FL")]
+    three += [len(ld.get(k) or ()) == 3 * n and n > 0 for k in ("F0", "FL")] + [len(ld.get("per_length", ())) == 3]
+    three += [float(m["amplitude"][2]) != 0 for m in sp.values() if len(m["amplitude"]) == 3]
+    dim = 3 if data.get("spatial") or float(cab.get("W", 0.0)) != 0 or any(three) else 2
+    F0 = _pad(ld["F0"], n, dim) if "F0" in ld else np.zeros(dim * n)
+    FL = _pad(ld["FL"], n, dim) if "FL" in ld else np.zeros(dim * n)
+    for p in ld.get("point", ()):
+        i = int(p["node"]) - 1
+        masses[i] += float(p.get("mass", 0.0))
+        for key, target in (("F", F0), ("FL", FL)):
+            if key in p:
+                target[dim * i : dim * i + len(p[key])] += np.array(p[key], dtype=float)
+    F0[1::dim] += float(ld.get("gravity", 0.0)) * masses
+    for k, q in enumerate(ld.get("per_length", ())):
+        F0[k::dim] += float(q) * share
+    EA = float(cab["EA"]) if "EA" in cab else float(cab["E"]) * float(cab["A"])
+    motion = {}
+    for end in ("A", "B"):
+        m = sp.get(end)
+        motion["u" + end] = np.zeros(dim) if m is None else _pad(m["amplitude"][:dim], 1, dim)
+        motion["ph" + end] = 0.0 if m is None else float(m.get("phase", 0.0))
+    B = [float(cab["L"]), float(cab["H"]), float(cab.get("W", 0.0))][:dim]
+    c = LumpedCable(S=S, EA=EA, masses=masses, B=B, F0=F0, FL=FL, **motion)
+    d = data.get("damping", {"ratio": 0.01})
+    if "ratio" not in d:
+        return replace(c, a0=float(d["a0"]), a1=float(d["a1"]))
+    return with_damping(c, float(d["ratio"]), tuple(d.get("modes", (1, 2))))
 
 
 def whirl_case():

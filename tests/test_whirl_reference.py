@@ -21,7 +21,6 @@ from helpers_whirl import (
     LumpedCable,
     Motion,
     cable_from_case,
-    cable_from_yaml,
     fd_monodromy,
     floquet_multipliers,
     flow,
@@ -40,6 +39,7 @@ from helpers_whirl import (
 from helpers_whirl_cases import (
     STAY_CASE,
     WHIRL_CASE,
+    cable_from_yaml,
     continuous_string_frequency,
     lumped_string_frequency,
     mathieu_edges,

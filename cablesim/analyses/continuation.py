@@ -18,6 +18,7 @@ from ..case import Case
 from ..channels import channel_index
 from ..errors import CablesimError
 from ..dynamics.steady import SteadyCriterion, steady_response
+from ..modal import COUPLED, IN_PLANE
 from ..orbits import OrbitPoint, Settings, continue_branches
 from .setup import build_equations, frequency_of_interest, make_integrator
 from .static import run_static
@@ -52,6 +53,12 @@ class BranchResult:
         Branch it was switched from (period doubling).
     end : str
         Why the branch ended.
+    planes : ndarray of str (points, 2 n_dof) or None
+        The block of every multiplier, ``in-plane`` or ``out-of-plane``, on a branch of planar
+        orbits of a spatial cable symmetric about its plane (``coupled`` on a nonplanar branch
+        of a spatial cable, ``in-plane`` for a planar cable).
+    planar : bool
+        Whether its orbits lie in the plane of a mirror-symmetric spatial cable.
     """
 
     name: str
@@ -67,6 +74,8 @@ class BranchResult:
     state: np.ndarray
     parent: int | None
     end: str
+    planes: np.ndarray | None = None
+    planar: bool = False
 
 
 @dataclass(frozen=True)
@@ -74,7 +83,10 @@ class BifurcationResult:
     """A located bifurcation: ``kind`` (``fold``, ``period-doubling``, ``neimark-sacker``,
     ``branch-point``, or ``grazing``: the last orbit before a segment goes slack), where (``parameter``, ``omega``), on which ``branch`` (index), the orbit's
     ``period`` and ``amplitude`` per channel (m), the critical ``multiplier``, and whether the
-    location converged (``located``) and its multipliers passed the accuracy checks (``trusted``)."""
+    location converged (``located``) and its multipliers passed the accuracy checks (``trusted``);
+    ``plane``: the block of the critical multiplier (``in-plane``, ``out-of-plane``; ``coupled``
+    on a nonplanar orbit of a spatial cable), where an out-of-plane multiplier through +1 is a
+    ``pitchfork``; ``frequency_ratio``: ``arg(mu) / 2 pi`` at a Neimark-Sacker point (else NaN)."""
 
     kind: str
     parameter: float
@@ -85,6 +97,8 @@ class BifurcationResult:
     multiplier: complex
     located: bool
     trusted: bool
+    plane: str = IN_PLANE
+    frequency_ratio: float = float("nan")
 
 
 @dataclass
@@ -111,9 +125,10 @@ class ContinuationResult:
 
 
 def _channels(case: Case) -> tuple[list[str], np.ndarray]:
-    n_dof = 2 * case.cable.n_nodes
+    dim = case.dim
+    n_dof = dim * case.cable.n_nodes
     names = case.continuation.channels or case.history.channels or [f"z{i + 1}" for i in range(n_dof)]
-    idx = np.array([channel_index(c, n_dof) for c in names], dtype=int)
+    idx = np.array([channel_index(c, n_dof, dim) for c in names], dtype=int)
     return [f"z{i + 1}" for i in idx], idx
 
 
@@ -148,7 +163,14 @@ def _grazing_points(diagram, parameter: str, fixed: float, idx: np.ndarray) -> l
     return out
 
 
-def _branch(k: int, br, parameter: str, fixed: float, idx: np.ndarray) -> BranchResult:
+def _planes(br, dim: int) -> np.ndarray:
+    """The block of every multiplier of every point (:attr:`BranchResult.planes`)."""
+    other = IN_PLANE if dim == 2 else COUPLED
+    return np.array([p.planes if p.planes is not None else (other,) * len(p.multipliers) for p in br.points],
+                    dtype=str).reshape(len(br.points), -1)
+
+
+def _branch(k: int, br, parameter: str, fixed: float, idx: np.ndarray, dim: int = 2) -> BranchResult:
     pts = br.points
     values = np.array([p.parameter for p in pts], dtype=float)
     omega = np.array([p.omega for p in pts], dtype=float)
@@ -167,6 +189,8 @@ def _branch(k: int, br, parameter: str, fixed: float, idx: np.ndarray) -> Branch
         state=np.array([p.state for p in pts]),
         parent=br.parent,
         end=_end_text(br),
+        planes=_planes(br, dim),
+        planar=bool(getattr(br, "planar", False)),
     )
 
 
@@ -236,13 +260,16 @@ def run_continuation(
         callback=callback, gamma=fixed if spec.parameter == "omega" else 1.0, initial_state=initial,
         segments=spec.segments, max_period=spec.max_period, settings=Settings(max_points=spec.max_points),
     )
-    branches = [_branch(k, br, spec.parameter, fixed, idx) for k, br in enumerate(diagram.branches) if br.points]
+    branches = [_branch(k, br, spec.parameter, fixed, idx, case.dim) for k, br in enumerate(diagram.branches)
+                if br.points]
+    other = IN_PLANE if case.dim == 2 else COUPLED
     bifs = [
         BifurcationResult(
             kind=b.kind, parameter=float(b.parameter),
             omega=float(b.parameter) if spec.parameter == "omega" else fixed,
             branch=int(b.branch), period=int(b.period), amplitude=np.asarray(b.amplitude)[idx],
             multiplier=complex(b.multiplier), located=bool(b.located), trusted=bool(b.trusted),
+            plane=b.plane or other, frequency_ratio=np.nan if b.frequency_ratio is None else b.frequency_ratio,
         )
         for b in diagram.bifurcations
     ]

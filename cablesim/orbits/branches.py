@@ -37,6 +37,7 @@ from .diagram import Bifurcation, BranchEnd, OrbitBranch, OrbitPoint, ResponseDi
 from .shooting import Evaluation, FlowStatus, Shooting, solve_orbit
 from .starting import integrate_to_steady, linear_response, linear_response_state
 from .switching import MergeWatch, doubled_point, doubling_direction, lap_separation, start_factor
+from .symmetry import Mirror, split_multipliers
 from .systems import OdeSystem, cable_system
 
 
@@ -74,28 +75,71 @@ class OrbitProblem:
         return stability.step_ratio(ev_a.multipliers, ev_b.multipliers)
 
 
+class PlanarOrbitProblem(OrbitProblem):
+    """:class:`OrbitProblem` on a branch of planar orbits of a mirror-symmetric system: the
+    bifurcation tests run on the in-plane and the out-of-plane blocks of the monodromy apart
+    (:mod:`cablesim.orbits.symmetry`), so that an out-of-plane multiplier through +1 is a
+    pitchfork, never a fold or branch point of the planar branch."""
+
+    test_names = stability.TEST_NAMES + stability.OUT_OF_PLANE_TESTS
+
+    def __init__(self, shooting: Shooting, state_scale: np.ndarray, lam_scale: float, mirror: Mirror):
+        super().__init__(shooting, state_scale, lam_scale)
+        self.mirror = mirror
+
+    def test_functions(self, ev: Evaluation) -> np.ndarray:
+        return stability.split_test_functions(*split_multipliers(self.mirror, ev.monodromy))
+
+    def confirm(self, name: str, ev: Evaluation) -> str | None:
+        mu_in, mu_out = split_multipliers(self.mirror, ev.monodromy)
+        if name.startswith("out-of-plane "):
+            base = stability.confirm(name[len("out-of-plane "):], mu_out)
+            return None if base is None else name
+        return stability.confirm(name, mu_in)
+
+
+def labelled_multipliers(mirror: Mirror, monodromy: np.ndarray) -> tuple[np.ndarray, tuple]:
+    """The multipliers of a planar orbit from the two blocks of its monodromy, sorted together
+    (:func:`~cablesim.orbits.stability.sort_multipliers`), and the block of each."""
+    mu_in, mu_out = split_multipliers(mirror, monodromy)
+    mu = np.concatenate([mu_in, mu_out])
+    labels = np.array([mirror.labels[0]] * mu_in.size + [mirror.labels[1]] * mu_out.size)
+    order = np.lexsort((-mu.imag, -np.abs(mu)))
+    return mu[order], tuple(str(x) for x in labels[order])
+
+
 def _orbit_point(system: OdeSystem, shooting: Shooting, cp, branch: int, index: int, residual_tol: float,
-                 liouville_tol: float) -> OrbitPoint:
+                 liouville_tol: float, mirror: Mirror | None = None) -> OrbitPoint:
     ev: Evaluation = cp.evaluation
     d = system.displacements
     xmax, xmin = ev.xmax[d], ev.xmin[d]
-    mu = ev.multipliers
+    mu, planes = ev.multipliers, None
+    if mirror is not None:
+        mu, planes = labelled_multipliers(mirror, ev.monodromy)
     trusted = bool(cp.residual <= 10.0 * residual_tol and ev.liouville <= liouville_tol and np.all(np.isfinite(mu)))
     return OrbitPoint(
         branch=branch, index=index, parameter=float(cp.lam), omega=ev.omega, period=shooting.period,
         state=cp.u[: shooting.n].copy(), u=cp.u.copy(), amplitude=np.maximum(np.abs(xmax), np.abs(xmin)),
         halfrange=0.5 * (xmax - xmin), multipliers=mu.copy(), stable=stability.is_stable(mu), trusted=trusted,
         residual=float(cp.residual), liouville=float(ev.liouville), special=cp.special, located=cp.located,
+        planes=planes,
     )
 
 
 def _bifurcation(p: OrbitPoint, branch: int) -> Bifurcation:
-    """The bifurcation at special point ``p`` of branch ``branch``."""
+    """The bifurcation at special point ``p`` of branch ``branch`` (on a planar branch of a
+    symmetric system: its kind and the block of the critical multiplier)."""
+    kind, plane, mu = p.special, None, p.multipliers
+    if p.planes is not None:
+        kind, plane = stability.SPLIT_KINDS[p.special]
+        mu = p.multipliers[np.array(p.planes) == plane]
+    crit = stability.critical_multiplier(kind, mu)
     return Bifurcation(
-        kind=p.special, parameter=p.parameter, branch=branch, period=p.period,
+        kind=kind, parameter=p.parameter, branch=branch, period=p.period,
         amplitude=p.amplitude, halfrange=p.halfrange, state=p.state,
-        multiplier=stability.critical_multiplier(p.special, p.multipliers), multipliers=p.multipliers,
-        located=p.located, trusted=p.trusted, point=p.index,
+        multiplier=crit, multipliers=p.multipliers,
+        located=p.located, trusted=p.trusted, point=p.index, plane=plane,
+        frequency_ratio=stability.frequency_ratio(crit) if kind == "neimark-sacker" else None,
     )
 
 
@@ -160,7 +204,12 @@ class _Tracer:
         br = OrbitBranch(index=idx, period=sh.period, parameter=self.parameter, parent=parent, origin=origin)
         br.segments = sh.segments
         self.diagram.branches.append(br)
-        problem = OrbitProblem(sh, self.state_scale, self.lam_scale)
+        mirror = self.system.mirror
+        br.planar = mirror is not None and mirror.is_planar(u_start[: self.n], self.state_scale)
+        if br.planar:
+            problem = PlanarOrbitProblem(sh, self.state_scale, self.lam_scale, mirror)
+        else:
+            problem, mirror = OrbitProblem(sh, self.state_scale, self.lam_scale), None
         watch = None
         if parent is not None:
             size = self.switch_size if size is None else size
@@ -177,7 +226,7 @@ class _Tracer:
             return bool(self.callback(op)) if self.callback is not None else False
 
         def on_point(cp) -> bool:
-            op = _orbit_point(self.system, sh, cp, idx, -1, self.settings.residual_tol, self.liouville_tol)
+            op = _orbit_point(self.system, sh, cp, idx, -1, self.settings.residual_tol, self.liouville_tol, mirror)
             return deliver(op) if watch is None else watch.observe(cp, op, deliver)
 
         res = continuation(problem, u_start, lam_start, self.settings, callback=on_point, direction=self.direction,

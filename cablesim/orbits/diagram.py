@@ -66,6 +66,11 @@ class OrbitPoint:
         bifurcation, else None.
     located : bool
         For a special point: whether the location converged.
+    planes : tuple of str or None
+        On a planar orbit of a mirror-symmetric system (:mod:`cablesim.orbits.symmetry`): the
+        block of every multiplier, ``"in-plane"`` or ``"out-of-plane"``; special points are then
+        also ``"pitchfork"``, ``"out-of-plane period-doubling"`` or
+        ``"out-of-plane neimark-sacker"``.
     """
 
     branch: int
@@ -84,6 +89,7 @@ class OrbitPoint:
     liouville: float
     special: str | None = None
     located: bool = True
+    planes: tuple | None = None
 
 
 @dataclass
@@ -111,6 +117,12 @@ class Bifurcation:
         Index of the point on its branch.
     child : int or None
         Branch started here (period doubling), if any.
+    plane : str or None
+        Which block of a split monodromy the critical multiplier belongs to (``"in-plane"`` or
+        ``"out-of-plane"``; :mod:`cablesim.orbits.symmetry`), None on an orbit whose monodromy
+        is not split.
+    frequency_ratio : float or None
+        At a Neimark-Sacker point: ``arg(mu) / 2 pi`` of the critical multiplier.
     """
 
     kind: str
@@ -126,6 +138,8 @@ class Bifurcation:
     trusted: bool
     point: int
     child: int | None = None
+    plane: str | None = None
+    frequency_ratio: float | None = None
 
 
 @dataclass
@@ -151,6 +165,9 @@ class OrbitBranch:
     failure : FlowStatus or None
         When the step fell below its minimum or the start failed: why the last refused flow
         failed (a slack segment, a failed inner solve), if a flow failed at all.
+    planar : bool
+        Its orbits lie in the mirror plane of a symmetric system, and their monodromy is split
+        into in-plane and out-of-plane blocks (:mod:`cablesim.orbits.symmetry`).
     """
 
     index: int
@@ -164,6 +181,7 @@ class OrbitBranch:
     segments: int = 1
     merged_at: OrbitPoint | None = None
     failure: FlowStatus | None = None
+    planar: bool = False
 
     @property
     def values(self) -> np.ndarray:

@@ -35,7 +35,6 @@ from typing import Callable
 
 import numpy as np
 
-from . import stability
 from .shooting import Evaluation, FlowStatus
 
 
@@ -147,8 +146,11 @@ def doubled_point(p, period: int, u: np.ndarray, **changes):
     period-``period / 2`` branch seen as a period-``period`` orbit (two laps of unknowns ``u``,
     multipliers squared): the first or last point of the doubled branch; ``changes`` replace
     further fields."""
-    return replace(p, period=period, u=u, special="period-doubling",
-                   multipliers=stability.sort_multipliers(p.multipliers**2), **changes)
+    mu = p.multipliers**2
+    order = np.lexsort((-mu.imag, -np.abs(mu)))  # the order of stability.sort_multipliers
+    planes = None if p.planes is None else tuple(p.planes[k] for k in order)
+    return replace(p, period=period, u=u, special="period-doubling", multipliers=mu[order], planes=planes,
+                   **changes)
 
 
 class MergeWatch:

@@ -1,0 +1,188 @@
+"""Periodic orbits of spatial cables: the planar analysis run in space, the split of a planar
+orbit's monodromy into its in-plane and out-of-plane blocks, and the out-of-plane bifurcations.
+
+References written here, independent of the orbit code: the planar cable's own continuation;
+the out-of-plane linearisation about a planar orbit, ``M w'' + (a0 M + a1 K0_ww) w' + K_w(t) w = 0``
+with ``K_w(t)`` the string tridiagonal of the segment tensions over their lengths ``T_r / l_r``,
+integrated with the planar motion by scipy's DOP853 from the segment forces written out below.
+"""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from cablesim.analyses.continuation import run_continuation
+from cablesim.analyses.setup import build_equations
+from cablesim.analyses.static import run_static
+from cablesim.case import case_from_dict
+from cablesim.orbits import Shooting, cable_system, continue_branches, linear_response_state, solve_orbit
+from cablesim.orbits.symmetry import split_multipliers
+
+#: The paper's example cable (two nodes).
+PAPER = {
+    "cable": {"L": 300.0, "H": 20.0, "S": [130.0, 100.0, 110.0], "EA": 1.0e9, "masses": [8000.0, 14000.0]},
+    "loads": {"F0": [300.0e3, 1100.0e3, 450.0e3, 2000.0e3], "FL": [-6.0e3, 22.0e3, -18.0e3, 120.0e3]},
+    "damping": {"ratio": 0.01, "modes": [1, 2]},
+}
+#: A single mass on two segments, shallow sag, forced vertically: its out-of-plane (pendulum
+#: like) mode is excited parametrically by the tension the in-plane motion modulates.
+BEAD = {
+    "cable": {"L": 2.0, "H": 0.0, "S": [1.02, 1.02], "EA": 2000.0, "masses": [1.0]},
+    "loads": {"F0": [0.0, 9.81], "FL": [0.0, 0.6]},
+    "damping": {"ratio": 0.005, "modes": [1, 2]},
+}
+
+
+def case_of(base: dict, spatial: bool, **sections):
+    data = copy.deepcopy(base)
+    data.update(sections)
+    if spatial:
+        data["spatial"] = True
+    return case_from_dict(data)
+
+
+def equations(case, omega):
+    static = run_static(case)
+    return build_equations(case, static, omega=omega)
+
+
+def planar_orbit(eom, omega):
+    """The periodic orbit of the spatial cable at ``omega`` from the linear response."""
+    sh = Shooting(cable_system(eom))
+    sol = solve_orbit(sh, linear_response_state(eom, omega), omega)
+    assert sol.converged
+    return sh, sol
+
+
+# ------------------------------------------------------------------------------------------------
+# The independent out-of-plane linearisation about a planar orbit
+# ------------------------------------------------------------------------------------------------
+def segment_geometry(eom, y):
+    """Positions of supports and nodes (n + 2, 2) in the plane, segment lengths and tensions."""
+    c = eom.cable
+    A = np.asarray(c.support_A, dtype=float)[:2]
+    B = np.asarray(c.support_B, dtype=float)[:2]
+    pts = np.vstack([A, y.reshape(-1, 2), B])
+    d = np.diff(pts, axis=0)
+    l = np.linalg.norm(d, axis=1)
+    S = np.asarray(c.S, dtype=float)
+    T = np.maximum(c.EA * (l - S) / S, 0.0)
+    return d, l, T
+
+
+def planar_resisting_force(eom, y):
+    """``P(y)``: at every node ``T_r e_r - T_{r+1} e_{r+1}`` (segment r ends at node r)."""
+    d, l, T = segment_geometry(eom, y)
+    f = (T / l)[:, None] * d
+    return (f[:-1] - f[1:]).ravel()
+
+
+def string_stiffness(T, l):
+    """The out-of-plane stiffness of the string: tridiagonal in ``T_r / l_r``."""
+    k = T / l
+    n = k.size - 1
+    K = np.diag(k[:-1] + k[1:])
+    K -= np.diag(k[1:-1], 1) + np.diag(k[1:-1], -1)
+    return K
+
+
+def out_of_plane_multipliers(eom, x0_spatial, omega):
+    """Floquet multipliers of the out-of-plane linearisation about the orbit through the spatial
+    state ``x0_spatial`` (whose out-of-plane part is zero), integrated here with the planar motion."""
+    n = eom.cable.n_nodes
+    z = x0_spatial[: 3 * n].reshape(n, 3)
+    v = x0_spatial[3 * n:].reshape(n, 3)
+    y0 = eom.y0.reshape(n, 3)[:, :2].ravel()
+    m2 = np.repeat(eom.cable.masses, 2)
+    ip = np.array([[3 * i, 3 * i + 1] for i in range(n)]).ravel()
+    wi = np.arange(n) * 3 + 2
+    C2 = eom.C[np.ix_(ip, ip)]
+    Cw = eom.C[np.ix_(wi, wi)]
+    F0, FL = eom.F0[ip], eom.FL[ip]
+    mw = eom.cable.masses
+
+    def rhs(t, s):
+        q, p = s[: 2 * n], s[2 * n: 4 * n]
+        Y = s[4 * n:].reshape(2 * n, 2 * n)  # (w, w') variations, columns the initial conditions
+        acc = (F0 + FL * np.sin(omega * t) - C2 @ p - planar_resisting_force(eom, y0 + q)) / m2
+        _, l, T = segment_geometry(eom, y0 + q)
+        Kw = string_stiffness(T, l)
+        A = np.block([[np.zeros((n, n)), np.eye(n)], [-Kw / mw[:, None], -Cw / mw[:, None]]])
+        return np.concatenate([p, acc, (A @ Y).ravel()])
+
+    s0 = np.concatenate([z[:, :2].ravel(), v[:, :2].ravel(), np.eye(2 * n).ravel()])
+    sol = solve_ivp(rhs, (0.0, 2 * np.pi / omega), s0, method="DOP853", rtol=1e-12, atol=1e-13)
+    end = sol.y[:, -1]
+    drift = np.abs(end[: 4 * n] - s0[: 4 * n]).max()
+    return np.linalg.eigvals(end[4 * n:].reshape(2 * n, 2 * n)), drift
+
+
+def assert_same_multipliers(a, b, tol):
+    a, b = np.asarray(a, dtype=complex), list(np.asarray(b, dtype=complex))
+    assert len(a) == len(b)
+    for mu in a:
+        k = int(np.argmin([abs(mu - x) for x in b]))
+        assert abs(mu - b[k]) < tol, (a, b)
+        b.pop(k)
+
+
+# ------------------------------------------------------------------------------------------------
+def test_spatial_continuation_of_an_in_plane_case_is_the_planar_one():
+    """The same branch, the same located period doublings and the planar multipliers as the
+    in-plane block, over the paper's period-doubling band; every channel of the spatial case
+    is reported (x, v, w of both nodes)."""
+    flat = run_continuation(case_of(PAPER, False, continuation={"omega": {"start": 5.0, "stop": 5.1},
+                                                                 "switch_branches": False}))
+    space = run_continuation(case_of(PAPER, True, continuation={"omega": {"start": 5.0, "stop": 5.1},
+                                                                 "switch_branches": False}))
+    assert space.channels == [f"z{i + 1}" for i in range(6)]
+    b3 = space.branches[0]
+    # every spatial point (the steps differ: the arclength counts the out-of-plane components)
+    # is a periodic orbit of the planar cable, with the planar cable's multipliers in-plane
+    planar = Shooting(cable_system(equations(case_of(PAPER, False), 5.0)))
+    spatial = Shooting(cable_system(equations(case_of(PAPER, True), 5.0)))
+    ip = np.array([0, 1, 3, 4, 6, 7, 9, 10])
+    assert np.all(b3.amplitude[:, [2, 5]] < 1e-12)
+    for k in range(b3.parameter.size):
+        x = b3.state[k]
+        ev = planar.evaluate(x[ip], b3.parameter[k])
+        ev3 = spatial.evaluate(x, b3.parameter[k], jac=False)
+        for half in (slice(0, 4), slice(4, 8)):  # displacements, velocities: at Newton's tolerance
+            assert np.abs(ev.r[half]).max() < 1e-7 * np.abs(x[ip][half]).max()
+        np.testing.assert_allclose(ev3.r[ip], ev.r, rtol=0, atol=1e-12 * np.abs(x).max())  # one map, to round-off
+        mu_in = b3.multipliers[k][b3.planes[k] == "in-plane"]
+        assert_same_multipliers(mu_in, ev.multipliers, 1e-8)
+    pd2 = sorted(b.parameter for b in flat.bifurcations if b.kind == "period-doubling")
+    pd3 = sorted(b.parameter for b in space.bifurcations if b.kind == "period-doubling")
+    assert len(pd2) == 2 and np.allclose(pd3, pd2, rtol=0, atol=1e-8)
+    assert all(b.plane == "in-plane" for b in space.bifurcations)
+
+
+def test_planar_monodromy_splits_and_its_out_of_plane_block_is_the_string_linearisation():
+    omega = 2.4
+    eom = equations(case_of(PAPER, True), omega)
+    sh, sol = planar_orbit(eom, omega)
+    mirror = sh.system.mirror
+    assert mirror is not None and mirror.n_odd == 4 and mirror.is_planar(sol.u, np.abs(sol.u).max() + 0 * sol.u)
+    Q = mirror.Q
+    np.testing.assert_allclose(Q.T @ Q, np.eye(12), atol=1e-15)
+    _, _, off = mirror.blocks(sol.evaluation.monodromy)
+    assert off < 1e-13
+    mu_in, mu_out = split_multipliers(mirror, sol.evaluation.monodromy)
+    assert mu_in.size == 8 and mu_out.size == 4
+    reference, drift = out_of_plane_multipliers(eom, sol.u, omega)
+    assert drift < 1e-8 * np.abs(sol.u).max()  # the orbit is periodic in the independent integration
+    assert_same_multipliers(mu_out, reference, 1e-8)
+    # and the whole spectrum is the union of the blocks'
+    assert_same_multipliers(np.concatenate([mu_in, mu_out]), sol.evaluation.multipliers, 1e-9)
+
+
+def test_a_load_out_of_the_plane_breaks_the_mirror():
+    FL = [-6.0e3, 22.0e3, 1.0e3, -18.0e3, 120.0e3, 0.0]
+    tilted = case_of(PAPER, True, loads={"F0": PAPER["loads"]["F0"], "FL": FL})
+    assert cable_system(equations(tilted, 2.4)).mirror is None
+    assert cable_system(equations(case_of(PAPER, False), 2.4)).mirror is None

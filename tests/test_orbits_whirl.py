@@ -186,3 +186,75 @@ def test_a_load_out_of_the_plane_breaks_the_mirror():
     tilted = case_of(PAPER, True, loads={"F0": PAPER["loads"]["F0"], "FL": FL})
     assert cable_system(equations(tilted, 2.4)).mirror is None
     assert cable_system(equations(case_of(PAPER, False), 2.4)).mirror is None
+
+
+def band_to_dense_of_one_node():
+    """A one-node spatial cable's banded stiffness (6 rows for 3 unknowns) as a dense matrix."""
+    from cablesim.statics import band_to_dense
+
+    band = np.arange(18.0).reshape(6, 3)
+    return band_to_dense(band)
+
+
+def test_a_band_deeper_than_its_matrix_is_cut():
+    A = band_to_dense_of_one_node()
+    assert A.shape == (3, 3) and np.array_equal(A, A.T)
+    assert A[0, 0] == 0.0 and A[1, 0] == 3.0 and A[2, 0] == 6.0 and A[2, 1] == 4.0 and A[2, 2] == 2.0
+
+
+def bead(FL: float):
+    return case_of(BEAD, True, loads={"F0": BEAD["loads"]["F0"], "FL": [0.0, FL]})
+
+
+def located_crossing(eom, omega_b, x_b, target, h=1e-5, **integration):
+    """Where the independent out-of-plane multiplier nearest ``target`` (+1 or -1) passes it,
+    by linear interpolation between planar orbits at ``omega_b +- h`` (the multiplier curves:
+    at h = 2e-4 the interpolation alone is 1.3e-6 off)."""
+    sh = Shooting(cable_system(eom), **integration)
+    values = []
+    for w in (omega_b - h, omega_b + h):
+        sol = solve_orbit(sh, x_b, w)
+        assert sol.converged
+        mu, drift = out_of_plane_multipliers(eom, sol.u, w)
+        assert drift < 1e-8 * np.abs(sol.u).max()
+        values.append(float(mu[np.argmin(np.abs(mu - target))].real) - target)
+    (w0, w1), (f0, f1) = (omega_b - h, omega_b + h), values
+    assert f0 * f1 < 0.0, values  # the crossing is between them
+    return w0 - f0 * (w1 - w0) / (f1 - f0)
+
+
+def out_of_plane_diagram(FL, start, stop, **integration):
+    eom = equations(bead(FL), start)
+    return eom, continue_branches(eom, "omega", start, stop, switch_branches=False, **integration)
+
+
+def test_parametric_tongue_of_a_bead_is_an_out_of_plane_period_doubling_pair():
+    """Forced in its plane near twice its out-of-plane frequency (6.285 rad/s), the bead's planar
+    orbit loses stability across the plane: an out-of-plane multiplier through -1 at both edges of
+    the tongue, located to 1e-6 in omega by the independent linearisation."""
+    eom, d = out_of_plane_diagram(0.6, 12.0, 13.2)
+    br = d.branches[0]
+    assert br.planar and br.end.name == "BOUND_REACHED"
+    assert [(b.kind, b.plane) for b in d.bifurcations] == [("period-doubling", "out-of-plane")] * 2
+    for b in d.bifurcations:
+        assert abs(b.multiplier + 1.0) < 1e-8
+        w_ref = located_crossing(eom, b.parameter, b.state, -1.0)
+        assert abs(w_ref - b.parameter) < 1e-6, (w_ref, b.parameter)
+    inside = [p for p in br.points if d.bifurcations[0].parameter < p.parameter < d.bifurcations[1].parameter]
+    assert inside and not any(p.stable for p in inside)
+    assert all(p.planes.count("out-of-plane") == 2 for p in br.points)
+
+
+def test_whirling_onset_is_a_pitchfork_never_a_fold_of_the_planar_branch():
+    """Near its out-of-plane frequency the bead's planar orbit (forced harder) loses stability to
+    a nonplanar one: an out-of-plane multiplier through +1, a pitchfork on each side, located to
+    1e-6 in omega by the independent linearisation; the planar branch has no fold or branch point
+    there (a test on the whole monodromy sees +1 and cannot tell)."""
+    eom, d = out_of_plane_diagram(5.0, 5.0, 6.6)
+    assert [(b.kind, b.plane) for b in d.bifurcations] == [("pitchfork", "out-of-plane")] * 2
+    values = d.branches[0].values
+    assert np.all(np.diff(values) > 0)  # no turning point: the planar branch goes straight through
+    for b in d.bifurcations:
+        assert abs(b.multiplier - 1.0) < 1e-8
+        w_ref = located_crossing(eom, b.parameter, b.state, 1.0)
+        assert abs(w_ref - b.parameter) < 1e-6, (w_ref, b.parameter)

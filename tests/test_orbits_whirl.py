@@ -258,3 +258,34 @@ def test_whirling_onset_is_a_pitchfork_never_a_fold_of_the_planar_branch():
         assert abs(b.multiplier - 1.0) < 1e-8
         w_ref = located_crossing(eom, b.parameter, b.state, 1.0)
         assert abs(w_ref - b.parameter) < 1e-6, (w_ref, b.parameter)
+
+
+def test_continue_command_stores_and_names_the_out_of_plane_bifurcations(tmp_path):
+    """`cablesim continue` on the bead across its whirling onset: the file's bifurcations carry
+    their plane, the branches the block of every multiplier, the summary names both."""
+    import h5py
+    import yaml
+    from typer.testing import CliRunner
+
+    from cablesim.cli import app
+    from cablesim.io.continuation import read_continuation
+
+    data = copy.deepcopy(BEAD)
+    data.update(spatial=True, name="bead")
+    data["loads"]["FL"] = [0.0, 5.0]
+    data["continuation"] = {"omega": {"start": 5.0, "stop": 6.6}, "switch_branches": False}
+    path = tmp_path / "bead.yaml"
+    path.write_text(yaml.safe_dump(data))
+    out = tmp_path / "bead.h5"
+    res = CliRunner().invoke(app, ["continue", str(path), "-o", str(out)])
+    assert res.exit_code == 0, (res.stdout, res.exception)
+    assert "pitchfork" in res.stdout and "out-of-plane" in res.stdout
+    d = read_continuation(out)
+    assert d["bifurcations"]["kind"] == ["pitchfork", "pitchfork"]
+    assert d["bifurcations"]["plane"] == ["out-of-plane", "out-of-plane"]
+    np.testing.assert_allclose(d["bifurcations"]["frequency_ratio"], 0.0, atol=1e-9)  # mu = +1
+    b = d["branches"][0]
+    assert b["planar"] and b["multiplier_plane"].shape == b["multipliers"].shape
+    assert np.all((b["multiplier_plane"] == "out-of-plane").sum(axis=1) == 2)
+    with h5py.File(out) as f:
+        assert f["continuation/bifurcations/plane"].attrs["units"] == "1"

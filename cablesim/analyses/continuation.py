@@ -20,6 +20,7 @@ from ..errors import CablesimError
 from ..dynamics.steady import SteadyCriterion, steady_response
 from ..modal import COUPLED, IN_PLANE
 from ..orbits import OrbitPoint, Settings, continue_branches
+from ..orbits.stability import frequency_ratio
 from .setup import build_equations, frequency_of_interest, make_integrator
 from .static import run_static
 
@@ -86,7 +87,9 @@ class BifurcationResult:
     location converged (``located``) and its multipliers passed the accuracy checks (``trusted``);
     ``plane``: the block of the critical multiplier (``in-plane``, ``out-of-plane``; ``coupled``
     on a nonplanar orbit of a spatial cable), where an out-of-plane multiplier through +1 is a
-    ``pitchfork``; ``frequency_ratio``: ``arg(mu) / 2 pi`` at a Neimark-Sacker point (else NaN)."""
+    ``pitchfork``; ``frequency_ratio``: ``|arg(mu)| / 2 pi`` of the critical multiplier (0 at a fold or
+    pitchfork, 1/2 at a period doubling, the new frequency over the orbit's at a Neimark-Sacker
+    point)."""
 
     kind: str
     parameter: float
@@ -98,7 +101,7 @@ class BifurcationResult:
     located: bool
     trusted: bool
     plane: str = IN_PLANE
-    frequency_ratio: float = float("nan")
+    frequency_ratio: float = 0.0
 
 
 @dataclass
@@ -146,7 +149,7 @@ def _end_text(br) -> str:
     return text
 
 
-def _grazing_points(diagram, parameter: str, fixed: float, idx: np.ndarray) -> list:
+def _grazing_points(diagram, parameter: str, fixed: float, idx: np.ndarray, dim: int = 2) -> list:
     """A branch that ended because a segment went slack ends at a *grazing* orbit: its last
     orbit, whose smallest tension is about to reach zero (orbits with slack intervals are not
     followed). One record per such branch, at its last orbit."""
@@ -159,7 +162,8 @@ def _grazing_points(diagram, parameter: str, fixed: float, idx: np.ndarray) -> l
         out.append(BifurcationResult(
             kind="grazing", parameter=float(p.parameter), omega=float(p.omega),
             branch=k, period=int(br.period), amplitude=np.asarray(p.amplitude)[idx],
-            multiplier=complex(p.multipliers[0]), located=False, trusted=bool(p.trusted)))
+            multiplier=complex(p.multipliers[0]), located=False, trusted=bool(p.trusted),
+            frequency_ratio=frequency_ratio(complex(p.multipliers[0])), plane=IN_PLANE if dim == 2 or br.planar else COUPLED))
     return out
 
 
@@ -269,11 +273,11 @@ def run_continuation(
             omega=float(b.parameter) if spec.parameter == "omega" else fixed,
             branch=int(b.branch), period=int(b.period), amplitude=np.asarray(b.amplitude)[idx],
             multiplier=complex(b.multiplier), located=bool(b.located), trusted=bool(b.trusted),
-            plane=b.plane or other, frequency_ratio=np.nan if b.frequency_ratio is None else b.frequency_ratio,
+            plane=b.plane or other, frequency_ratio=frequency_ratio(complex(b.multiplier)),
         )
         for b in diagram.bifurcations
     ]
-    bifs += _grazing_points(diagram, spec.parameter, fixed, idx)
+    bifs += _grazing_points(diagram, spec.parameter, fixed, idx, case.dim)
     stats = dict(diagram.stats)
     stats["wall"] = time.perf_counter() - t0
     return ContinuationResult(

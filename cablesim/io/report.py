@@ -268,11 +268,14 @@ def continuation_summary(case, res, wall: float) -> str:
     lines.append(_table(["branch", "period", f"range {unit}".strip(), "orbits", "stable",
                          f"max {', '.join(res.channels)} (m)", "ended"], rows))
     lines += ["", "Bifurcations:" if res.bifurcations else "No bifurcations in the range."]
+    spatial = any(b.plane != "in-plane" for b in res.bifurcations) or any(
+        b.planes is not None and np.any(b.planes != "in-plane") for b in res.branches)
     if res.bifurcations:
-        rows = [[b.kind, f"{b.parameter:.6g}", res.branches[b.branch].name if b.branch < len(res.branches) else str(b.branch),
+        rows = [[b.kind] + ([b.plane] if spatial else []) + [f"{b.parameter:.6g}", res.branches[b.branch].name if b.branch < len(res.branches) else str(b.branch),
                  str(b.period), ", ".join(f"{a:.4g}" for a in b.amplitude), f"{abs(b.multiplier):.4f}",
-                 ("" if b.located else "not located; ") + ("" if b.trusted else "multipliers not trusted")]
+                 ("" if b.located else "not located; ") + ("" if b.trusted else "multipliers not trusted")
+                 + (f"frequency ratio {b.frequency_ratio:.4f}" if b.kind == "neimark-sacker" else "")]
                 for b in sorted(res.bifurcations, key=lambda b: (b.branch, b.parameter))]
-        lines.append(_table(["kind", res.parameter, "branch", "period", f"{', '.join(res.channels)} (m)", "|mu|",
+        lines.append(_table(["kind"] + (["plane"] if spatial else []) + [res.parameter, "branch", "period", f"{', '.join(res.channels)} (m)", "|mu|",
                              "notes"], rows))
     return "\n".join(lines)

@@ -139,7 +139,7 @@ def _bifurcation(p: OrbitPoint, branch: int) -> Bifurcation:
         amplitude=p.amplitude, halfrange=p.halfrange, state=p.state,
         multiplier=crit, multipliers=p.multipliers,
         located=p.located, trusted=p.trusted, point=p.index, plane=plane,
-        frequency_ratio=stability.frequency_ratio(crit) if kind == "neimark-sacker" else None,
+        frequency_ratio=stability.frequency_ratio(crit),
     )
 
 

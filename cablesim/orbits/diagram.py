@@ -122,7 +122,9 @@ class Bifurcation:
         ``"out-of-plane"``; :mod:`cablesim.orbits.symmetry`), None on an orbit whose monodromy
         is not split.
     frequency_ratio : float or None
-        At a Neimark-Sacker point: ``arg(mu) / 2 pi`` of the critical multiplier.
+        ``|arg(mu)| / 2 pi`` of the critical multiplier: 0 at a fold or pitchfork, 1/2 at a
+        period doubling, between them at a Neimark-Sacker point (the ratio of the new frequency
+        to the orbit's).
     """
 
     kind: str

@@ -289,3 +289,56 @@ def test_continue_command_stores_and_names_the_out_of_plane_bifurcations(tmp_pat
     assert np.all((b["multiplier_plane"] == "out-of-plane").sum(axis=1) == 2)
     with h5py.File(out) as f:
         assert f["continuation/bifurcations/plane"].attrs["units"] == "1"
+
+
+def spatial_rhs(eom, omega):
+    """The spatial cable's equations of motion ``M y'' + C y' + P(y) = F0 + FL sin(omega t)``
+    for the state ``(z, y')``, written here from the segment forces (P(y0) taken as F0)."""
+    c = eom.cable
+    A = np.asarray(c.support_A, dtype=float)
+    B = np.asarray(c.support_B, dtype=float)
+    S = np.asarray(c.S, dtype=float)
+    nd = eom.n_dof
+    m = eom.mass
+
+    def force(y):
+        d = np.diff(np.vstack([A, y.reshape(-1, 3), B]), axis=0)
+        l = np.linalg.norm(d, axis=1)
+        f = (np.maximum(c.EA * (l - S) / S, 0.0) / l)[:, None] * d
+        return (f[:-1] - f[1:]).ravel()
+
+    F0 = force(eom.y0)
+
+    def rhs(t, s):
+        z, v = s[:nd], s[nd:]
+        return np.concatenate([v, (F0 + eom.FL * np.sin(omega * t) - eom.C @ v - force(eom.y0 + z)) / m])
+
+    return rhs
+
+
+def test_whirling_branch_is_born_at_the_pitchfork_and_is_a_nonplanar_orbit():
+    """Switched at the upper pitchfork (6.388 rad/s), the nonplanar branch leaves the plane along
+    the out-of-plane null vector; its out-of-plane amplitude follows the normal form's square-root
+    law near the pitchfork, its mirror image is reported, and its orbits are periodic orbits of an
+    independent integration of the spatial equations of motion (stable whirling)."""
+    eom = equations(bead(5.0), 6.0)
+    d = continue_branches(eom, "omega", 6.0, 6.6)
+    pf = [b for b in d.bifurcations if b.kind == "pitchfork"]
+    assert len(pf) == 1 and pf[0].child is not None
+    whirl = d.branches[pf[0].child]
+    assert whirl.mirror_image and not whirl.planar and whirl.parent == pf[0].branch
+    assert whirl.points[0].parameter == pf[0].parameter
+    lam0 = pf[0].parameter
+    near = [p for p in whirl.points[1:] if abs(p.parameter - lam0) < 0.1]
+    assert len(near) >= 2
+    dl = np.array([abs(p.parameter - lam0) for p in near])
+    w = np.array([p.amplitude[2] for p in near])
+    slope = np.polyfit(np.log(dl), np.log(w), 1)[0]
+    assert abs(slope - 0.5) < 0.05, slope
+    p = near[-1]
+    sol = solve_ivp(spatial_rhs(eom, p.omega), (0.0, 2 * np.pi / p.omega), p.state, method="DOP853",
+                    rtol=1e-12, atol=1e-14)
+    # (at the continuation's Newton tolerance; a wrong orbit would be off by its own size)
+    assert np.abs(sol.y[:, -1] - p.state).max() < 1e-7 * np.abs(p.state).max()
+    assert np.abs(p.state[[2, 5]]).max() > 0.01  # well out of the plane
+    assert p.stable

@@ -36,7 +36,15 @@ from .continuation import Settings, continuation
 from .diagram import Bifurcation, BranchEnd, OrbitBranch, OrbitPoint, ResponseDiagram
 from .shooting import Evaluation, FlowStatus, Shooting, solve_orbit
 from .starting import integrate_to_steady, linear_response, linear_response_state
-from .switching import MergeWatch, doubled_point, doubling_direction, lap_separation, start_factor
+from .switching import (
+    MergeWatch,
+    PlaneWatch,
+    doubled_point,
+    doubling_direction,
+    lap_separation,
+    pitchfork_direction,
+    start_factor,
+)
 from .symmetry import Mirror, split_multipliers
 from .systems import OdeSystem, cable_system
 
@@ -211,7 +219,10 @@ class _Tracer:
         else:
             problem, mirror = OrbitProblem(sh, self.state_scale, self.lam_scale), None
         watch = None
-        if parent is not None:
+        if origin is not None and origin.kind == "pitchfork":
+            size = self.switch_size if size is None else size
+            watch = PlaneWatch(self.system.mirror, self.n, self.state_scale, size)
+        elif parent is not None:
             size = self.switch_size if size is None else size
             self.sizes[idx] = size
             partners = [q for q in self.diagram.branches[parent].points if q.special == "period-doubling"]
@@ -232,8 +243,9 @@ class _Tracer:
         res = continuation(problem, u_start, lam_start, self.settings, callback=on_point, direction=self.direction,
                            tangent=tangent)
         br.evaluations = res.evaluations
-        br.merged_at = watch.merged_at if watch is not None else None
-        br.end = BranchEnd.MERGED if br.merged_at is not None else BranchEnd(int(res.status))
+        br.merged_at = getattr(watch, "merged_at", None)
+        returned = bool(getattr(watch, "returned", False))
+        br.end = BranchEnd.MERGED if br.merged_at is not None or returned else BranchEnd(int(res.status))
         if br.end in (BranchEnd.STEP_TOO_SMALL, BranchEnd.START_FAILED):
             br.failure = problem.last_failure
         return br
@@ -261,6 +273,30 @@ class _Tracer:
             factor *= 0.25
         return None
 
+    def switch_pitchfork(self, br: OrbitBranch, p: OrbitPoint, bif: Bifurcation) -> OrbitBranch | None:
+        """Start the nonplanar branch at pitchfork ``p`` of planar branch ``br`` along the
+        out-of-plane null vector (:func:`~cablesim.orbits.switching.pitchfork_direction`); its
+        mirror image (``w -> -w``) is the other branch born there, not computed. The
+        perturbation shrinks by quarters while the start fails."""
+        sh = self.shooting(br.period, br.segments)
+        ev = sh.evaluate(p.u, p.parameter)
+        if ev.status != ok.OK:
+            return None
+        dirn, eps = pitchfork_direction(ev, self.system.mirror, br.segments, self.state_scale, self.switch_size)
+        size = self.switch_size
+        for _ in range(SWITCH_ATTEMPTS):
+            first = replace(p, planes=None)
+            child = self.run_branch(sh, p.u + eps * dirn, p.parameter, np.concatenate([dirn, [0.0]]), br.index,
+                                    bif, [first], size)
+            odd = self.system.mirror.odd_size(child.points[-1].state, self.state_scale) if child.points else 0.0
+            if child.end != BranchEnd.START_FAILED and len(child.points) > 1 and odd > 0.1 * size:
+                child.mirror_image = True
+                return child
+            self.diagram.branches.pop()
+            self.sizes.pop(child.index, None)
+            eps, size = 0.25 * eps, 0.25 * size
+        return None
+
     def start_doubled(self, br: OrbitBranch, p: OrbitPoint, bif: Bifurcation, sh2: Shooting, base: np.ndarray,
                       direction: np.ndarray, eps: float, size: float) -> OrbitBranch | None:
         """The period-doubled branch started from ``base + eps direction`` or
@@ -283,6 +319,9 @@ class _Tracer:
             return False
         if p.index == 0 and br.origin is not None:
             return False  # the branch's own origin
+        if br.mirror_image:  # near its return to the plane the tests trip at the pitchfork there
+            return not (br.end == BranchEnd.MERGED and p.index >= len(br.points) - 4 and self.system.mirror.odd_size(
+                p.state, self.state_scale) < 2.0 * self.sizes.get(br.index, self.switch_size))
         if br.end == BranchEnd.MERGED and (p is br.points[-1] or (
                 p.index >= len(br.points) - 4
                 and lap_separation(p.u, self.n, br.segments // 2, self.state_scale)
@@ -305,6 +344,16 @@ class _Tracer:
                     continue
                 bif = _bifurcation(p, br.index)
                 self.diagram.bifurcations.append(bif)
+                if switch_branches and bif.kind == "pitchfork" and (br.index, p.index) not in done_pd:
+                    child = self.switch_pitchfork(br, p, bif)
+                    if child is not None:
+                        bif.child = child.index
+                        if child.end == BranchEnd.MERGED:  # back in the plane at another pitchfork
+                            others = [q for q in br.points if q.special == "pitchfork" and q is not p]
+                            if others:
+                                q = min(others, key=lambda q: abs(q.parameter - child.points[-1].parameter))
+                                done_pd.add((br.index, q.index))
+                    continue
                 if not (switch_branches and p.special == "period-doubling" and 2 * br.period <= max_period):
                     continue
                 if (br.index, p.index) in done_pd:

@@ -170,6 +170,10 @@ class OrbitBranch:
     planar : bool
         Its orbits lie in the mirror plane of a symmetric system, and their monodromy is split
         into in-plane and out-of-plane blocks (:mod:`cablesim.orbits.symmetry`).
+    mirror_image : bool
+        A nonplanar branch born at a pitchfork: its mirror image through the plane
+        (``w -> -w``) is a branch too, not computed. It ends (:attr:`BranchEnd.MERGED`) where
+        it returns to the plane.
     """
 
     index: int
@@ -184,6 +188,7 @@ class OrbitBranch:
     merged_at: OrbitPoint | None = None
     failure: FlowStatus | None = None
     planar: bool = False
+    mirror_image: bool = False
 
     @property
     def values(self) -> np.ndarray:

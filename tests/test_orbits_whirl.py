@@ -342,3 +342,16 @@ def test_whirling_branch_is_born_at_the_pitchfork_and_is_a_nonplanar_orbit():
     assert np.abs(sol.y[:, -1] - p.state).max() < 1e-7 * np.abs(p.state).max()
     assert np.abs(p.state[[2, 5]]).max() > 0.01  # well out of the plane
     assert p.stable
+    # whirling measures against the same orbit sampled by the independent integration
+    t = np.linspace(0.0, 2 * np.pi / p.omega, 2001)
+    ref = solve_ivp(spatial_rhs(eom, p.omega), (t[0], t[-1]), p.state, method="DOP853", rtol=1e-12,
+                    atol=1e-14, t_eval=t).y
+    v, w = ref[1], ref[2]  # the plane's frame is (x, v, w) for this level span
+    area = 0.5 * np.trapezoid(w * np.gradient(v, t) - v * np.gradient(w, t), t)
+    assert p.whirl.area[0] == pytest.approx(area, rel=1e-4)
+    evals, evecs = np.linalg.eigh(np.cov(np.vstack([v, w])))
+    tilt = np.degrees(np.arctan2(abs(evecs[1, -1]), abs(evecs[0, -1])))
+    assert p.whirl.tilt == pytest.approx(tilt, abs=0.05)
+    assert 45.0 < tilt < 90.0 and abs(area) > 1e-4  # mostly across the plane, going round
+    planar = d.branches[pf[0].branch]
+    assert all(q.whirl is None for q in planar.points)

@@ -60,6 +60,13 @@ class BranchResult:
         of a spatial cable, ``in-plane`` for a planar cable).
     planar : bool
         Whether its orbits lie in the plane of a mirror-symmetric spatial cable.
+    mirror_image : bool
+        A nonplanar branch born at a pitchfork: its mirror image ``w -> -w`` exists too.
+    whirl_area : ndarray (points, n_nodes) or None
+        Spatial cable: the signed area of each node's path in its cross-section plane ``(w, v)``
+        over the orbit, m^2 (positive counter-clockwise; zero on a planar orbit).
+    tilt : ndarray (points,) or None
+        Spatial cable: the angle of the orbit's mean plane of motion from the cable's plane, deg.
     """
 
     name: str
@@ -77,6 +84,9 @@ class BranchResult:
     end: str
     planes: np.ndarray | None = None
     planar: bool = False
+    mirror_image: bool = False
+    whirl_area: np.ndarray | None = None
+    tilt: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -195,7 +205,19 @@ def _branch(k: int, br, parameter: str, fixed: float, idx: np.ndarray, dim: int 
         end=_end_text(br),
         planes=_planes(br, dim),
         planar=bool(getattr(br, "planar", False)),
+        mirror_image=bool(getattr(br, "mirror_image", False)),
+        **_whirling(br, dim),
     )
+
+
+def _whirling(br, dim: int) -> dict:
+    """The whirling measures of a spatial branch's points (zero on planar orbits)."""
+    if dim == 2:
+        return {}
+    n = br.points[0].state.size // 6 if br.points else 0
+    area = np.array([p.whirl.area if p.whirl is not None else np.zeros(n) for p in br.points]).reshape(-1, n)
+    tilt = np.array([p.whirl.tilt if p.whirl is not None else 0.0 for p in br.points], dtype=float)
+    return {"whirl_area": area, "tilt": tilt}
 
 
 def _integrated_start(case: Case, static, omega: float, gamma: float, names, idx) -> np.ndarray:

@@ -12,8 +12,12 @@ Layout (with the root attributes of every cablesim file, see :mod:`cablesim.io.h
   frequency_ratio (``|arg(mu)| / 2 pi`` of the critical multiplier: the new frequency over the
   orbit's at a Neimark-Sacker point)}``; an out-of-plane
   multiplier of a planar orbit through +1 is a ``pitchfork`` (symmetry breaking);
-- per branch also ``multiplier_plane`` (points x multipliers: the block of each multiplier) and
-  the attribute ``planar`` (orbits in the mirror plane of a symmetric spatial cable);
+- per branch also ``multiplier_plane`` (points x multipliers: the block of each multiplier),
+  the attributes ``planar`` (orbits in the mirror plane of a symmetric spatial cable) and
+  ``mirror_image`` (a nonplanar branch born at a pitchfork, whose mirror image ``w -> -w`` is a
+  branch too) and, for a spatial cable, ``whirl_area`` (points x nodes, m^2: the signed area of
+  each node's path in its ``(w, v)`` plane) and ``tilt`` (deg: the orbit's mean plane of motion
+  from the cable's plane);
 - ``/modal/omega``: the linear modal frequencies, rad/s.
 """
 
@@ -62,6 +66,11 @@ def write_continuation(path: str | Path, res) -> Path:
                     "block of each multiplier: in-plane, out-of-plane (a planar orbit of a symmetric "
                     "spatial cable) or coupled")
             h.attrs["planar"] = bool(b.planar)
+            h.attrs["mirror_image"] = bool(b.mirror_image)
+            if b.whirl_area is not None:
+                put(h, "whirl_area", b.whirl_area, "m^2", "signed area of each node's path in its (w, v) "
+                    "cross-section plane over the orbit (positive counter-clockwise)")
+                put(h, "tilt", b.tilt, "deg", "angle of the orbit's mean plane of motion from the cable's plane")
         fg = g.create_group("bifurcations")
         bifs = res.bifurcations
         put(fg, "kind", np.array([b.kind for b in bifs], dtype="S"), "1", "fold, period-doubling, neimark-sacker")
@@ -115,6 +124,7 @@ def read_continuation(path: str | Path) -> dict:
             if "multiplier_plane" in b:
                 b["multiplier_plane"] = np.char.decode(b["multiplier_plane"].astype("S"))
             b["planar"] = bool(h.attrs.get("planar", False))
+            b["mirror_image"] = bool(h.attrs.get("mirror_image", False))
             b.update(name=name, period=int(h.attrs["period"]), parent=int(h.attrs["parent"]),
                      end=attr_text(h.attrs["end"]), index=int(h.attrs.get("index", len(branches))))
             branches.append(b)

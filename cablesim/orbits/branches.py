@@ -45,12 +45,14 @@ from .switching import (
     pitchfork_direction,
     start_factor,
 )
-from .symmetry import Mirror, split_multipliers
+from .symmetry import Mirror, split_multipliers, whirling_measures
 from .systems import OdeSystem, cable_system
 
 
 #: Perturbation sizes tried at a period doubling before giving up (each a quarter of the last).
 SWITCH_ATTEMPTS = 3
+#: Samples per forcing period of a nonplanar orbit for its whirling measures.
+WHIRL_SAMPLES = 256
 
 
 class OrbitProblem:
@@ -121,16 +123,19 @@ def _orbit_point(system: OdeSystem, shooting: Shooting, cp, branch: int, index: 
     ev: Evaluation = cp.evaluation
     d = system.displacements
     xmax, xmin = ev.xmax[d], ev.xmin[d]
-    mu, planes = ev.multipliers, None
+    mu, planes, whirl = ev.multipliers, None, None
     if mirror is not None:
         mu, planes = labelled_multipliers(mirror, ev.monodromy)
+    elif system.mirror is not None:  # a nonplanar orbit of a symmetric system
+        t, x = shooting.trajectory(cp.u, cp.lam, samples_per_period=WHIRL_SAMPLES)
+        whirl = whirling_measures(system.mirror, x, float(t[1] - t[0]))
     trusted = bool(cp.residual <= 10.0 * residual_tol and ev.liouville <= liouville_tol and np.all(np.isfinite(mu)))
     return OrbitPoint(
         branch=branch, index=index, parameter=float(cp.lam), omega=ev.omega, period=shooting.period,
         state=cp.u[: shooting.n].copy(), u=cp.u.copy(), amplitude=np.maximum(np.abs(xmax), np.abs(xmin)),
         halfrange=0.5 * (xmax - xmin), multipliers=mu.copy(), stable=stability.is_stable(mu), trusted=trusted,
         residual=float(cp.residual), liouville=float(ev.liouville), special=cp.special, located=cp.located,
-        planes=planes,
+        planes=planes, whirl=whirl,
     )
 
 

@@ -71,6 +71,10 @@ class OrbitPoint:
         block of every multiplier, ``"in-plane"`` or ``"out-of-plane"``; special points are then
         also ``"pitchfork"``, ``"out-of-plane period-doubling"`` or
         ``"out-of-plane neimark-sacker"``.
+    whirl : Whirling or None
+        On a nonplanar orbit of a mirror-symmetric system: the signed area of every node's path
+        across the plane and the tilt of the orbit's mean plane
+        (:func:`~cablesim.orbits.symmetry.whirling_measures`).
     """
 
     branch: int
@@ -90,6 +94,7 @@ class OrbitPoint:
     special: str | None = None
     located: bool = True
     planes: tuple | None = None
+    whirl: object = None
 
 
 @dataclass

@@ -52,12 +52,16 @@ class Mirror:
         Names of the even and odd blocks: ``("in-plane", "out-of-plane")``.
     normal : ndarray (3,)
         The plane's unit normal.
+    frame : ndarray (3, 3)
+        Columns: the in-plane axis along the chord, the in-plane axis across it and the normal
+        (:func:`~cablesim.modal.plane_basis`).
     """
 
     Q: np.ndarray
     n_odd: int
     labels: tuple = (IN_PLANE, OUT_OF_PLANE)
     normal: np.ndarray | None = None
+    frame: np.ndarray | None = None
 
     @property
     def dim(self) -> int:
@@ -122,7 +126,49 @@ def state_mirror(normal: np.ndarray, chord: np.ndarray, n_nodes: int) -> Mirror:
                 col[half + 3 * i : half + 3 * i + 3] = R[:, a]
                 (odd if a == 2 else even).append(col)
     Q = np.column_stack(even + odd)
-    return Mirror(Q=Q, n_odd=len(odd), normal=R[:, 2].copy())
+    return Mirror(Q=Q, n_odd=len(odd), normal=R[:, 2].copy(), frame=R)
+
+
+@dataclass(frozen=True)
+class Whirling:
+    """How a spatial orbit leaves its plane (:func:`whirling_measures`).
+
+    Attributes
+    ----------
+    area : ndarray (n_nodes,)
+        Signed area enclosed by each node's path in its cross-section plane ``(w, v)`` (``w``
+        along the normal, ``v`` the in-plane axis across the chord), m^2: positive when the node
+        goes round counter-clockwise in those axes, zero for a motion in the plane or along a
+        line.
+    tilt : float
+        Angle between the plane of symmetry and the orbit's mean plane of motion, degrees: the
+        principal direction of all nodes' ``(v, w)`` displacements over the orbit, from the
+        ``v`` axis (0 for a planar orbit, 90 for a motion straight across the plane).
+    """
+
+    area: np.ndarray
+    tilt: float
+
+
+def whirling_measures(mirror: Mirror, x: np.ndarray, dt: float) -> Whirling:
+    """Whirling measures of an orbit sampled uniformly in time at ``x`` (samples, 6 n): states
+    ``(z, y')`` over one closed orbit (first and last samples the same state), ``dt`` s apart.
+
+    The area is ``1/2 oint (w v' - v w') dt`` by the trapezoidal rule, which is spectrally
+    accurate for a smooth periodic integrand (a polygon through the samples would be short by
+    about ``(2 pi / N)^2 / 6`` of it)."""
+    n = x.shape[1] // 6
+    R = mirror.frame
+    q = np.asarray(x, dtype=float).reshape(x.shape[0], 2, n, 3) @ R  # (chord, across, normal) per node
+    v, w, dv, dw = q[:, 0, :, 1], q[:, 0, :, 2], q[:, 1, :, 1], q[:, 1, :, 2]
+    integrand = w * dv - v * dw
+    area = 0.5 * dt * np.sum(integrand[:-1], axis=0)
+    dv, dw = v - v.mean(axis=0), w - w.mean(axis=0)
+    cov = np.array([[np.sum(dv * dv), np.sum(dv * dw)], [np.sum(dv * dw), np.sum(dw * dw)]])
+    vals, vecs = np.linalg.eigh(cov)
+    e = vecs[:, -1]
+    tilt = float(np.degrees(np.arctan2(abs(e[1]), abs(e[0])))) if vals[-1] > 0 else 0.0
+    return Whirling(area=area, tilt=tilt)
 
 
 def cable_mirror(eom) -> Mirror | None:

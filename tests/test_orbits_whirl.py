@@ -355,3 +355,23 @@ def test_whirling_branch_is_born_at_the_pitchfork_and_is_a_nonplanar_orbit():
     assert 45.0 < tilt < 90.0 and abs(area) > 1e-4  # mostly across the plane, going round
     planar = d.branches[pf[0].branch]
     assert all(q.whirl is None for q in planar.points)
+
+
+def test_out_of_plane_period_doubling_is_switched_onto_a_nonplanar_period_two_branch():
+    """At the lower edge of the bead's parametric tongue the period-2 branch leaves the plane:
+    its orbits close after two forcing periods (not one) in an independent integration of the
+    spatial equations, with a clear out-of-plane motion."""
+    eom = equations(bead(0.6), 12.1)
+    d = continue_branches(eom, "omega", 12.1, 12.3)
+    pd = [b for b in d.bifurcations if b.kind == "period-doubling"]
+    assert len(pd) == 1 and pd[0].plane == "out-of-plane" and pd[0].child is not None
+    child = d.branches[pd[0].child]
+    assert child.period == 2 and not child.planar and len(child.points) > 3
+    p = child.points[-1]
+    T = 2 * np.pi / p.omega
+    sol = solve_ivp(spatial_rhs(eom, p.omega), (0.0, 2 * T), p.state, method="DOP853", rtol=1e-12, atol=1e-14,
+                    dense_output=True)
+    scale = np.abs(p.state).max()
+    assert np.abs(sol.y[:, -1] - p.state).max() < 1e-7 * scale  # closes after two periods
+    assert np.abs(sol.sol(T) - p.state).max() > 1e-2 * scale  # but not after one
+    assert p.amplitude[2] > 0.01  # w of the bead, m

@@ -51,6 +51,11 @@ from .systems import OdeSystem, cable_system
 
 #: Perturbation sizes tried at a period doubling before giving up (each a quarter of the last).
 SWITCH_ATTEMPTS = 3
+#: The special point of a period doubling, by the plane of its critical multiplier (None: an
+#: orbit whose monodromy is not split). An out-of-plane one is switched at like any other: the
+#: eigenvector nearest -1 of the whole monodromy is then the out-of-plane one.
+DOUBLINGS = {None: "period-doubling", "in-plane": "period-doubling",
+             "out-of-plane": "out-of-plane period-doubling"}
 #: Samples per forcing period of a nonplanar orbit for its whirling measures.
 WHIRL_SAMPLES = 256
 
@@ -230,7 +235,8 @@ class _Tracer:
         elif parent is not None:
             size = self.switch_size if size is None else size
             self.sizes[idx] = size
-            partners = [q for q in self.diagram.branches[parent].points if q.special == "period-doubling"]
+            kind = origin.plane if origin is not None else None
+            partners = [q for q in self.diagram.branches[parent].points if q.special == DOUBLINGS.get(kind)]
             watch = MergeWatch(partners, idx, sh.period, self.n, sh.segments // 2, self.state_scale, size)
         for p in prefix:
             p.branch, p.index = idx, len(br.points)
@@ -359,7 +365,7 @@ class _Tracer:
                                 q = min(others, key=lambda q: abs(q.parameter - child.points[-1].parameter))
                                 done_pd.add((br.index, q.index))
                     continue
-                if not (switch_branches and p.special == "period-doubling" and 2 * br.period <= max_period):
+                if not (switch_branches and p.special in DOUBLINGS.values() and 2 * br.period <= max_period):
                     continue
                 if (br.index, p.index) in done_pd:
                     continue

@@ -131,6 +131,7 @@ def assert_same_multipliers(a, b, tol):
 
 
 # ------------------------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_spatial_continuation_of_an_in_plane_case_is_the_planar_one():
     """The same branch, the same located period doublings and the planar multipliers as the
     in-plane block, over the paper's period-doubling band; every channel of the spatial case
@@ -281,6 +282,7 @@ def test_continue_command_stores_and_names_the_out_of_plane_bifurcations(tmp_pat
     assert res.exit_code == 0, (res.stdout, res.exception)
     assert "pitchfork" in res.stdout and "out-of-plane" in res.stdout
     d = read_continuation(out)
+    assert d["channels"] == ["z1", "z2", "z3"]  # every component of the spatial node (x, v, w)
     assert d["bifurcations"]["kind"] == ["pitchfork", "pitchfork"]
     assert d["bifurcations"]["plane"] == ["out-of-plane", "out-of-plane"]
     np.testing.assert_allclose(d["bifurcations"]["frequency_ratio"], 0.0, atol=1e-9)  # mu = +1

@@ -403,6 +403,24 @@ def out_of_plane_shape(y0: np.ndarray, support_A: np.ndarray, support_B: np.ndar
     return shape / np.abs(shape).max()
 
 
+def mirror_plane(points: np.ndarray, chord: np.ndarray, vectors=()) -> np.ndarray | None:
+    """Unit normal of a plane of mirror symmetry of a spatial cable, or None.
+
+    The plane of the equilibrium (:func:`equilibrium_plane`, nodes and supports in ``points``)
+    is a mirror of the motion when every load and support motion in ``vectors`` (each a flat
+    array of 3-vectors, one per node or support) lies in it as well, to :data:`PLANE_TOL` of the
+    largest of them: reflected through it, a motion is again a motion.
+    """
+    normal = equilibrium_plane(points, chord)
+    if normal is None:
+        return None
+    for v in vectors:
+        v = np.reshape(np.asarray(v, dtype=float), (-1, 3))
+        if v.size and np.abs(v @ normal).max() > PLANE_TOL * max(float(np.abs(v).max()), 1e-300):
+            return None
+    return normal
+
+
 def plane_basis(normal: np.ndarray, chord: np.ndarray) -> np.ndarray:
     """Columns ``(e1, e2, normal)``: ``e1`` along the chord's part in the plane, ``e2`` the
     third axis of a right-handed frame (3 x 3, orthonormal)."""

@@ -23,10 +23,23 @@ import numpy as np
 from . import bordered as bd
 from .continuation import Settings, continuation
 from .loci import CODIM2_TESTS, LocusEvaluation, LocusProblem, TwoParameterFlows
+from .shooting import Shooting, solve_orbit
 from .systems import OdeSystem
 
 #: Kinds of bifurcation that have curves.
 CURVE_KINDS = tuple(bd.RANK_DEFECT)
+#: Largest ``|mu + 1|`` of the half-period orbit where a curve of period-2p folds counts as ending
+#: on its period-doubling curve.
+GPD_TOL = 1e-3
+
+
+class LociInterrupted(KeyboardInterrupt):
+    """Ctrl-C or SIGTERM while tracing curves: ``loci`` holds the curves traced until then, the
+    last one as far as it got (its ends ``"interrupted"``)."""
+
+    def __init__(self, loci: list):
+        super().__init__("interrupted")
+        self.loci = loci
 
 
 @dataclass
@@ -293,24 +306,66 @@ def trace_locus(
     B0, C0 = problem.borders()
     st = replace(settings or Settings(), lam_min=min(p2_range), lam_max=max(p2_range))
     halves = []
-    for direction in (-1.0, 1.0):
-        problem.set_borders(B0, C0)
-        half = _Half(problem, system, p1_range, liouville_tol, callback)
-        res = continuation(problem, U0, x2, st, callback=half.on_point, direction=direction)
-        half.finish(res.status, st)
-        halves.append(half)
     locus = Locus(index=index, kind=kind, period=period, parameters=tuple(parameters), origin=(float(x1), float(x2)))
+    try:
+        for direction in (-1.0, 1.0):
+            problem.set_borders(B0, C0)
+            half = _Half(problem, system, p1_range, liouville_tol, callback)
+            halves.append(half)
+            res = continuation(problem, U0, x2, st, callback=half.on_point, direction=direction)
+            half.finish(res.status, st)
+            if half.end.startswith("step too small") and kind == "fold" and period % 2 == 0 and segments % 2 == 0:
+                _generalized_period_doubling(half, flows, integration)
+    except KeyboardInterrupt:
+        halves[-1].end = "interrupted"
+        if len(halves) == 1:
+            halves.append(_Half(problem, system, p1_range, liouville_tol, None))
+            halves[-1].end = "interrupted"
+        _assemble(locus, halves, kind, scales, (x1, x2), problem, flows, t0)
+        raise LociInterrupted([locus]) from None
+    return _assemble(locus, halves, kind, scales, (x1, x2), problem, flows, t0)
+
+
+def _assemble(locus: Locus, halves: list, kind: str, scales, origin, problem, flows, t0: float) -> Locus:
+    """The two halves as one curve (the first reversed), with its ends and cost."""
     first, second = halves
-    tail = [p for p in second.points[1:] if not _same(p, second.points[0], scales)]
+    tail = [p for p in second.points[1:] if not _same(p, second.points[0], scales)] if second.points else []
+    if not first.points:  # interrupted before the first point
+        first.points = second.points[:1]
     locus.points = first.points[::-1] + tail
-    locus.points = _drop_duplicates(locus.points, kind, scales, (x1, x2))
+    locus.points = _drop_duplicates(locus.points, kind, scales, origin)
     for k, p in enumerate(locus.points):
         p.index = k
-    locus.ends = (first.end, second.end if tail else first.end)
+    # a curve started on a bound of p2 has no second half: its origin is that end
+    locus.ends = (first.end, second.end or first.end)
     locus.evaluations = problem.evaluations
     locus.segments = flows.calls
     locus.seconds = time.perf_counter() - t0
     return locus
+
+
+def _generalized_period_doubling(half: _Half, flows: TwoParameterFlows, integration: dict | None) -> None:
+    """A curve of folds of period-2p orbits that cannot be followed further may be ending on the
+    period-doubling curve of the period-p orbits, at a generalized period doubling (where that
+    period doubling changes from sub- to supercritical, and the period-2p branch born there
+    starts to fold): the two curves meet tangentially and the defining system of the fold
+    degenerates as the period-2p orbit shrinks onto the doubled period-p one. The end is named
+    so when the period-p orbit at the last point (from the mean of the two laps) has a multiplier
+    within :data:`GPD_TOL` of -1; the point is approximate (``located`` False)."""
+    if not half.points:
+        return
+    last = half.points[-1]
+    m, n = flows.m, flows.n
+    S = last.u.reshape(m, n)
+    guess = 0.5 * (S[: m // 2] + S[m // 2 :]).ravel()
+    flows.set(last.p1, last.p2)
+    sh = Shooting(flows.sh1.system, flows.sh1.period // 2, m // 2, parameter=flows.p1, **(integration or {}))
+    sol = solve_orbit(sh, guess, last.p1, scale=np.tile(half.problem.scale, 1))
+    if not sol.converged or np.abs(sol.evaluation.multipliers + 1.0).min() > GPD_TOL:
+        return
+    half.points.append(replace(last, index=len(half.points), special="generalized period doubling", located=False))
+    half.end = (f"ends on the period-doubling curve of the period-{flows.sh1.period // 2} orbits "
+                "(generalized period doubling)")
 
 
 def _same(p: LocusPoint, q: LocusPoint, scales, tol: float = 1e-9) -> bool:
@@ -330,3 +385,90 @@ def _drop_duplicates(points: list, kind: str, scales, origin) -> list:
             continue
         out.append(p)
     return out
+
+
+def _covered(loci: list, kind: str, period: int, x1: float, x2: float, scales) -> bool:
+    """Whether a curve already traced passes through the bifurcation ``(x1, x2)``."""
+    for loc in loci:
+        if loc.kind != kind or loc.period != period:
+            continue
+        if abs(loc.origin[0] - x1) <= 1e-6 * scales[0] and abs(loc.origin[1] - x2) <= 1e-9 * scales[1]:
+            return True
+        for p in loc.points:
+            if p.special in ("level", "bound", None) and abs(p.p2 - x2) <= 1e-7 * scales[1] \
+                    and abs(p.p1 - x1) <= 1e-6 * scales[0]:
+                return True
+    return False
+
+
+def trace_loci(
+    system: OdeSystem,
+    diagram,
+    x2: float,
+    p1_range: tuple[float, float],
+    p2_range: tuple[float, float],
+    parameters: tuple[str, str] = ("omega", "gamma"),
+    state_scale: np.ndarray | None = None,
+    scales: tuple[float, float] | None = None,
+    levels=(),
+    kinds=CURVE_KINDS,
+    settings: Settings | None = None,
+    integration: dict | None = None,
+    liouville_tol: float = 1e-3,
+    callback: Callable[[Locus, LocusPoint], bool | None] | None = None,
+) -> list[Locus]:
+    """The bifurcation curves through every located, trusted fold, period doubling and
+    Neimark-Sacker point of a response diagram (module docstring).
+
+    Parameters
+    ----------
+    system : OdeSystem
+        The system the diagram was traced on.
+    diagram : ResponseDiagram
+        Traced in ``parameters[0]`` at ``parameters[1] = x2``.
+    x2 : float
+        The diagram's value of the second parameter.
+    p1_range, p2_range, parameters, state_scale, scales, settings, integration, liouville_tol
+        See :func:`trace_locus`.
+    levels : sequence of float
+        Values of ``p2`` whose crossings are located (``x2`` is always one).
+    kinds : sequence of str
+        Kinds of bifurcation followed.
+    callback : callable, optional
+        ``callback(locus, point)`` for every point (the locus still being traced); True ends
+        that direction of that curve.
+
+    Returns
+    -------
+    list of Locus
+        One per curve, in the order of the diagram's bifurcations that started them.
+    """
+    if diagram.parameter != parameters[0]:
+        raise ValueError(f"the diagram is traced in {diagram.parameter}, not in {parameters[0]}")
+    if scales is None:
+        scales = (max(abs(p1_range[0]), abs(p1_range[1])), max(abs(p2_range[0]), abs(p2_range[1])))
+    levels = tuple(dict.fromkeys([float(x2), *map(float, levels)]))
+    loci: list[Locus] = []
+    for b in diagram.bifurcations:
+        if b.kind not in kinds or not (b.located and b.trusted):
+            continue
+        if _covered(loci, b.kind, b.period, b.parameter, x2, scales):
+            continue
+        br = diagram.branches[b.branch]
+        p = br.points[b.point]
+        index = len(loci)
+        shell = Locus(index=index, kind=b.kind, period=b.period, parameters=tuple(parameters))
+        cb = None if callback is None else (lambda q, shell=shell: callback(shell, q))
+        try:
+            loc = trace_locus(system, b.kind, p.u, b.parameter, x2, p1_range, p2_range, parameters=parameters,
+                              period=b.period, segments=br.segments, kappa=float(np.real(b.multiplier)),
+                              state_scale=state_scale, scales=scales, levels=levels, settings=settings,
+                              integration=integration, liouville_tol=liouville_tol, callback=cb, index=index)
+        except FloatingPointError:
+            continue
+        except LociInterrupted as exc:
+            raise LociInterrupted(loci + [L for L in exc.loci if L.points]) from None
+        except KeyboardInterrupt:
+            raise LociInterrupted(loci) from None
+        loci.append(loc)
+    return loci

@@ -34,7 +34,9 @@ Codimension-two points located on a curve (sign changes of test functions, secan
 
 and, on every curve, its turning points in ``p2`` (``turning point``: for instance the least
 forcing at which a period-doubling tongue exists) and its crossings of given values of ``p2``
-(``level``).
+(``level``). A curve of folds of period-2p orbits that ends on the period-doubling curve of the
+period-p orbits is marked there as a ``generalized period doubling``
+(:mod:`cablesim.orbits.curves`; approximate: the defining system degenerates as the curves meet).
 """
 
 from __future__ import annotations

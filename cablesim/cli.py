@@ -22,6 +22,7 @@ from typing import Optional
 
 import typer
 
+from . import cli_charts
 from .errors import CablesimError
 from .io.terminal import (ANALYSIS_OPT, CASE_ARG, FORCE_OPT, INTEGRATOR_OPT, MODES_OPT, SET_OPT, SLACK_OPTION,
                            SNAPSHOTS_OPT, STAMP_OPT, Analysis, CommandGroup, IntegratorName, LazyBar, SlackPolicy, StatusLine,
@@ -506,17 +507,17 @@ def continue_(
     out = output if output is not None else Path("runs") / case.name / "continuation.h5"
     if overlay is not None and not overlay.is_file():
         raise CablesimError(f"--overlay {overlay}: no such sweep file; give the output of cablesim sweep.")
-    _check_outputs(out, case_file, (lambda o: [o.with_suffix(".png")]) if plot else [])
+    _check_outputs(out, case_file, (lambda o: [o.with_suffix(".png"), *cli_charts.chart_pngs(case, o)]) if plot else [])
     _effective(ctx, output=out)
     t0 = time.perf_counter()
     with compiling(_note), StatusLine(quiet=_OUT["quiet"]) as status:
-        run = api.continuation(case, analysis.value if analysis else None, progress=lambda p: status(
-            f"continuing: branch {p.branch} (period {p.period}), {p.parameter:.5g}, orbit {p.index}"))
+        run = cli_charts.interruptible(lambda: api.continuation(case, analysis.value if analysis else None, progress=cli_charts.branch_status(
+            status), loci_progress=cli_charts.loci_status(status)), case, out, "the response and the curves traced")
     run.to_hdf5(out)
-    _echo(continuation_summary(case, run.result, time.perf_counter() - t0))
+    _echo(continuation_summary(case, run.result, time.perf_counter() - t0) + cli_charts.loci_text(run.result))
     msg = f"\nWrote {out}"
     if plot:
-        msg += f" and {plot_continuation(out, out.with_suffix('.png'), overlay=overlay)}"
+        msg += f" and {plot_continuation(out, out.with_suffix('.png'), overlay=overlay)}" + cli_charts.chart_text(out, run.result)
     _echo(msg)
 
 
@@ -585,6 +586,9 @@ def stress(
     if failed:
         say_error(f"{failed} stress run(s) FAILED (listed above and in {md_path}); each is a bug to fix.")
         raise typer.Exit(1)
+
+
+cli_charts.register(app, user_errors)  # cablesim backbone
 
 
 def main():

@@ -14,6 +14,7 @@ from ..channels import channel_index
 from ..errors import CablesimError
 from ..names import ANALYSES, SLACK_POLICIES
 from .sections import (
+    BackboneSpec,
     CableSpec,
     ContinuationSpec,
     DampingSpec,
@@ -48,6 +49,7 @@ class Case(StrictModel):
     free_vibration: FreeVibrationSpec = FreeVibrationSpec()
     sweep: SweepSpec | None = None
     continuation: ContinuationSpec | None = None
+    backbone: BackboneSpec = BackboneSpec()
     outputs: OutputsSpec = OutputsSpec()
     figure: FigureSpec | None = None
     _text: str = PrivateAttr(default="")
@@ -97,7 +99,9 @@ class Case(StrictModel):
                              "give displacements from the equilibrium smaller than that, in m")
         if fv.mode is not None and fv.mode > 2 * n:
             raise ValueError(f"free_vibration.mode must be between 1 and 2n = {2 * n}")
-        for section in ("history", "free_vibration", "sweep", "outputs", "continuation", "figure"):
+        if self.backbone.mode > 2 * n:
+            raise ValueError(f"backbone.mode is {self.backbone.mode}; this cable has 2n = {2 * n} modes")
+        for section in ("history", "free_vibration", "sweep", "outputs", "continuation", "backbone", "figure"):
             spec = getattr(self, section)
             for name in (getattr(spec, "channels", None) or ()) if spec is not None else ():
                 try:

@@ -444,12 +444,19 @@ class ParameterRange(StrictModel):
         return self
 
 
+class LociRange(ParameterRange):
+    """The range of gamma over which bifurcation curves are continued (``continuation.gamma``
+    with ``loci: true``), and the gamma of the frequency response whose bifurcations start them."""
+
+    at: float | None = Field(default=None, gt=0, description="gamma of the response curve (default: stop)")
+
+
 class ContinuationSpec(StrictModel):
     """Periodic responses by shooting and pseudo-arclength continuation (``continuation:``)."""
 
     parameter: Literal[CONTINUATION_PARAMETERS] = Field(default="omega", description="omega | gamma")
     omega: ParameterRange | float = Field(description="range (parameter omega) or value, rad/s")
-    gamma: ParameterRange | float = Field(default=1.0, description="range (parameter gamma) or value; scales FL")
+    gamma: LociRange | float = Field(default=1.0, description="range (parameter gamma, or loci) or value; scales FL")
     period: int = Field(default=1, ge=1, le=16, description="period of the first branch, forcing periods")
     switch_branches: bool = Field(default=True, description="follow every period doubling onto its 2p branch")
     channels: tuple[str, ...] | None = Field(default=None, description="DOF reported, e.g. [z2, z4]")
@@ -458,10 +465,24 @@ class ContinuationSpec(StrictModel):
     segments: int = Field(default=1, ge=1, le=64, description="shooting segments per orbit (multiple shooting)")
     max_period: int = Field(default=8, ge=1, le=64, description="no branch switching beyond this period")
     max_points: int = Field(default=2000, ge=2, le=100_000, description="most points per branch")
+    loci: bool = Field(default=False, description=(
+        "continue every fold, period doubling and Neimark-Sacker point found in omega and gamma "
+        "(gamma: {start, stop, at}): the stability chart"))
 
     @model_validator(mode="after")
     def _ranges(self):
         ranged = {k: isinstance(getattr(self, k), ParameterRange) for k in ("omega", "gamma")}
+        if self.loci:
+            if self.parameter != "omega" or not (ranged["omega"] and ranged["gamma"]):
+                raise ValueError(
+                    "continuation.loci needs the response in omega (parameter: omega, the default) with "
+                    "continuation.omega a range {start: .., stop: ..} and continuation.gamma the range of "
+                    "the curves {start: .., stop: .., at: ..} (at: the gamma of the response, default stop)")
+            g = self.gamma
+            if g.at is not None and not min(g.start, g.stop) <= g.at <= max(g.start, g.stop):
+                raise ValueError(f"continuation.gamma.at ({g.at:g}) must lie between gamma.start ({g.start:g}) and "
+                                 f"gamma.stop ({g.stop:g}), the range the curves are continued over")
+            return self
         other = "gamma" if self.parameter == "omega" else "omega"
         if not ranged[self.parameter]:
             raise ValueError(
@@ -469,7 +490,11 @@ class ContinuationSpec(StrictModel):
                 f"range {{start: .., stop: ..}}"
             )
         if ranged[other]:
-            raise ValueError(f"continuation.{other} must be a single value when the parameter is {self.parameter}")
+            hint = " (or add loci: true to continue the bifurcations over that gamma range)" if other == "gamma" else ""
+            raise ValueError(f"continuation.{other} must be a single value when the parameter is {self.parameter}"
+                             + hint)
+        if isinstance(self.gamma, LociRange) and self.gamma.at is not None:
+            raise ValueError("continuation.gamma.at is used only with loci: true")
         if not isinstance(getattr(self, other), ParameterRange) and not getattr(self, other) > 0:
             raise ValueError(f"continuation.{other} must be positive")
         return self
@@ -481,8 +506,24 @@ class ContinuationSpec(StrictModel):
 
     @property
     def fixed(self) -> float:
-        """The value of the other parameter (omega in rad/s, or gamma)."""
+        """The value of the other parameter (omega in rad/s, or gamma; with loci the gamma of the
+        response curve)."""
+        if self.loci:
+            g = self.gamma
+            return float(g.at if g.at is not None else g.stop)
         return float(getattr(self, "gamma" if self.parameter == "omega" else "omega"))
+
+
+class BackboneSpec(StrictModel):
+    """Backbone curves of the unforced, undamped cable (section ``backbone:``, ``cablesim backbone``)."""
+
+    mode: MODE = Field(default=1, description="linear mode the backbone starts from")
+    amplitude: real(0.0, 1e5, "m", lo_open=True) | None = Field(
+        default=None, description="largest |z| of the channels followed, m (default: 2 % of the chord)")
+    channels: tuple[str, ...] | None = Field(default=None, description="DOF reported and followed, e.g. [z2, z4]")
+    max_points: int = Field(default=2000, ge=2, le=100_000, description="most points")
+    max_ratio: real(0.0, 100.0, lo_open=True) = Field(
+        default=5.0, description="largest frequency ratio of the internal resonances watched")
 
 
 class OutputsSpec(StrictModel):

@@ -9,6 +9,8 @@ Layout (with the root attributes of every cablesim file, see :mod:`cablesim.io.h
   ``period``, ``channels``, ``parent`` (-1: none) and ``end``;
 - ``/continuation/bifurcations/{kind, parameter, omega, branch, period, amplitude (x channels),
   multiplier (complex), located, trusted}``;
+- with ``continuation.loci``: ``/continuation/loci/<name>/...`` and ``/continuation/codim2/...``,
+  the bifurcation curves (:mod:`cablesim.io.charts`);
 - ``/modal/omega``: the linear modal frequencies, rad/s.
 """
 
@@ -20,6 +22,7 @@ import h5py
 import numpy as np
 
 from ..errors import CablesimError
+from .charts import read_loci, write_loci
 from .hdf5 import atomic_h5, attr_text, put, stamp
 
 #: Bifurcation kinds, in the order the files store their names.
@@ -64,6 +67,8 @@ def write_continuation(path: str | Path, res) -> Path:
         put(fg, "multiplier", np.array([b.multiplier for b in bifs], dtype=complex), "1", "critical multiplier")
         put(fg, "located", np.array([b.located for b in bifs], dtype=bool), "1", "location converged")
         put(fg, "trusted", np.array([b.trusted for b in bifs], dtype=bool), "1", "multipliers trusted")
+        if getattr(res, "gamma_range", None) is not None:
+            write_loci(g, res)  # bifurcation curves (cablesim.io.charts)
         m = f.create_group("modal")
         put(m, "omega", res.modal_omega, "rad/s", "linear modal frequencies about the equilibrium")
     return Path(path)
@@ -77,7 +82,8 @@ def read_continuation(path: str | Path) -> dict:
     dict
         ``parameter``, ``start``, ``stop``, ``fixed``, ``channels``, ``case_name``, ``analysis``,
         ``modal`` (rad/s), ``branches`` (list of dicts with the datasets and ``name``, ``period``,
-        ``parent``, ``end``, in file order) and ``bifurcations`` (dict of arrays).
+        ``parent``, ``end``, in file order), ``bifurcations`` (dict of arrays) and ``loci``
+        (:func:`~cablesim.io.charts.read_loci`, None without bifurcation curves).
     """
     path = Path(path)
     try:
@@ -106,4 +112,5 @@ def read_continuation(path: str | Path) -> dict:
         bif = {k: np.asarray(fg[k][()]) for k in fg}
         bif["kind"] = [attr_text(k) for k in bif.get("kind", [])]
         out["bifurcations"] = bif
+        out["loci"] = read_loci(g)
     return out

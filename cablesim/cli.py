@@ -526,8 +526,9 @@ def continue_(
 def plot(
     ctx: typer.Context,
     results: list[Path] = typer.Argument(..., metavar="RESULT.h5", show_default=False,
-                                         help="HDF5 result files of cablesim static, history, free-vibration "
-                                         "or sweep (one type at a time)."),
+                                         help="HDF5 result files of cablesim static, history, free-vibration, "
+                                         "sweep, continue or backbone (one type at a time; a continuation "
+                                         "with a sweep, or continuations with a backbone, are drawn together)."),
     output: Optional[Path] = typer.Option(None, "-o", "--output", metavar="PNG",
                                           help="PNG file (default: the first file with suffix .png)."),
     figure: Optional[Path] = typer.Option(None, "--figure", metavar="FIGURE.yaml",

@@ -241,3 +241,82 @@ def test_bad_backbone_options_are_refused_cleanly(invoke_cli, args, words):
     res = invoke_cli("backbone", CONFIG, "-o", "x.h5", *args)
     assert res.returncode == 2 and words in res.stderr and "Traceback" not in res.stderr
     assert not Path("x.h5").exists()
+
+
+# ----------------------------------------------------------------------------------------------
+# The issue's checks on the paper example (slow: several responses each)
+# ----------------------------------------------------------------------------------------------
+def _levels(result, kind: str, period: int) -> dict:
+    """(gamma -> sorted omegas) of the crossings of the levels of gamma on the curves of a kind."""
+    out: dict = {}
+    for L in result.loci:
+        if L.kind != kind or L.period != period:
+            continue
+        for k, sp in enumerate(L.special):
+            if sp == "level":
+                out.setdefault(round(float(L.gamma[k]), 9), []).append(float(L.omega[k]))
+    return {g: sorted(w) for g, w in out.items()}
+
+
+def _single_curve(setting: str, gamma: float, kind: str, period: int) -> list:
+    case = cablesim.load_case(CONFIG, overrides=[setting.format(gamma=gamma)])
+    bifs = cablesim.continuation(case).result.bifurcations
+    return sorted(float(b.parameter) for b in bifs if b.kind == kind and b.period == period and b.located)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("loci, single, kind, period, levels", [
+    # the fold curve of the primary resonance, its two folds meeting at a cusp near gamma 1.12
+    ("continuation={omega: {start: 2.2, stop: 2.8}, channels: [z2], loci: true, "
+     "gamma: {start: 0.3, stop: 3.0, levels: [1.5, 2.0, 2.5]}}",
+     "continuation={{omega: {{start: 2.2, stop: 2.8}}, gamma: {gamma}, channels: [z2]}}", "fold", 1, (1.5, 2.0, 2.5)),
+    # the period-doubling tongue near 2 w1 and the fold curve of its period-2 orbits
+    ("continuation={omega: {start: 4.9, stop: 5.2}, channels: [z2], loci: true, "
+     "gamma: {start: 0.8, stop: 1.0, levels: [0.9, 0.95]}}",
+     "continuation={{omega: {{start: 4.9, stop: 5.2}}, gamma: {gamma}, channels: [z2]}}", "period-doubling", 1,
+     (0.9, 0.95)),
+    ("continuation={omega: {start: 4.9, stop: 5.2}, channels: [z2], loci: true, "
+     "gamma: {start: 0.8, stop: 1.0, levels: [0.95]}}",
+     "continuation={{omega: {{start: 4.9, stop: 5.2}}, gamma: {gamma}, channels: [z2]}}", "fold", 2, (0.95,)),
+])
+def test_points_of_single_curves_lie_on_the_continued_curves(loci, single, kind, period, levels):
+    """The bifurcations that `cablesim continue` locates on single response curves at several
+    values of gamma (each its own continuation in omega) are where the continued curves cross
+    those values of gamma, to 1e-6 in omega (relative; measured 4e-12 to 1.6e-10)."""
+    res = cablesim.continuation(cablesim.load_case(CONFIG, overrides=[loci])).result
+    on_curves = _levels(res, kind, period)
+    for g in levels:
+        found = _single_curve(single, g, kind, period)
+        assert found, (kind, g)
+        assert len(on_curves.get(round(g, 9), [])) == len(found), (g, found, on_curves)
+        np.testing.assert_allclose(on_curves[round(g, 9)], found, rtol=1e-6)  # measured 2e-10 at most
+
+
+@pytest.mark.slow
+def test_backbone_passes_through_the_peaks_of_lightly_damped_responses():
+    """The forced response's peak (omega_p, a_p) in z2 against the backbone's frequency at the
+    amplitude a_p, for damping ratios 1 %, 0.5 % and 0.25 % with gamma proportional to the
+    damping (peaks of about the same size, 2.2 m): the distance shrinks with the damping,
+    about as its square as for a linear resonance (measured 1.4e-4, 3.1e-5, 5.5e-6 rad/s)."""
+    from scipy.interpolate import CubicSpline
+
+    bb = cablesim.backbone(cablesim.load_case(CONFIG), mode=1, amplitude=4.0).result
+    a_bb = bb.amplitude[:, 1]
+    assert np.all(np.diff(a_bb) > 0)
+    omega_bb = CubicSpline(a_bb, bb.omega)
+    gaps = []
+    for ratio in (0.01, 0.005, 0.0025):
+        case = cablesim.load_case(CONFIG, overrides=[
+            f"damping.ratio={ratio}", f"continuation={{omega: {{start: 2.45, stop: 2.56}}, gamma: {25 * ratio}, "
+            "channels: [z2]}"])
+        b = cablesim.continuation(case).result.branches[0]
+        a = b.amplitude[:, 0]
+        k = int(np.argmax(a))
+        # the peak by a parabola through the three highest points
+        c = np.polyfit(b.parameter[k - 1:k + 2], a[k - 1:k + 2], 2)
+        w_p = -c[1] / (2 * c[0])
+        a_p = np.polyval(c, w_p)
+        assert a_bb[0] < a_p < a_bb[-1]
+        gaps.append(abs(w_p - float(omega_bb(a_p))))
+    assert gaps[1] < 0.6 * gaps[0] and gaps[2] < 0.6 * gaps[1]
+    assert gaps[2] < 1e-3 * bb.linear_omega

@@ -137,7 +137,8 @@ def case_loci(case: Case, eom, diagram, idx: np.ndarray, progress: Callable | No
     Parameters
     ----------
     case : Case
-        ``continuation.loci`` set; ``continuation.gamma`` the range of the curves.
+        ``continuation.loci`` set; ``continuation.gamma`` the range of the curves (its
+        ``levels``: the values of gamma whose crossings are located on every curve).
     eom : EquationsOfMotion
         Of the case (its ``FL`` is what gamma multiplies).
     diagram : ResponseDiagram
@@ -164,7 +165,8 @@ def case_loci(case: Case, eom, diagram, idx: np.ndarray, progress: Callable | No
     scale, w_scale = cable_scales(eom, "omega", w.start, w.stop, max(g.start, g.stop))
     g_scale = max(abs(g.start), abs(g.stop))
     loci = trace_loci(system, diagram, g0, (w.start, w.stop), (g.start, g.stop), state_scale=scale,
-                      scales=(w_scale, g_scale), settings=Settings(max_points=spec.max_points), callback=progress)
+                      scales=(w_scale, g_scale), levels=g.levels, settings=Settings(max_points=spec.max_points),
+                      callback=progress)
     stats = {"loci_evaluations": sum(L.evaluations for L in loci), "loci_points": sum(len(L.points) for L in loci),
              "loci_seconds": sum(L.seconds for L in loci)}
     return [_locus_result(L, idx) for L in loci], _codim2(loci, idx), stats

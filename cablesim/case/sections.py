@@ -449,6 +449,8 @@ class LociRange(ParameterRange):
     with ``loci: true``), and the gamma of the frequency response whose bifurcations start them."""
 
     at: float | None = Field(default=None, gt=0, description="gamma of the response curve (default: stop)")
+    levels: tuple[float, ...] = Field(default=(), description=(
+        "values of gamma at which each curve's crossings are located (special: level), e.g. [0.5, 2]"))
 
 
 class ContinuationSpec(StrictModel):
@@ -482,6 +484,10 @@ class ContinuationSpec(StrictModel):
             if g.at is not None and not min(g.start, g.stop) <= g.at <= max(g.start, g.stop):
                 raise ValueError(f"continuation.gamma.at ({g.at:g}) must lie between gamma.start ({g.start:g}) and "
                                  f"gamma.stop ({g.stop:g}), the range the curves are continued over")
+            bad = [x for x in g.levels if not min(g.start, g.stop) <= x <= max(g.start, g.stop)]
+            if bad:
+                raise ValueError(f"continuation.gamma.levels: {', '.join(f'{x:g}' for x in bad)} outside the range "
+                                 f"gamma.start ({g.start:g}) to gamma.stop ({g.stop:g}); give levels inside it")
             return self
         other = "gamma" if self.parameter == "omega" else "omega"
         if not ranged[self.parameter]:
@@ -493,8 +499,8 @@ class ContinuationSpec(StrictModel):
             hint = " (or add loci: true to continue the bifurcations over that gamma range)" if other == "gamma" else ""
             raise ValueError(f"continuation.{other} must be a single value when the parameter is {self.parameter}"
                              + hint)
-        if isinstance(self.gamma, LociRange) and self.gamma.at is not None:
-            raise ValueError("continuation.gamma.at is used only with loci: true")
+        if isinstance(self.gamma, LociRange) and (self.gamma.at is not None or self.gamma.levels):
+            raise ValueError("continuation.gamma.at and continuation.gamma.levels are used only with loci: true")
         if not isinstance(getattr(self, other), ParameterRange) and not getattr(self, other) > 0:
             raise ValueError(f"continuation.{other} must be positive")
         return self

@@ -31,7 +31,7 @@ from cablesim.io.continuation import read_continuation
 CONFIG = Path(__file__).resolve().parents[1] / "configs" / "paper-example.yaml"
 #: The period-doubling band near 2 w1, its curves continued down to gamma 0.8.
 LOCI = ("continuation={omega: {start: 4.9, stop: 5.2}, channels: [z2, z4], loci: true, "
-        "gamma: {start: 0.8, stop: 1.0}}")
+        "gamma: {start: 0.8, stop: 1.0, levels: [0.9]}}")
 TIGHT = dict(method="DOP853", rtol=1e-12, atol=1e-14 * 300)
 
 
@@ -98,6 +98,9 @@ def test_loci_layout_and_summary(loci_run):
             assert all(h[k].attrs["units"] for k in h)
             assert np.isfinite(h["omega"][()]).all() and np.isfinite(h["gamma"][()]).all()
         assert "codim2" in f["continuation"] and "kind" in f["continuation/codim2"]
+        pd = next(lg[name] for name in lg if lg[name].attrs["kind"] == "period-doubling")
+        crossings = pd["gamma"][()][[s == b"level" for s in pd["special"][()]]]
+        np.testing.assert_allclose(crossings, [0.9, 0.9], rtol=1e-9)  # both edges of the tongue (measured 2e-11)
     assert "Bifurcation curves in (omega, gamma)" in stdout and "pd0-p1" in stdout
     chart = out.with_name(out.stem + "-chart.png")
     assert chart.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and chart.stat().st_size > 20_000
@@ -161,6 +164,8 @@ def test_plot_redraws_the_response_and_its_chart(loci_run, invoke_cli, tmp_path)
     ("continuation={parameter: gamma, omega: 5.0, loci: true, gamma: {start: 0.5, stop: 1.0}}",
      "continuation.loci needs"),
     ("continuation={omega: {start: 4.9, stop: 5.2}, gamma: {start: 0.5, stop: 1.0}}", "add loci: true"),
+    ("continuation={omega: {start: 4.9, stop: 5.2}, loci: true, gamma: {start: 0.5, stop: 1.0, levels: [3]}}",
+     "continuation.gamma.levels"),
 ])
 def test_bad_loci_settings_are_refused_cleanly(invoke_cli, setting, words):
     res = invoke_cli("continue", CONFIG, "-o", "x.h5", "--set", setting)
@@ -230,6 +235,44 @@ def test_backbone_command_and_plot_over_a_response(backbone_file, invoke_cli, tm
     res = invoke_cli("plot", "cont.h5", "bb.h5", "-o", "over.png")
     assert res.returncode == 0, res.stderr
     assert (tmp_path / "over.png").stat().st_size > 20_000
+
+
+def test_an_interrupted_backbone_keeps_its_orbits_and_never_replaces_a_complete_file(backbone_file, tmp_path):
+    """Ctrl-C after four orbits: the API raises Interrupted with those orbits (marked
+    incomplete); the command writes them beside a complete file of the same name, which stays
+    as it was, and exits with status 130."""
+    import typer
+
+    from cablesim.analyses.charts import Interrupted
+    from cablesim.cli_charts import interruptible
+    from cablesim.io.hdf5 import is_complete_result
+
+    case, _, complete = backbone_file
+    seen = []
+
+    def progress(p):
+        seen.append(p)
+        if len(seen) == 4:
+            raise KeyboardInterrupt
+
+    with pytest.raises(Interrupted) as exc:
+        cablesim.backbone(case, mode=1, amplitude=1.0, progress=progress)
+    part = exc.value.result
+    assert not part.complete and part.omega.size == 4 and part.end == "interrupted"
+    target = tmp_path / "bb.h5"
+    target.write_bytes(complete.read_bytes())
+    before = target.read_bytes()
+
+    def compute():
+        raise Interrupted(part)
+
+    with pytest.raises(typer.Exit) as ex:
+        interruptible(compute, case, target, "the orbits computed")
+    assert ex.value.exit_code == 130
+    assert target.read_bytes() == before and is_complete_result(target)
+    kept = tmp_path / "bb.partial.h5"
+    d = read_backbone(kept)
+    assert not d["complete"] and d["omega"].size == 4 and not is_complete_result(kept)
 
 
 @pytest.mark.parametrize("args, words", [

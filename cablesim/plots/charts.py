@@ -148,8 +148,9 @@ def _draw_thresholds(ax, d: dict) -> bool:
             if sp == "turning point" and L["gamma"][k] <= L["gamma"].min() * (1 + 1e-9):
                 x, y = float(L["omega"][k]), float(L["gamma"][k])
                 ax.plot(x, y, "v", color=KIND_STYLE[L["kind"]][0], mfc="white", ms=6, zorder=6)
+                # left of the point and below: codimension-two labels go to its right
                 ax.annotate(f"least $\\gamma$ = {y:.3g}\nat {x:.4g} rad/s", (x, y), textcoords="offset points",
-                            xytext=(0, -8), ha="center", va="top", fontsize=8, zorder=7)
+                            xytext=(-6, -6), ha="right", va="top", fontsize=8, zorder=7)
                 drawn = True
     return drawn
 

@@ -275,6 +275,30 @@ def test_an_interrupted_backbone_keeps_its_orbits_and_never_replaces_a_complete_
     assert not d["complete"] and d["omega"].size == 4 and not is_complete_result(kept)
 
 
+def test_backbone_in_the_approximate_analysis_starts_on_higher_modes():
+    """Mode 2 in the approximate analysis (whose flow map's round-off stalled Newton's
+    corrections at 1e-9, so that the backbone never started): it starts at the approximate
+    analysis's own linear frequency and follows the family."""
+    case = cablesim.load_case(CONFIG)
+    r = cablesim.backbone(case, mode=2, amplitude=0.2, analysis="approximate").result
+    assert r.analysis == "approximate" and r.complete and r.end.startswith("reached 0.2 m")
+    static = run_static(case, "approximate")
+    assert r.linear_omega == pytest.approx(float(static.modes.omega[1]), rel=1e-9)
+    assert r.omega[0] == pytest.approx(r.linear_omega, rel=1e-6)  # 0.002 m: still linear
+    assert r.omega.size >= 5 and np.abs(r.delta).max() < 1e-9 and r.trusted.all()
+
+
+def test_a_backbone_that_cannot_start_is_a_clear_error(invoke_cli, monkeypatch):
+    from cablesim.analyses import charts
+    from cablesim.orbits.backbone import Backbone
+
+    monkeypatch.setattr(charts, "trace_backbone", lambda system, mode, *a, **k: Backbone(
+        mode=mode, linear_omega=1.0, modes=np.ones(4), end="start failed"))
+    res = invoke_cli("backbone", CONFIG, "--mode", "1", "-o", "x.h5")
+    assert res.returncode == 2 and "could not start" in res.stderr and "Traceback" not in res.stderr
+    assert not Path("x.h5").exists()
+
+
 @pytest.mark.parametrize("args, words", [
     (["--mode", "9"], "--mode 9"),
     (["--mode", "0"], "--mode"),

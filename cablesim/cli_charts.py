@@ -114,6 +114,7 @@ def run_backbone_command(ctx, case_file, overrides, mode, amplitude, output, ana
     from . import api
     from .case.numbers import MODE, check_flag
     from .io.chart_report import backbone_summary
+    from .io.finish import replace_result
     from .io.paths import check_output
 
     check_flag(MODE, mode, "--mode", "backbone.mode")
@@ -128,13 +129,14 @@ def run_backbone_command(ctx, case_file, overrides, mode, amplitude, output, ana
     check_output(out, inputs=[case_file] if case_file else [], companions=(lambda o: [o.with_suffix(".png")]) if plot else [])
     echo, note, quiet = _begin(ctx, output=out, mode=k)
     t0 = time.perf_counter()
-    with compiling(note), StatusLine(quiet=quiet) as status:
+    with compiling(note) as notice, StatusLine(quiet=quiet) as status:
         run = interruptible(lambda: api.backbone(
             case, k, amplitude, analysis.value if analysis else None,
             progress=lambda p: status(f"backbone of mode {k}: orbit {p.index}, {p.omega:.6g} rad/s, "
                                       f"largest |z| {p.amplitude.max():.4g} m")), case, out, "the orbits computed")
+    replace_result(out, "backbone", note)
     run.to_hdf5(out)
-    echo(backbone_summary(case, run.result, time.perf_counter() - t0))
+    echo(backbone_summary(case, run.result, time.perf_counter() - t0 - notice.seconds()))
     echo(f"\nWrote {out}" + (f" and {run.plot(out.with_suffix('.png'), out)}" if plot else ""))
 
 

@@ -166,9 +166,12 @@ def test_plot_redraws_the_response_and_its_chart(loci_run, invoke_cli, tmp_path)
     ("continuation={omega: {start: 4.9, stop: 5.2}, gamma: {start: 0.5, stop: 1.0}}", "add loci: true"),
     ("continuation={omega: {start: 4.9, stop: 5.2}, loci: true, gamma: {start: 0.5, stop: 1.0, levels: [3]}}",
      "continuation.gamma.levels"),
+    ("continuation={omega: {start: 4.9, stop: 5.2}, loci: true, gamma: {start: 0.5, stop: 1.0}};spatial=true",
+     "planar cables only"),
 ])
 def test_bad_loci_settings_are_refused_cleanly(invoke_cli, setting, words):
-    res = invoke_cli("continue", CONFIG, "-o", "x.h5", "--set", setting)
+    sets = [a for part in setting.split(";") for a in ("--set", part)]
+    res = invoke_cli("continue", CONFIG, "-o", "x.h5", *sets)
     assert res.returncode == 2 and words in res.stderr and "Traceback" not in res.stderr
     assert not Path("x.h5").exists()
 
@@ -197,7 +200,9 @@ def test_backbone_api_result_and_file(backbone_file):
     assert r.omega[-1] < r.linear_omega  # mode 1 of the sagging cable softens
     d = read_backbone(out)
     np.testing.assert_array_equal(d["omega"], r.omega)
-    assert d["channels"] == ["z1", "z2", "z3", "z4"] and d["amplitude"].shape == (r.omega.size, 4)
+    # the case's channels (backbone.channels, else the continuation's or the history's)
+    names = list(case.backbone.channels or case.history.channels or ["z1", "z2", "z3", "z4"])
+    assert r.channels == d["channels"] == names and d["amplitude"].shape == (r.omega.size, len(names))
     with h5py.File(out) as f:
         assert f.attrs["command"] == "backbone" and f["backbone/omega"].attrs["units"] == "rad/s"
 
@@ -303,6 +308,7 @@ def test_a_backbone_that_cannot_start_is_a_clear_error(invoke_cli, monkeypatch):
     (["--mode", "9"], "--mode 9"),
     (["--mode", "0"], "--mode"),
     (["--amplitude", "-1"], "--amplitude"),
+    (["--set", "spatial=true"], "planar cables only"),
 ])
 def test_bad_backbone_options_are_refused_cleanly(invoke_cli, args, words):
     res = invoke_cli("backbone", CONFIG, "-o", "x.h5", *args)

@@ -30,7 +30,7 @@ RTOL = dict(rtol=1e-12, atol=1e-14, method="DOP853")
 
 
 @njit(cache=True)
-def two_mass_unfolded(theta, x, model, prm, work, dx, J, dp, ipar):
+def two_mass_unfolded(theta, omega, x, model, prm, work, dx, J, dp, ipar):
     delta, w2, c, alpha = prm[0], prm[1], prm[2], prm[3]
     for i in range(4):
         for j in range(4):

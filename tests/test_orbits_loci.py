@@ -40,7 +40,7 @@ RTOL = dict(rtol=1e-12, atol=1e-14, method="DOP853")
 # 1. Duffing: fold curve and cusp
 # ----------------------------------------------------------------------------------------------
 @njit(cache=True)
-def pair_field(theta, x, model, prm, work, dx, J, dp, ipar):
+def pair_field(theta, omega, x, model, prm, work, dx, J, dp, ipar):
     zeta, alpha, F, c, k, eps = prm[0], prm[1], prm[2], prm[3], prm[4], prm[5]
     for i in range(4):
         for j in range(4):
@@ -290,7 +290,7 @@ def test_mathieu_tongue_tip(tongue):
 # 3. Forced Hopf normal form: Neimark-Sacker and fold curves, strong resonances
 # ----------------------------------------------------------------------------------------------
 @njit(cache=True)
-def hopf_field(theta, x, model, prm, work, dx, J, dp, ipar):
+def hopf_field(theta, omega, x, model, prm, work, dx, J, dp, ipar):
     lam, w0, b, F = prm[0], prm[1], prm[2], prm[3]
     r2 = x[0] * x[0] + x[1] * x[1]
     dx[0] = lam * x[0] - w0 * x[1] - r2 * (x[0] - b * x[1]) + F * np.cos(theta)

@@ -115,6 +115,15 @@ class Codim2Result:
     located: bool
 
 
+def need_planar(case: Case, what: str) -> None:
+    """Bifurcation curves and backbones cover planar cables: a spatial case is refused, naming why."""
+    if case.dim == 3:
+        raise CablesimError(
+            f"{what} are computed for planar cables only for now; this case is spatial (spatial: true, cable.W, "
+            "an out-of-plane support or three-component loads). Give the planar case (two components per node) "
+            "for the in-plane curves.", field="spatial")
+
+
 def _locus_result(loc: Locus, idx: np.ndarray) -> LocusResult:
     pts = loc.points
     nch = idx.size
@@ -308,6 +317,7 @@ def run_backbone(case: Case, mode: int | None = None, amplitude: float | None = 
     Interrupted
         On Ctrl-C or SIGTERM, with the orbits computed until then (``result.complete`` False).
     """
+    need_planar(case, "Backbone curves")
     spec = case.backbone
     k = int(mode if mode is not None else spec.mode)
     n_dof = 2 * case.cable.n_nodes

@@ -19,7 +19,7 @@ from ..channels import channel_index
 from ..errors import CablesimError
 from ..dynamics.steady import SteadyCriterion, steady_response
 from ..orbits import OrbitPoint, Settings, continue_branches
-from .charts import Interrupted, finish_loci
+from .charts import Interrupted, finish_loci, need_planar
 from .setup import build_equations, frequency_of_interest, make_integrator
 from .static import run_static
 
@@ -231,6 +231,8 @@ def run_continuation(
             "`continuation: {omega: {start: 0.5, stop: 6.0}, channels: [z2, z4]}`.",
             field="continuation",
         )
+    if spec.loci:
+        need_planar(case, "Bifurcation curves (continuation.loci)")
     if not np.any(case.FL):
         raise CablesimError("loads.FL is zero, so there is no forced response to continue.", field="loads.FL")
     static = run_static(case, analysis, all_models=False)

@@ -19,9 +19,9 @@ from .files import (
     stored_overrides,
 )
 from .model import Case
+from .charts import BackboneSpec
 from .sections import (
     FIGURE_KINDS,
-    BackboneSpec,
     CableSpec,
     ContinuationSpec,
     DampingSpec,

@@ -142,7 +142,7 @@ def linear_modes(system: OdeSystem, unfolding: str):
     prm = system.prm.copy()
     prm[system.parameters[unfolding]] = 0.0
     dx, J, dp = np.empty(n), np.zeros((n, n)), np.zeros(n)
-    code = system.field(0.0, np.zeros(n), system.model, prm, ok.copy_work(system.work), dx, J, dp, -1)
+    code = system.field(0.0, float(system.omega), np.zeros(n), system.model, prm, ok.copy_work(system.work), dx, J, dp, -1)
     if code != ok.OK:
         raise FloatingPointError(f"the field cannot be evaluated at its equilibrium (status {code})")
     lam, vec = np.linalg.eig(J)
@@ -223,8 +223,8 @@ class BackboneProblem:
         out = np.empty((self.m, self.n))
         dx, J, dp = np.empty(self.n), np.zeros((self.n, self.n)), np.zeros(self.n)
         for k in range(self.m):
-            code = sysm.field(0.0, np.ascontiguousarray(ev.ends[k]), sysm.model, prm, ok.copy_work(sysm.work), dx, J,
-                              dp, -1)
+            code = sysm.field(0.0, float(sysm.omega), np.ascontiguousarray(ev.ends[k]), sysm.model, prm,
+                              ok.copy_work(sysm.work), dx, J, dp, -1)
             if code != ok.OK:
                 return None
             out[k] = dx

@@ -9,8 +9,9 @@ analysis) evaluated with ``FL = 0`` and ``C = 0``, plus the unfolding term of
     v' = M^-1 (F0 - P(y0 + z)) - delta v
 
 whose energy rate ``-delta v^T M v`` is negative on every motion when ``delta > 0``, with the
-derivative ``d v' / d delta = -v`` for the shooting kernel (``prm = (gamma, delta)``; gamma
-multiplies the zero harmonic load and is never used).
+derivative ``d v' / d delta = -v`` for the shooting kernel (``prm = (gamma, support, delta)``,
+the first two those of :mod:`cablesim.orbits.cablefield`: gamma multiplies the zero harmonic
+load, and the supports are held at rest).
 """
 
 from __future__ import annotations
@@ -22,8 +23,8 @@ from . import cablefield
 from .kernels import OK
 from .systems import OdeSystem, cable_system
 
-#: Index of the artificial damping ``delta`` in ``prm``.
-DELTA = 1
+#: Index of the artificial damping ``delta`` in ``prm`` (after the cable field's own).
+DELTA = 2
 
 
 @njit
@@ -42,9 +43,9 @@ def _unfold(x, prm, dx, J, dp, ipar):
 
 
 @njit
-def unfolded_exact_field(theta, x, model, prm, work, dx, J, dp, ipar):
+def unfolded_exact_field(theta, omega, x, model, prm, work, dx, J, dp, ipar):
     """Exact analysis, unforced and undamped (``model.FL = 0``, ``model.C = 0``), unfolded."""
-    code = cablefield.exact_field(theta, x, model, prm, work, dx, J, dp, -1)
+    code = cablefield.exact_field(theta, omega, x, model, prm, work, dx, J, dp, -1)
     if code != OK:
         return code
     _unfold(x, prm, dx, J, dp, ipar)
@@ -52,9 +53,9 @@ def unfolded_exact_field(theta, x, model, prm, work, dx, J, dp, ipar):
 
 
 @njit
-def unfolded_approximate_field(theta, x, model, prm, work, dx, J, dp, ipar):
+def unfolded_approximate_field(theta, omega, x, model, prm, work, dx, J, dp, ipar):
     """Approximate analysis, unforced and undamped, unfolded."""
-    code = cablefield.approximate_field(theta, x, model, prm, work, dx, J, dp, -1)
+    code = cablefield.approximate_field(theta, omega, x, model, prm, work, dx, J, dp, -1)
     if code != OK:
         return code
     _unfold(x, prm, dx, J, dp, ipar)
@@ -77,13 +78,13 @@ def conservative_cable_system(eom) -> OdeSystem:
         ``fastest_rate`` the highest undamped modal frequency.
     """
     forced = cable_system(eom)
-    model = forced.model._replace(C=np.zeros_like(forced.model.C), FL=np.zeros_like(forced.model.FL))
+    model = forced.model._replace(C=np.zeros_like(forced.model.C), FL=np.zeros_like(forced.model.FL), moving=False)
     field = unfolded_exact_field if eom.analysis == "exact" else unfolded_approximate_field
     nd = eom.n_dof
     A = np.zeros((2 * nd, 2 * nd))
     A[:nd, nd:] = np.eye(nd)
     A[nd:, :nd] = -eom.K0 / eom.mass[:, None]
     rate = float(np.abs(np.linalg.eigvals(A)).max())
-    return OdeSystem(field=field, dim=2 * nd, prm=np.array([0.0, 0.0]), work=forced.work, model=model,
+    return OdeSystem(field=field, dim=2 * nd, prm=np.array([0.0, 0.0, 0.0]), work=forced.work, model=model,
                      omega=float(eom.frequencies[0]), parameters={"delta": DELTA}, fastest_rate=rate,
                      displacements=forced.displacements, divergence=None, noise=forced.noise, names=forced.names)

@@ -130,6 +130,8 @@ def step_peaks(model, ta, t_end, tb, sa, sb, peak, peak_t):
     within the step without the ends showing it) the step is searched at
     :data:`PEAK_SAMPLES` samples; otherwise ``g`` is monotone over the step and its ends are
     its extremes (so most steps cost two evaluations a segment, from the states themselves).
+    A segment whose gap cannot reach its peak so far within the step (by a bound from the
+    ends' rates) is not searched at all.
     """
     if not t_end > ta:
         return
@@ -139,6 +141,12 @@ def step_peaks(model, ta, t_end, tb, sa, sb, peak, peak_t):
             g1, r1 = _end_gap(model, sb, tb, k)
         else:
             g1, r1 = gap_and_rate(model, ta, tb, sa, sb, k, t_end)
+        # g can exceed its ends by little more than |g'| times the step: where even that stays
+        # below the segment's peak so far, nothing in this step can raise it (most segments of
+        # most steps of a long run), so it is not searched
+        bound = max(g0, g1) + (abs(r0) + abs(r1)) * (t_end - ta)
+        if sg.tension_of_stretch(max(bound, 0.0), model.S[k], model.EA) < peak[k]:
+            continue
         if max(g0, g1) > 0.0 and r0 > 0.0 and r1 <= 0.0:
             tm, gm = _locate_max(model, ta, tb, sa, sb, k, ta, g0, r0, t_end, g1, r1)
             _raise(peak, peak_t, k, model, tm, gm)

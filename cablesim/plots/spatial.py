@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..channels import components
-from .base import CURVE_POINTS, envelope_plot, figure_grid, legend_below, steady_start, title_line
+from .base import CURVE_POINTS, envelope_plot, figure_grid, legend_below, save_atomic, steady_start, title_line
 from .style import COLOURS, SERIES
 
 #: Largest number of nodes whose paths are drawn across the span.
@@ -47,8 +47,6 @@ def plot_across(result, path: str | Path, title: str, describe: str) -> Path | N
     describe : str
         Second title line (the run's conditions).
     """
-    from .base import save_atomic
-
     nodes = across_nodes(result)
     if not nodes:
         return None

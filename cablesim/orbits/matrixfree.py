@@ -489,8 +489,11 @@ class Bordered:
 
     def solve(self, normal: np.ndarray, rhs: np.ndarray, tol: float | None = None) -> np.ndarray | None:
         """``dv`` with ``[J_u J_lam; normal] dv = rhs`` (scaled), or None if GMRES fails."""
-        sol = gmres(self._matvec(np.asarray(normal, dtype=float)), rhs, tol=self.tol if tol is None else tol,
-                    max_iter=self.max_iter, precondition=self._precondition())
+        try:
+            sol = gmres(self._matvec(np.asarray(normal, dtype=float)), rhs, tol=self.tol if tol is None else tol,
+                        max_iter=self.max_iter, precondition=self._precondition())
+        except FloatingPointError:  # the variational equations failed: the step is shortened
+            return None
         self.sh.newton_steps += 1
         self.sh.krylov_iterations += sol.iterations
         self.ev.newton_krylov += sol.iterations
@@ -506,8 +509,11 @@ class Bordered:
                 self.pre = better
         rhs = np.zeros(ref.size)
         rhs[-1] = 1.0
-        sol = gmres(self._matvec(np.asarray(ref, dtype=float)), rhs, tol=self.tangent_tol, max_iter=self.max_iter,
-                    precondition=self._precondition())
+        try:
+            sol = gmres(self._matvec(np.asarray(ref, dtype=float)), rhs, tol=self.tangent_tol,
+                        max_iter=self.max_iter, precondition=self._precondition())
+        except FloatingPointError:
+            return None
         self.sh.krylov_iterations += sol.iterations
         t = sol.x
         nt = np.linalg.norm(t)

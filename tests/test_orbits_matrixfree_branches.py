@@ -73,3 +73,21 @@ def test_period_doubling_pair_and_the_doubled_branch(paper):
 def test_the_switch_by_size():
     assert not use_matrix_free(MATRIX_FREE_DOF, None) and use_matrix_free(MATRIX_FREE_DOF + 1, None)
     assert use_matrix_free(4, True) and not use_matrix_free(400, False)
+
+
+def test_branch_multipliers_of_different_counts():
+    """A matrix-free branch keeps as many multipliers as each point needs: the branch's table
+    pads with NaN (it once failed on the ragged rows)."""
+    from cablesim.orbits import OrbitBranch, OrbitPoint
+
+    def point(i, mu):
+        z = np.zeros(2)
+        return OrbitPoint(branch=0, index=i, parameter=1.0 + i, omega=1.0 + i, period=1, state=z, u=z,
+                          amplitude=z, halfrange=z, multipliers=np.asarray(mu, complex), stable=True,
+                          trusted=True, residual=0.0, liouville=np.nan, special=None, located=True)
+
+    br = OrbitBranch(index=0, period=1, parameter="omega")
+    br.points = [point(0, [0.9, 0.5j, -0.5j]), point(1, [0.95])]
+    table = br.multipliers
+    assert table.shape == (2, 3)
+    assert table[1, 0] == 0.95 and np.isnan(table[1, 1:]).all() and table[0, 1] == 0.5j

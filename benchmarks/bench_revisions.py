@@ -18,7 +18,9 @@ Scenes (all public entry points that every revision since the heavy-cable releas
   (generalized-alpha, banded Newton solves);
 - ``continuation``: every periodic response of the paper's example over 0.5-6 rad/s.
 
-Usage: ``python benchmarks/bench_revisions.py --against REV [--rounds 3] [--repeats 3]``.
+Usage: ``python benchmarks/bench_revisions.py --against REV [--this REV] [--rounds 3] [--repeats 3]``
+(``--this``: time a committed revision instead of the working tree, which may then be edited
+while the benchmark runs).
 """
 
 from __future__ import annotations
@@ -100,20 +102,22 @@ def timed(tree: Path, scene: str, repeats: int) -> list[tuple[float, float]]:
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--against", required=True, help="the earlier revision (a commit, tag or branch)")
+    ap.add_argument("--this", help="a revision to time instead of the working tree")
     ap.add_argument("--rounds", type=int, default=3, help="alternations of the two trees per scene")
     ap.add_argument("--repeats", type=int, default=3, help="timed runs per process")
     ap.add_argument("--scene", action="append", choices=SCENES, help="scenes to run (default: all)")
     args = ap.parse_args(argv)
     other = export(args.against)
-    print(f"this tree ({REPO}) against {args.against} ({other.name}); medians over {args.rounds} rounds x "
+    mine_tree = export(args.this) if args.this else REPO
+    print(f"this tree ({mine_tree}) against {args.against} ({other.name}); medians over {args.rounds} rounds x "
           f"{args.repeats} runs; ratio = this / earlier")
     print(f"{'scene':16s} {'CPU this':>10s} {'CPU earlier':>12s} {'ratio':>6s} {'wall this':>10s} {'wall earlier':>13s} {'ratio':>6s}")
     for scene in args.scene or SCENES:
         mine, theirs = [], []
         for r in range(args.rounds):
-            order = (REPO, other) if r % 2 == 0 else (other, REPO)
+            order = (mine_tree, other) if r % 2 == 0 else (other, mine_tree)
             for tree in order:
-                (mine if tree == REPO else theirs).extend(timed(tree, scene, args.repeats))
+                (mine if tree == mine_tree else theirs).extend(timed(tree, scene, args.repeats))
         a, b = np.array(mine), np.array(theirs)
         ca, cb, wa, wb = np.median(a[:, 0]), np.median(b[:, 0]), np.median(a[:, 1]), np.median(b[:, 1])
         print(f"{scene:16s} {ca:10.3f} {cb:12.3f} {ca / cb:6.2f} {wa:10.3f} {wb:13.3f} {wa / wb:6.2f}", flush=True)

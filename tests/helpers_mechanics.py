@@ -113,3 +113,47 @@ def rotation_about_vertical(a):
     """Rotation by ``a`` about the vertical (v) axis of the (x, v, w) frame."""
     c, s = np.cos(a), np.sin(a)
     return np.array([[c, 0.0, -s], [0.0, 1.0, 0.0], [s, 0.0, c]])
+
+
+class SecondOrder:
+    """``M y'' + a0 M y' + a1 (K0 y' + K0s s') + P(y, s) = F0 + FL sin(w t)`` with supports
+    ``A + uA sin(w t + phA)``, ``B + uB sin(w t + phB)`` (docs/theory.md, section 8): the state
+    ``(y, y')``, own assembly, ``K0`` and ``K0s = dP/ds`` at the equilibrium by central
+    differences, for scipy's ``solve_ivp``."""
+
+    def __init__(self, S, EA, chord, dim, mass, F0, FL, omega, y0, a0, a1, uA, uB, phA=0.0, phB=0.0):
+        self.S, self.EA, self.chord, self.dim = np.asarray(S, float), float(EA), np.asarray(chord, float), dim
+        self.mass, self.F0, self.FL, self.w = np.asarray(mass, float), np.asarray(F0, float), np.asarray(FL, float), omega
+        self.y0, self.a0, self.a1 = np.asarray(y0, float), a0, a1
+        self.uA, self.uB, self.phA, self.phB = np.asarray(uA, float), np.asarray(uB, float), phA, phB
+        h = 1e-6 * np.linalg.norm(self.chord)
+        self.K0 = jacobian(lambda y: self.force(y, np.zeros(dim), self.chord), self.y0, h)
+        self.K0A = jacobian(lambda a: self.force(self.y0, a, self.chord), np.zeros(dim), h)
+        self.K0B = jacobian(lambda b: self.force(self.y0, np.zeros(dim), b), self.chord, h)
+
+    def force(self, y, A, B):
+        d = np.diff(np.vstack([A, np.reshape(y, (-1, self.dim)), B]), axis=0)
+        l = np.sqrt((d * d).sum(axis=1))
+        F = (self.EA * (l - self.S) / self.S / l)[:, None] * d
+        return (F[:-1] - F[1:]).ravel()
+
+    def supports(self, t):
+        w = self.w
+        A = self.uA * np.sin(w * t + self.phA)
+        B = self.chord + self.uB * np.sin(w * t + self.phB)
+        vA = self.uA * w * np.cos(w * t + self.phA)
+        vB = self.uB * w * np.cos(w * t + self.phB)
+        return A, B, vA, vB
+
+    def rhs(self, t, q):
+        nd = self.y0.size
+        y, v = q[:nd], q[nd:]
+        A, B, vA, vB = self.supports(t)
+        damping = self.a0 * self.mass * v + self.a1 * (self.K0 @ v + self.K0A @ vA + self.K0B @ vB)
+        acc = (self.F0 + self.FL * np.sin(self.w * t) - damping - self.force(y, A, B)) / self.mass
+        return np.concatenate([v, acc])
+
+    def tensions(self, t, y):
+        A, B, _, _ = self.supports(t)
+        d = np.diff(np.vstack([A, np.reshape(y, (-1, self.dim)), B]), axis=0)
+        return self.EA * (np.sqrt((d * d).sum(axis=1)) - self.S) / self.S

@@ -90,7 +90,7 @@ CABLE = "cable: {L: 100.0, H: 0.0, EA: 2.0e8, %s}\n"
     ("length: 102.5, nodes: 3, mass_per_length: 1.0", "{}", ["`loads.F0` is required"]),
     ("length: 102.5, nodes: 3, mass_per_length: 1.0", "point: [{node: 4, F: [0.0, 1.0]}]", ["`loads.point[1].node` is 4", "n = 3"]),
     ("length: 102.5, nodes: 3, mass_per_length: 1.0", "point: [{node: 0}]", ["`loads.point[1].node`"]),
-    ("length: 102.5, nodes: 3, mass_per_length: 1.0", "point: [{node: 1, F: [1.0, 2.0, 3.0]}]", ["`loads.point[1].F`"]),
+    ("length: 102.5, nodes: 3, mass_per_length: 1.0", "point: [{node: 1, F: [1.0, 2.0, 3.0, 4.0]}]", ["`loads.point[1].F`", "3 (x, v, w)"]),
     ("length: 102.5, nodes: 3, mass_per_length: 1.0", "point: [{node: 1, mass: -5.0}]", ["`loads.point[1].mass`"]),
     ("length: 102.5, nodes: 3, mass_per_length: 1.0", "point: [{node: 1, force: [1.0, 2.0]}]", ["`loads.point[1].force`", "not a known key"]),
     ("length: 102.5, nodes: 3, mass_per_length: 1.0", "gravity: 9.81, F0: [1.0, 2.0]", ["loads.F0 has 2 values", "2n = 6"]),

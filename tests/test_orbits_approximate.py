@@ -50,7 +50,7 @@ def _call(sysm, work, x, theta=0.0, model=None):
     n = x.size
     dx, J, dp = np.empty(n), np.zeros((n, n)), np.zeros(n)
     model = sysm.model if model is None else model
-    code = sysm.field(theta, np.ascontiguousarray(x, dtype=float), model, sysm.prm, work, dx, J, dp, -1)
+    code = sysm.field(theta, sysm.omega, np.ascontiguousarray(x, dtype=float), model, sysm.prm, work, dx, J, dp, -1)
     return code, dx, J
 
 

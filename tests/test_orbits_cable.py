@@ -73,7 +73,7 @@ def third_order(eom, x):
     n = sysm.dim
     dx, J, dp = np.empty(n), np.zeros((n, n)), np.zeros(n)
     work = copy_work(sysm.work)
-    assert sysm.field(0.0, np.ascontiguousarray(x, float), sysm.model, sysm.prm, work, dx, J, dp, -1) == 0
+    assert sysm.field(0.0, sysm.omega, np.ascontiguousarray(x, float), sysm.model, sysm.prm, work, dx, J, dp, -1) == 0
     return np.concatenate([x, dx[n // 2 :]])
 
 

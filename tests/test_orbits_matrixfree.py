@@ -62,7 +62,7 @@ def test_mechanical_form_is_the_field(small):
     rng = np.random.default_rng(1)
     x = sol.u + 1e-3 * rng.standard_normal(n) * np.abs(sol.u).max()
     dx, J, dp = np.empty(n), np.zeros((n, n)), np.zeros(n)
-    assert sysm.field(0.7, x, sysm.model, sysm.prm, copy_work(sysm.work), dx, J, dp, -1) == 0
+    assert sysm.field(0.7, sysm.omega, x, sysm.model, sysm.prm, copy_work(sysm.work), dx, J, dp, -1) == 0
     geo, bal, rate = np.empty(mech.geo_shape), np.empty(nd), np.empty(n)
     assert mech.balance(0.7, x, mech.model, sysm.prm, copy_work(sysm.work), geo, bal) == 0
     mechanical_rate(x, bal, mech.model, rate)

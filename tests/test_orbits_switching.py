@@ -45,7 +45,7 @@ MC, MEPS, MALPHA, XMAX = 0.05, 0.4, 1.0, 1.2
 # 1. Mathieu-Duffing with a state limit and an oversized scale
 # ----------------------------------------------------------------------------------------------
 @njit(cache=True)
-def limited_mathieu_field(theta, x, model, prm, work, dx, J, dp, ipar):
+def limited_mathieu_field(theta, omega, x, model, prm, work, dx, J, dp, ipar):
     c, eps, alpha, xmax = prm[0], prm[1], prm[2], prm[3]
     if abs(x[0]) > xmax:
         return SLACK

@@ -83,7 +83,7 @@ def test_continuation_algorithm_on_s_curve():
 # 1. Duffing
 # ----------------------------------------------------------------------------------------------
 @njit(cache=True)
-def duffing_field(theta, x, model, prm, work, dx, J, dp, ipar):
+def duffing_field(theta, omega, x, model, prm, work, dx, J, dp, ipar):
     zeta, alpha, F = prm[0], prm[1], prm[2]
     dx[0] = x[1]
     dx[1] = F * np.cos(theta) - 2.0 * zeta * x[1] - x[0] - alpha * x[0] ** 3
@@ -275,7 +275,7 @@ def test_duffing_multipliers_and_departure(duffing_diagram):
 # 2. Forced Hopf normal form
 # ----------------------------------------------------------------------------------------------
 @njit(cache=True)
-def hopf_field(theta, x, model, prm, work, dx, J, dp, ipar):
+def hopf_field(theta, omega, x, model, prm, work, dx, J, dp, ipar):
     lam, w0, b, F = prm[0], prm[1], prm[2], prm[3]
     r2 = x[0] * x[0] + x[1] * x[1]
     dx[0] = lam * x[0] - w0 * x[1] - r2 * (x[0] - b * x[1]) + F * np.cos(theta)
@@ -363,7 +363,7 @@ def test_hopf_folds_and_multipliers(hopf_diagram):
 # 3. Mathieu-Duffing: period doubling and branch switching
 # ----------------------------------------------------------------------------------------------
 @njit(cache=True)
-def mathieu_field(theta, x, model, prm, work, dx, J, dp, ipar):
+def mathieu_field(theta, omega, x, model, prm, work, dx, J, dp, ipar):
     c, eps, alpha = prm[0], prm[1], prm[2]
     k = 1.0 + eps * np.cos(theta)
     dx[0] = x[1]

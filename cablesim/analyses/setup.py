@@ -13,11 +13,11 @@ from ..case import Case, IntegratorSpec
 from ..dynamics.equations import EquationsOfMotion
 from ..dynamics.integrators import Integrator
 from ..dynamics.integrators.settings import (DEFAULT_ATOL_PER_CHORD, DEFAULT_RTOL, RK4_SAFE_STEP, SCHEMES,
-                                              STEPS_PER_PERIOD, STIFF_RATIO, STIFF_STEPS_PER_PERIOD, dividing_step,
-                                              ignored_keys, is_stiff, make, rk4_stable_step)
+                                              STEPS_PER_PERIOD, STIFF_RATIO, STIFF_STEPS_PER_PERIOD, default_atol,
+                                              dividing_step, ignored_keys, is_stiff, make, rk4_stable_step)
 from ..errors import CablesimError
 from ..modal import fastest_rate, modal_analysis_banded, rayleigh_coefficients
-from .static import StaticResult
+from .static import StaticResult, damping_modes
 
 #: Saved instants per period of the highest frequency of interest, by default.
 SAMPLES_PER_PERIOD = 40
@@ -41,7 +41,8 @@ def build_equations(
     omega : float
         Forcing frequency, rad/s.
     load_scale : float
-        Multiplies ``FL`` (``gamma`` of the paper's Fig. 4; 0 for free vibration).
+        Multiplies ``FL`` and the supports' motion (``gamma`` of the paper's Fig. 4; 0 for free
+        vibration).
     damping_ratio : float, optional
         Overrides the case's damping ratio (same two modes).
     slack : str, optional
@@ -57,11 +58,12 @@ def build_equations(
     if damping_ratio is None:
         a0, a1 = static.a0, static.a1
     else:
-        i, j = case.damping.modes
+        i, j = damping_modes(case, static.modes)
         w = static.modes.omega
-        a0, a1 = rayleigh_coefficients(w[i - 1], w[j - 1], damping_ratio)
+        a0, a1 = rayleigh_coefficients(w[i], w[j], damping_ratio)
     banded = static.K0_band is not None  # exact analysis: K0 is block-tridiagonal, so is C
     inext = static.inextensible
+    uA, uB, phA, phB = case.support_motion()  # scaled with FL by load_scale, like the loads
     x0 = inext.x
     return EquationsOfMotion(
         cable=cable,
@@ -81,6 +83,10 @@ def build_equations(
         slack=slack or case.slack,
         K0_band=static.K0_band.copy() if banded else None,
         K0_dense=None if banded else static.K0.copy(),
+        uA=uA * load_scale,
+        uB=uB * load_scale,
+        phA=phA,
+        phB=phB,
     )
 
 
@@ -168,3 +174,14 @@ def mode_velocity(static: StaticResult, mode: int, peak_velocity: float) -> np.n
     phi = shapes[:, mode - 1]
     k = int(np.argmax(np.abs(phi)))
     return phi * (peak_velocity / phi[k])
+
+
+def integrator_record(integ: Integrator) -> dict:
+    """What a sweep's file and summary state about its integrator: the name and, for the
+    adaptive scheme, the effective tolerances (``integrator_rtol``, ``integrator_atol`` in m,
+    ``integrator_dt_max`` in s), the same at every point. A fixed step is chosen per point (to
+    divide its forcing period), so it is not stated once for the sweep."""
+    out: dict = {"integrator": integ.name}
+    if not integ.fixed_step:
+        out.update({f"integrator_{k}": float(v) for k, v in integ.settings().items()})
+    return out

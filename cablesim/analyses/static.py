@@ -12,13 +12,19 @@ from ..case.sections import ALL_MODES_DOF, DEFAULT_MODES
 from ..errors import CablesimError
 from ..modal import (
     ALL_SHAPES_DOF,
+    COUPLED,
+    OUT_OF_PLANE,
     Modes,
+    equilibrium_plane,
     inextensible_frequencies,
     modal_analysis,
     modal_analysis_banded,
     modal_damping_ratios,
+    planar_modes,
+    plane_basis,
     rayleigh_coefficients,
     sole_inextensible_frequency,
+    with_kinds,
 )
 from ..statics import (
     ApproximateEquilibrium,
@@ -105,15 +111,13 @@ class StaticResult:
         return self.exact.T if self.analysis == "exact" else self.approximate.T
 
 
-def damping_coefficients(case: Case, omega: np.ndarray) -> tuple[float, float]:
-    """Rayleigh ``(a0, a1)`` for a case, given the modal frequencies (rad/s)."""
+def damping_coefficients(case: Case, modes: Modes) -> tuple[float, float]:
+    """Rayleigh ``(a0, a1)`` for a case, given its modes (:func:`damping_modes` says which two)."""
     d = case.damping
     if d.ratio is None:
         return float(d.a0), float(d.a1)
-    i, j = d.modes
-    if max(i, j) > omega.size:
-        raise CablesimError(f"damping.modes asks for mode {max(i, j)} but the cable has {omega.size}.")
-    return rayleigh_coefficients(omega[i - 1], omega[j - 1], d.ratio)
+    i, j = damping_modes(case, modes)
+    return rayleigh_coefficients(modes.omega[i], modes.omega[j], d.ratio)
 
 
 def modes_to_compute(case: Case, n_dof: int, n_modes: int | None = None, at_least: int = 0) -> int | None:
@@ -134,13 +138,35 @@ def modes_to_compute(case: Case, n_dof: int, n_modes: int | None = None, at_leas
 
 
 def _modes(case: Case, cable: Cable, K0: np.ndarray | None, K0_band: np.ndarray | None,
-           n_modes: int | None, at_least: int) -> Modes:
+           n_modes: int | None, at_least: int, y0: np.ndarray) -> Modes:
     k = modes_to_compute(case, cable.n_dof, n_modes, at_least)
-    if K0_band is None:
-        return modal_analysis(K0, cable.mass_diagonal, n_modes=k)
     wanted = max(SHAPES_KEPT, case.free_vibration.mode or 0, at_least, *case.damping.modes)
-    n_shapes = None if 2 * cable.n_nodes <= ALL_SHAPES_DOF else wanted
-    return modal_analysis_banded(K0_band, cable.mass_diagonal, n_modes=k, n_shapes=n_shapes)
+    n_shapes = None if cable.n_dof <= ALL_SHAPES_DOF else wanted
+    if cable.dim == 3:  # in-plane and out-of-plane modes of a planar equilibrium, solved apart
+        points = np.vstack([cable.support_A, np.reshape(y0, (-1, 3)), cable.support_B])
+        normal = equilibrium_plane(points, cable.chord)
+        if normal is not None:
+            R = plane_basis(normal, cable.chord)
+            if K0_band is None:
+                return planar_modes(K0, cable.masses, R, n_modes=k, banded=False)
+            return planar_modes(K0_band, cable.masses, R, n_modes=k, n_shapes=n_shapes)
+    if K0_band is None:
+        modes = modal_analysis(K0, cable.mass_diagonal, n_modes=k)
+    else:
+        modes = modal_analysis_banded(K0_band, cable.mass_diagonal, n_modes=k, n_shapes=n_shapes)
+    return with_kinds(modes, COUPLED) if cable.dim == 3 else modes
+
+
+def damping_modes(case: Case, modes: Modes) -> tuple[int, int]:
+    """The 0-based indices of the two modes ``damping.modes`` names: counted among all modes of a
+    planar cable and, of a spatial one, among those that are not out of the plane (a planar case
+    made spatial keeps its damping)."""
+    i, j = case.damping.modes
+    counted = [m for m, kind in enumerate(modes.kinds or ("",) * modes.omega.size) if kind != OUT_OF_PLANE]
+    if max(i, j) > len(counted):
+        raise CablesimError(f"damping.modes asks for mode {max(i, j)} but the cable has {len(counted)} "
+                            f"{'in-plane and coupled ' if modes.kinds else ''}modes.", field="damping.modes")
+    return counted[i - 1], counted[j - 1]
 
 
 def run_static(case: Case, analysis: str | None = None, all_models: bool | None = True,
@@ -200,13 +226,14 @@ def run_static(case: Case, analysis: str | None = None, all_models: bool | None 
         if taut:
             check_resolvable(cable, exact.T)
     K0_band = exact.K_band if analysis == "exact" else None
-    modes = _modes(case, cable, None if K0_band is not None else approx.K, K0_band, n_modes, modes_at_least)
-    a0, a1 = damping_coefficients(case, modes.omega)
+    y0 = exact.y if analysis == "exact" else approx.y
+    modes = _modes(case, cable, None if K0_band is not None else approx.K, K0_band, n_modes, modes_at_least, y0)
+    a0, a1 = damping_coefficients(case, modes)
     inext_omega = np.array([])
     sole = None
     if inext is not None and all_models:
-        inext_omega = inextensible_frequencies(inext.D, cable.mass_diagonal)
-        if cable.n_nodes == 2:
+        inext_omega = inextensible_frequencies(inext.D, cable.mass_diagonal, cable.n_nodes)
+        if cable.n_nodes == 2 and cable.dim == 2:  # eq. 21, the paper's closed form for a planar 2-node cable
             sole = sole_inextensible_frequency(inext.x, P, inext.T[1], cable.S, cable.masses, cable.L, cable.H)
     return StaticResult(
         cable=cable,

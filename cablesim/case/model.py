@@ -27,14 +27,18 @@ from .sections import (
     StrictModel,
     SweepSpec,
 )
+from .supports import SupportsSpec
 
 
 class Case(StrictModel):
     """One analysis case, as read from a YAML case file."""
 
     name: str | None = Field(default=None, description="case name; default: the file stem")
+    spatial: bool = Field(default=False, description="three components per node (x, v, w); implied by cable.W, "
+                          "three-component loads or a support moving out of the plane")
     cable: CableSpec
     loads: LoadsSpec
+    supports: SupportsSpec | None = Field(default=None, description="harmonic motion of the supports")
     analysis: Literal[ANALYSES] = "exact"
     slack: Literal[SLACK_POLICIES] = Field(
         default="continue",
@@ -51,6 +55,7 @@ class Case(StrictModel):
     outputs: OutputsSpec = OutputsSpec()
     figure: FigureSpec | None = None
     _text: str = PrivateAttr(default="")
+    _dim: int = PrivateAttr(default=2)
 
     def set_text(self, text: str) -> None:
         """Record the YAML text this case was read from (the readers of case files do)."""
@@ -71,37 +76,61 @@ class Case(StrictModel):
             raise ValueError(f"is {len(v)} characters long; keep it to 100 (it names the output folder)")
         return v
 
+    @property
+    def dim(self) -> int:
+        """Components per node: 2 (planar) or 3 (spatial)."""
+        return self._dim
+
+    def _components(self) -> int:
+        """3 if the case is spatial (it says so, support B is out of the plane, a load has three
+        components, or a support moves out of the plane), else 2."""
+        c, ld, n = self.cable, self.loads, self.cable.n_nodes
+        if self.spatial or c.W != 0.0 or (self.supports is not None and self.supports.out_of_plane):
+            return 3
+        if any(v is not None and len(v) == 3 * n for v in (ld.F0, ld.FL)):
+            return 3
+        if any(len(p.F or ()) == 3 or len(p.FL or ()) == 3 for p in ld.point or ()):
+            return 3
+        if ld.per_length is not None and len(ld.per_length) == 3:
+            return 3
+        return 2
+
     @model_validator(mode="after")
     def _sizes(self):
+        self._dim = self._components()
         self._expand()
-        n = self.cable.n_nodes
+        n, dim = self.cable.n_nodes, self._dim
+        nd = dim * n
         for key in ("F0", "FL"):
             v = getattr(self.loads, key)
-            if v is not None and len(v) != 2 * n:
+            if v is not None and len(v) not in (2 * n, nd):
                 raise ValueError(
                     f"loads.{key} has {len(v)} values; this cable has n = {n} interior nodes, so it "
                     f"needs 2n = {2 * n} (horizontal, vertical for each node in turn)"
+                    + (f" or 3n = {3 * n} (x, v, w for each node, a spatial case)" if n > 0 else "")
                 )
-        if self.damping.modes[1] > 2 * n or self.damping.modes[0] > 2 * n:
-            raise ValueError(f"damping.modes must be between 1 and 2n = {2 * n}")
-        if self.modal.modes is not None and self.modal.modes > 2 * n:
-            raise ValueError(f"modal.modes is {self.modal.modes}; this cable has 2n = {2 * n} modes")
+        if self.damping.modes[1] > nd or self.damping.modes[0] > nd:
+            raise ValueError(f"damping.modes must be between 1 and {dim}n = {nd}")
+        if self.modal.modes is not None and self.modal.modes > nd:
+            raise ValueError(f"modal.modes is {self.modal.modes}; this cable has {dim}n = {nd} modes")
         fv = self.free_vibration
         for key in ("z0", "v0"):
             v = getattr(fv, key)
-            if v is not None and len(v) != 2 * n:
-                raise ValueError(f"free_vibration.{key} has {len(v)} values; it needs 2n = {2 * n}")
+            if v is not None and len(v) not in (2 * n, nd):
+                raise ValueError(f"free_vibration.{key} has {len(v)} values; it needs {dim}n = {nd}")
         length = sum(self.cable.S)
         if fv.z0 is not None and max(abs(x) for x in fv.z0) > length:
             raise ValueError(f"free_vibration.z0 moves a node by more than the cable's whole length ({length:g} m); "
                              "give displacements from the equilibrium smaller than that, in m")
-        if fv.mode is not None and fv.mode > 2 * n:
-            raise ValueError(f"free_vibration.mode must be between 1 and 2n = {2 * n}")
+        if fv.mode is not None and fv.mode > nd:
+            raise ValueError(f"free_vibration.mode must be between 1 and {dim}n = {nd}")
+        if self.supports is not None and self.supports.moving and self.analysis != "exact":
+            raise ValueError("supports: moving supports need the exact analysis; set analysis: exact")
         for section in ("history", "free_vibration", "sweep", "outputs", "continuation", "figure"):
             spec = getattr(self, section)
             for name in (getattr(spec, "channels", None) or ()) if spec is not None else ():
                 try:
-                    channel_index(name, 2 * n)
+                    channel_index(name, nd, dim)
                 except CablesimError as exc:
                     raise ValueError(f"{section}.channels: {exc}".rstrip(".")) from None
         return self
@@ -119,28 +148,36 @@ class Case(StrictModel):
         c, ld = self.cable, self.loads
         if not (c.shorthand or ld.shorthand):
             return
-        n = c.n_nodes
+        n, dim = c.n_nodes, self._dim
         masses = np.array(c.masses, dtype=float)
-        F0 = np.zeros(2 * n) if ld.F0 is None else np.array(ld.F0, dtype=float)
+        F0 = np.zeros(dim * n) if ld.F0 is None else np.array(ld.F0, dtype=float)
         FL = None if ld.FL is None else np.array(ld.FL, dtype=float)
         for key, v in (("F0", F0), ("FL", FL)):
-            if v is not None and len(v) != 2 * n:
+            if v is not None and len(v) not in (2 * n, dim * n):
                 raise ValueError(f"loads.{key} has {len(v)} values; this cable has n = {n} interior nodes, so it "
-                                 f"needs 2n = {2 * n} (horizontal, vertical for each node in turn)")
+                                 f"needs 2n = {2 * n} (horizontal, vertical for each node in turn)"
+                                 + (f" or 3n = {3 * n} (x, v, w, a spatial case)" if dim == 3 else ""))
+        F0 = node_components(F0, n, dim)
+        FL = None if FL is None else node_components(FL, n, dim)
         for k, p in enumerate(ld.point or ()):
             if p.node > n:
                 raise ValueError(f"`loads.point[{k + 1}].node` is {p.node}, but this cable has n = {n} interior "
                                  f"nodes; count them from 1 at support A")
             i = p.node - 1
             masses[i] += p.mass or 0.0
-            F0[2 * i:2 * i + 2] += p.F or (0.0, 0.0)
+            F0[dim * i:dim * i + len(p.F or ())] += p.F or ()
             if p.FL is not None:
-                FL = np.zeros(2 * n) if FL is None else FL
-                FL[2 * i:2 * i + 2] += p.FL
-        F0[1::2] += (ld.gravity or 0.0) * masses
+                FL = np.zeros(dim * n) if FL is None else FL
+                FL[dim * i:dim * i + len(p.FL)] += p.FL
+        F0[1::dim] += (ld.gravity or 0.0) * masses
+        if ld.per_length is not None:  # lumped like the masses: half of each adjacent segment
+            S = np.asarray(c.S, dtype=float)
+            share = 0.5 * (S[:-1] + S[1:])
+            for d, q in enumerate(ld.per_length):
+                F0[d::dim] += q * share
         rigidity = {"EA": c.EA} if c.EA is not None else {"E": c.E, "A": c.A}
         try:
-            cable = CableSpec(L=c.L, H=c.H, S=c.S, masses=tuple(masses.tolist()), **rigidity)
+            cable = CableSpec(L=c.L, H=c.H, W=c.W, S=c.S, masses=tuple(masses.tolist()), **rigidity)
             loads = LoadsSpec(F0=tuple(F0.tolist()), FL=None if FL is None else tuple(FL.tolist()))
         except ValidationError as err:  # e.g. point masses or weights beyond the ranges of the lists
             e = err.errors()[0]
@@ -158,19 +195,37 @@ class Case(StrictModel):
     def to_cable(self) -> Cable:
         """The :class:`~cablesim.cable.Cable` this case describes."""
         c = self.cable
-        return Cable(c.L, c.H, np.array(c.S), c.axial_rigidity, np.array(c.masses))
+        return Cable(c.L, c.H, np.array(c.S), c.axial_rigidity, np.array(c.masses), W=c.W, dim=self._dim)
 
     @property
     def F0(self) -> np.ndarray:
-        """Sustained loads, N."""
-        return np.array(self.loads.F0, dtype=float)
+        """Sustained loads, N, ``dim`` components per node (a planar list padded with w = 0)."""
+        return node_components(self.loads.F0, self.cable.n_nodes, self._dim)
 
     @property
     def FL(self) -> np.ndarray:
-        """Peak harmonic loads, N (zeros if not given)."""
+        """Peak harmonic loads, N (zeros if not given), ``dim`` components per node."""
         if self.loads.FL is None:
-            return np.zeros(2 * self.cable.n_nodes)
-        return np.array(self.loads.FL, dtype=float)
+            return np.zeros(self._dim * self.cable.n_nodes)
+        return node_components(self.loads.FL, self.cable.n_nodes, self._dim)
+
+    def support_motion(self) -> tuple[np.ndarray, np.ndarray, float, float]:
+        """``(uA, uB, phA, phB)``: the supports' amplitudes (m, ``dim`` components) and phases (rad)."""
+        sp, dim = self.supports, self._dim
+        motion = [(np.zeros(dim), 0.0) if m is None else (np.array(m.components(dim)), float(m.phase))
+                  for m in ((sp.A, sp.B) if sp is not None else (None, None))]
+        return motion[0][0], motion[1][0], motion[0][1], motion[1][1]
+
+
+def node_components(values, n: int, dim: int) -> np.ndarray:
+    """A list of nodal values (loads, displacements) with ``dim`` components per node: a list of
+    ``2 n`` (x, v per node) is padded with ``w = 0`` for a spatial cable."""
+    v = np.array(values, dtype=float)
+    if dim == 2 or v.size == dim * n:
+        return v
+    out = np.zeros((n, dim))
+    out[:, :2] = v.reshape(n, 2)
+    return out.ravel()
 
 
 # ----------------------------------------------------------------------------------------------

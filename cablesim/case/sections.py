@@ -91,6 +91,7 @@ class CableSpec(StrictModel):
 
     L: real(0.0, 1e5, "m", lo_open=True) = Field(description="horizontal distance A->B, m")
     H: real(-1e5, 1e5, "m") = Field(description="vertical distance A->B, m, positive = B below A")
+    W: real(-1e5, 1e5, "m") = Field(default=0.0, description="out-of-plane distance A->B, m (a spatial cable)")
     S: tuple[Load, ...] | None = Field(default=None, description="natural segment lengths, m (n+1)")
     length: real(0.0, 1e6, "m", lo_open=True) | None = Field(
         default=None, description="total natural length, m (with nodes)")
@@ -208,14 +209,17 @@ class PointLoad(StrictModel):
     """Loads and an extra mass at one interior node (an item of ``loads.point``)."""
 
     node: integer(1, MAX_NODES) = Field(description="interior node, counted from 1 at support A")
-    F: tuple[Load, Load] | None = Field(default=None, description="sustained load (horizontal, vertical), N")
-    FL: tuple[Load, Load] | None = Field(default=None, description="peak harmonic load (horizontal, vertical), N")
+    F: tuple[Load, ...] | None = Field(default=None, description="sustained load (x, v) or (x, v, w), N")
+    FL: tuple[Load, ...] | None = Field(default=None, description="peak harmonic load (x, v) or (x, v, w), N")
     mass: real(0.0, MASS_RANGE[1], "kg") | None = Field(default=None, description="extra lumped mass, kg")
 
     @field_validator("F", "FL")
     @classmethod
     def _range(cls, v):
         if v is not None:
+            if len(v) not in (2, 3):
+                raise ValueError(f"has {len(v)} values; give 2 (horizontal, vertical) or, for a spatial case, 3 "
+                                 "(x, v, w) in N")
             in_range(v, *LOAD_RANGE, what="load")
         return v
 
@@ -224,13 +228,16 @@ class LoadsSpec(StrictModel):
     """Sustained and harmonic nodal loads (section ``loads:``), N, 2n values each.
 
     ``F0`` may be left out or completed by the shorthand: ``gravity`` (m/s^2: every node's
-    weight, vertical, down) and ``point`` (loads and extra masses at chosen nodes); the case
-    expands them into ``F0`` and ``FL``.
+    weight, vertical, down), ``per_length`` (a sustained load per metre of natural length, such
+    as wind or current, lumped like the mass: half of each adjacent segment) and ``point`` (loads
+    and extra masses at chosen nodes); the case expands them into ``F0`` and ``FL``.
     """
 
     F0: tuple[Load, ...] | None = Field(default=None, description="sustained nodal loads, N")
     FL: tuple[Load, ...] | None = Field(default=None, description="peak harmonic loads, N")
     gravity: real(0.0, 1e3, "m/s^2") | None = Field(default=None, description="acceleration of gravity, m/s^2")
+    per_length: tuple[Load, ...] | None = Field(
+        default=None, description="sustained load per m of natural length (x, v) or (x, v, w), N/m: wind, current")
     point: tuple[PointLoad, ...] | None = Field(default=None, description="loads and masses by node")
 
     @model_validator(mode="before")
@@ -250,10 +257,19 @@ class LoadsSpec(StrictModel):
             in_range(v, *LOAD_RANGE, what="load")
         return v
 
+    @field_validator("per_length")
+    @classmethod
+    def _per_length(cls, v):
+        if v is not None:
+            if len(v) not in (2, 3):
+                raise ValueError(f"has {len(v)} values; give 2 (x, v) or, for a spatial case, 3 (x, v, w) in N/m")
+            in_range(v, -1e9, 1e9, "N/m", what="load per length")
+        return v
+
     @property
     def shorthand(self) -> bool:
-        """True if gravity or point loads were given."""
-        return self.gravity is not None or self.point is not None
+        """True if gravity, loads per length or point loads were given."""
+        return self.gravity is not None or self.point is not None or self.per_length is not None
 
 
 class DampingSpec(StrictModel):
@@ -333,7 +349,8 @@ class FreeVibrationSpec(StrictModel):
     z0: tuple[real(-1e5, 1e5, "m"), ...] | None = Field(default=None, description="initial displacement from equilibrium, m")
     v0: tuple[real(-1e3, 1e3, "m/s"), ...] | None = Field(default=None, description="initial velocities, m/s")
     damping_ratio: DAMPING_RATIO | None = Field(default=None, description="overrides damping.ratio")
-    duration: DURATION = Field(default=20.0, description="simulated time, s")
+    duration: DURATION | None = Field(default=None, description="simulated time, s (default: until the motion "
+                                      "has decayed to 0.01 %, from the damping)")
     output_step: OUTPUT_STEP | None = Field(default=None, description="interval between saved instants, s")
     channels: tuple[str, ...] | None = Field(default=None, description="DOF to plot, e.g. [z2, z4]")
 
@@ -343,6 +360,12 @@ class FreeVibrationSpec(StrictModel):
         if explicit and (self.mode is not None or self.peak_velocity is not None):
             raise ValueError("give either mode with peak_velocity, or z0/v0, not both")
         return self
+
+
+#: Halvings of a sweep grid's step where neighbouring points disagree (``sweep.refine``): the
+#: default for a grid, and the most allowed.
+REFINE_LEVELS = 4
+REFINE_MOST = 10
 
 
 class OmegaGrid(StrictModel):
@@ -372,6 +395,9 @@ class SweepSpec(StrictModel):
     max_period: integer(1, 50) = Field(default=6, description="largest response period sought")
     floquet: bool = Field(default=True, description="check the stability of periodic responses")
     accelerate: bool = Field(default=True, description="decide steady points by shooting from the transient")
+    refine: bool | integer(0, REFINE_MOST) | None = Field(
+        default=None, description="halvings of the grid step where neighbouring points disagree (true: "
+        f"{REFINE_LEVELS}, false or 0: none; default: {REFINE_LEVELS} for a grid, none for a list)")
 
     @field_validator("omega", mode="before")
     @classmethod
@@ -421,6 +447,15 @@ class SweepSpec(StrictModel):
                 "the window is the final part of each point's run, so shorten it"
             )
         return self
+
+    @property
+    def refine_levels(self) -> int:
+        """How many times the grid step may be halved where neighbouring points disagree."""
+        if self.refine is None:
+            return REFINE_LEVELS if isinstance(self.omega, OmegaGrid) and self.omega.num > 1 else 0
+        if isinstance(self.refine, bool):
+            return REFINE_LEVELS if self.refine else 0
+        return int(self.refine)
 
     def frequencies(self) -> np.ndarray:
         """The frequency grid, rad/s (ascending for up/down sweeps)."""

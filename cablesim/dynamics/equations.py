@@ -21,9 +21,11 @@ from ..cable import Cable
 from ..mechanics import banded as bd
 from ..mechanics import closure as cl
 from ..mechanics import flexibility as fx
+from ..mechanics import segments as sg
 from ..mechanics.model import APPROXIMATE, CONTINUE, EXACT, STOP, CableModel, approximate_workspace, workspace
 from ..modal import modal_analysis
 from ..statics import band_to_dense, resisting_force
+from .field import consistent_acceleration
 
 
 @dataclass(frozen=True)
@@ -66,6 +68,11 @@ class EquationsOfMotion:
     K0_dense : ndarray, shape (dim n, dim n), optional
         The full tangent stiffness, N/m: the approximate analysis, whose ``K = N(P)^-1`` is
         full. Exactly one of ``K0_band`` and ``K0_dense`` is given.
+    uA, uB : ndarray, shape (dim,), optional
+        Amplitudes of the supports' harmonic motion at the forcing frequency, m
+        (``A(t) = A + uA sin(omega t + phA)``); the exact analysis only.
+    phA, phB : float
+        Their phases, rad.
     """
 
     cable: Cable
@@ -85,10 +92,40 @@ class EquationsOfMotion:
     slack: str = "continue"
     K0_band: np.ndarray | None = None
     K0_dense: np.ndarray | None = None
+    uA: np.ndarray | None = None
+    uB: np.ndarray | None = None
+    phA: float = 0.0
+    phB: float = 0.0
 
     def __post_init__(self):
         if (self.K0_band is None) == (self.K0_dense is None):
             raise ValueError("EquationsOfMotion takes exactly one of K0_band and K0_dense")
+        dim = self.cable.dim
+        for key in ("uA", "uB"):
+            u = np.zeros(dim) if getattr(self, key) is None else np.asarray(getattr(self, key), dtype=float)
+            if u.shape != (dim,):
+                raise ValueError(f"{key} must have {dim} components")
+            object.__setattr__(self, key, u)
+        if self.moving_supports and not self.exact:
+            raise ValueError("moving supports need the exact analysis")
+
+    @property
+    def moving_supports(self) -> bool:
+        """Whether a support moves."""
+        return bool(np.any(self.uA != 0.0) or np.any(self.uB != 0.0))
+
+    def support_damping_blocks(self) -> tuple[tuple, tuple]:
+        """``a1`` times the tangent blocks of the first and last segments at the equilibrium
+        (the support part of the stiffness-proportional damping, ``docs/theory.md`` section 7),
+        flat tuples of dim x dim, N s/m."""
+        c, dim = self.cable, self.cable.dim
+        blocks = []
+        for k in (0, c.n_segments - 1):
+            out = np.empty((dim, dim))
+            sg.segment_block(np.ascontiguousarray(self.y0, dtype=float), k, np.ascontiguousarray(c.S, dtype=float),
+                             float(c.EA), c.support_A, c.support_B, out)
+            blocks.append(tuple(float(x) for x in (self.a1 * out).ravel()))
+        return blocks[0], blocks[1]
 
     @cached_property
     def K0(self) -> np.ndarray:
@@ -219,6 +256,13 @@ class EquationsOfMotion:
             u0=np.ascontiguousarray(self.u0, dtype=float),
             tol=float(tol),
             slack=CONTINUE if self.continues_slack else STOP,
+            moving=self.moving_supports,
+            uA=tuple(float(x) for x in self.uA),
+            uB=tuple(float(x) for x in self.uB),
+            phA=float(self.phA),
+            phB=float(self.phB),
+            **dict(zip(("cA", "cB"), self.support_damping_blocks() if self.moving_supports
+                       else ((0.0,) * c.dim ** 2,) * 2)),
         )
 
     def initial_state(self, z0: np.ndarray | None = None, v0: np.ndarray | None = None) -> np.ndarray:
@@ -236,6 +280,11 @@ class EquationsOfMotion:
         z0 = np.zeros(nd) if z0 is None else np.asarray(z0, dtype=float)
         v0 = np.zeros(nd) if v0 is None else np.asarray(v0, dtype=float)
         F = self.F0  # F(0) = F0 + FL sin 0
+        if self.moving_supports:  # eq. 19 with the supports where they are at t = 0
+            s = np.concatenate([z0, v0, np.zeros(nd)])
+            model = self.model()
+            consistent_acceleration(model, 0.0, s, workspace(self.cable.n_nodes, self.cable.dim))
+            return s
         if self.exact:
             P = resisting_force(self.cable, self.y0 + z0)
         else:

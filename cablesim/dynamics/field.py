@@ -28,7 +28,8 @@ from ..mechanics import closure as cl
 from ..mechanics import flexibility as fx
 from ..mechanics import segments as sg
 from ..mechanics.model import APPROXIMATE, EXACT, STOP
-from ..mechanics.vectors import vsub
+from ..mechanics.supports import add_support_damping, support_accelerations, support_positions, support_velocities
+from ..mechanics.vectors import vadd_to, vsub
 from .status import INNER_SOLVE, NONFINITE, OK, SLACK
 
 
@@ -52,11 +53,17 @@ def approximate_stiffness(model, P, warm, awk):
     :func:`cablesim.mechanics.flexibility.segment_factors`; returns ``OK`` or ``INNER_SOLVE``.
     The states x and u follow from :func:`natural_state` (outputs only).
     """
+    return stiffness_on_chord(model, P, warm, awk, chord(model))
+
+
+@njit
+def stiffness_on_chord(model, P, warm, awk, c):
+    """:func:`approximate_stiffness` for the chord ``c`` (the supports where they are now)."""
     for i in range(P.size):
         if not abs(P[i]) < 1e100:  # a blown-up state (or NaN): the closure's products would underflow
             return INNER_SOLVE
     cl.cumulative_loads(P, awk.Q, model.A)
-    if cl.minimise(model.S, awk.Q, 0.0, chord(model), warm, model.tol, 60) < 0:
+    if cl.minimise(model.S, awk.Q, 0.0, c, warm, model.tol, 60) < 0:
         return INNER_SOLVE
     if not fx.segment_factors(model.S, model.EA, awk.Q, warm, awk.T, awk.fac, awk.gi, model.A):
         return INNER_SOLVE
@@ -80,11 +87,25 @@ def resisting_from_eq15(model, t, v, a, P):
 
 
 @njit
-def exact_force_and_rate(model, y, v, wk):
-    """``P(y)`` into ``wk.P`` and ``K(y) v`` into ``wk.Kv`` for the segment modes ``wk.taut``;
-    the first segment not longer than its natural length, or -1."""
+def exact_force_and_rate(model, t, y, v, wk):
+    """``P(y)`` into ``wk.P`` and ``K(y) v`` into ``wk.Kv`` (with moving supports, the whole rate
+    ``K y' + Ks s'``) for the segment modes ``wk.taut`` at time ``t``; the first segment not
+    longer than its natural length, or -1."""
+    if model.moving:
+        A, B = support_positions(model, t)
+        vA, vB = support_velocities(model, t)
+        return asm.force_and_rate(y, v, model.S, model.EA, A, B, vA, vB, wk.taut, wk.P, wk.Kv)
     z = sg.zero_rate(model.A)
     return asm.force_and_rate(y, v, model.S, model.EA, model.A, model.B, z, z, wk.taut, wk.P, wk.Kv)
+
+
+@njit
+def damping_force(model, t, v, out):
+    """``C y' + a1 K0s s'`` (the support part only with moving supports) into ``out``, N."""
+    bd.damping_product(model.C, model.Cr, v, 0, out)
+    if model.moving:
+        vA, vB = support_velocities(model, t)
+        add_support_damping(model, vA, vB, out, -1.0)
 
 
 @njit
@@ -104,7 +125,7 @@ def rate(model, t, s, warm, ds, wk, awk):
     if awk is None:
         for i in range(nd):
             y[i] = model.y0[i] + s[i]
-        if exact_force_and_rate(model, y, v, wk) >= 0 and model.slack == STOP:
+        if exact_force_and_rate(model, t, y, v, wk) >= 0 and model.slack == STOP:
             return SLACK
     else:
         st = _approximate_Kv(model, t, s, warm, wk, awk)
@@ -114,6 +135,9 @@ def rate(model, t, s, warm, ds, wk, awk):
     Ca = wk.Cx
     Kv = wk.Kv
     bd.damping_product(model.C, model.Cr, s, 2 * nd, Ca)
+    if model.moving:  # the rate of the supports' part of the damping
+        aA, aB = support_accelerations(model, t)
+        add_support_damping(model, aA, aB, Ca, -1.0)
     for i in range(nd):
         acc = (FL[i] * wc - Kv[i] - Ca[i]) / m[i]
         if not np.isfinite(acc):
@@ -132,9 +156,9 @@ def consistent_acceleration(model, t, s, wk):
     for i in range(nd):
         y[i] = model.y0[i] + s[i]
         v[i] = s[nd + i]
-    exact_force_and_rate(model, y, v, wk)
+    exact_force_and_rate(model, t, y, v, wk)
     sw = np.sin(model.omega * t)
-    bd.damping_product(model.C, model.Cr, v, 0, wk.Cx)
+    damping_force(model, t, v, wk.Cx)
     for i in range(nd):
         s[2 * nd + i] = (F0[i] + FL[i] * sw - wk.P[i] - wk.Cx[i]) / m[i]
 
@@ -187,24 +211,28 @@ def observe(model, t, s, warm, zc, ze, T, segment_state, awk, split, k0):
         P = np.empty(nd)
         Kv = np.empty(nd)
         taut = np.empty(model.S.size)
-        sg.taut_modes(y, model.S, model.A, model.B, taut)
-        zr = sg.zero_rate(model.A)
-        segment_state[0] = asm.force_and_rate(y, v, model.S, model.EA, model.A, model.B, zr, zr, taut, P, Kv)
-        sg.tensions(y, model.S, model.EA, model.A, model.B, T)
+        A, B = support_positions(model, t)
+        vA, vB = support_velocities(model, t)
+        sg.taut_modes(y, model.S, A, B, taut)
+        segment_state[0] = asm.force_and_rate(y, v, model.S, model.EA, A, B, vA, vB, taut, P, Kv)
+        sg.tensions(y, model.S, model.EA, A, B, T)
         for k in range(model.S.size):
             T[k] *= taut[k]
         if not split:
             zc[:] = 0.0
             ze[:] = 0.0
-        elif approximate_stiffness(model, P, warm, awk) != OK:
+        elif stiffness_on_chord(model, P, warm, awk, vsub(B, A)) != OK:
             zc[:] = np.nan
             ze[:] = np.nan
         else:
-            natural_state(model, awk)
+            natural_state(model, awk)  # x(P) from support A where it is now
+            dim = len(A)
+            for j in range(nd // dim):
+                vadd_to(awk.x, dim * j, A, 1.0)
             zc[:] = awk.x - model.x0
             ze[:] = z - zc
         Cv = np.empty(nd)
-        bd.damping_product(model.C, model.Cr, v, 0, Cv)
+        damping_force(model, t, v, Cv)
         r = m * a + P - F + Cv
         return np.sqrt(np.sum(r * r)) / f0norm
     P = np.empty(nd)

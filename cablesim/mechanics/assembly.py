@@ -30,7 +30,7 @@ from __future__ import annotations
 from ..jit import njit
 from .segments import (block_coefficients, block_entry, block_times, displaced_stretch, length, node,
                        node_rate, segment_vector, tension, tension_of_stretch)
-from .vectors import vadd, vadd_to, vdiv, vsub
+from .vectors import madd_diag, madd_outer, mzero, vadd, vadd_to, vdiv, vsub
 
 
 @njit
@@ -194,3 +194,18 @@ def displaced_force_and_stiffness(z, y0, S, EA, A, B, zA, zB, P, J, row, col):
                     J[row + a + r, col + b + c] -= kk
                     J[row + b + r, col + a + c] -= kk
     return slack
+
+
+@njit
+def displaced_block(z, y0, k, S, EA, A, B, zA, zB):
+    """Segment ``k``'s tangent block at ``y0 + z`` (supports at ``A + zA``, ``B + zB``), as a
+    flat ``DIM x DIM`` tuple in the displaced form of :func:`displaced_force_and_stiffness`."""
+    n = S.size - 1
+    d0 = segment_vector(y0, k, n, A, B)
+    dd = vsub(node(z, k, n, zA, zB), node(z, k - 1, n, zA, zB))
+    dvec = vadd(d0, dd)
+    l = length(dvec)
+    T = tension_of_stretch(displaced_stretch(d0, dd, l, S[k]), S[k], EA)
+    ka, kg = block_coefficients(l, T, S[k], EA, 1.0)
+    e = vdiv(dvec, l)
+    return madd_outer(madd_diag(mzero(A), kg), e, e, ka - kg)

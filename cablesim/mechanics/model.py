@@ -57,6 +57,15 @@ class CableModel(NamedTuple):
         Closure tolerance of the inner solves, m.
     slack : int
         :data:`STOP` or :data:`CONTINUE`.
+    moving : bool
+        Whether a support moves (:mod:`cablesim.mechanics.supports`).
+    uA, uB : tuple of DIM floats
+        Amplitudes of the supports' harmonic motion, m.
+    phA, phB : float
+        Their phases, rad: ``A(t) = A + uA sin(w t + phA)``.
+    cA, cB : tuple of DIM * DIM floats
+        ``a1`` times the tangent blocks of the first and last segments at the equilibrium (the
+        support part of the stiffness-proportional damping), N s/m, row-major.
     """
 
     kind: int
@@ -75,6 +84,13 @@ class CableModel(NamedTuple):
     u0: np.ndarray
     tol: float
     slack: int
+    moving: bool
+    uA: tuple
+    uB: tuple
+    phA: float
+    phB: float
+    cA: tuple
+    cB: tuple
 
 
 class Workspace(NamedTuple):

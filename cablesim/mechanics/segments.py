@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 
 from ..jit import njit
-from .vectors import vcombo, vdot, vload, vsub, vzero
+from .vectors import vcombo, vdiv, vdot, vload, vsub, vzero
 
 
 @njit(inline="always")
@@ -156,3 +156,18 @@ def segment_states(y, S, EA, A, B, lengths, e, T):
         T[k] = tension(l, S[k], EA)
         for c in range(dim):
             e[k, c] = d[c] / l
+
+
+@njit
+def segment_block(y, k, S, EA, A, B, out):
+    """Segment ``k``'s tangent block ``(EA/S) e e^T + (T/l)(I - e e^T)`` in configuration ``y``
+    (taut) into ``out`` (DIM x DIM), N/m."""
+    dim = len(A)
+    n = S.size - 1
+    d = segment_vector(y, k, n, A, B)
+    l = length(d)
+    e = vdiv(d, l)
+    ka, kg = block_coefficients(l, tension(l, S[k], EA), S[k], EA, 1.0)
+    for r in range(dim):
+        for c in range(dim):
+            out[r, c] = block_entry(ka, kg, e, r, c)

@@ -55,16 +55,19 @@ from ..mechanics import flexibility as fx
 from ..mechanics import segments as sg
 from ..mechanics.banded import band_rows
 from ..mechanics.model import ApproximateWorkspace, approximate_workspace
-from ..mechanics.vectors import vnorm, vsub
-from .kernels import INNER_SOLVE, OK, SLACK
+from ..mechanics.supports import add_support_damping
+from ..mechanics.vectors import mvec, vadd, vnorm, vscale, vsub
+from .kernels import INNER_SOLVE, IPAR_OMEGA, OK, SLACK
 
 #: Round-off level of the approximate analysis' inner residual ``y - x(P) - u(P)``, in ulps of
 #: the cable's length (measured up to 5 on ``configs/paper/fig6.yaml``, 1.5 on the paper's
 #: example; :func:`residual_floor`). The final Newton step from there leaves P at its own
 #: round-off level, so the margin costs no accuracy.
 FLOOR_ULPS = 32.0
-#: Index of ``gamma`` (the multiplier of FL) in ``prm``.
+#: Index of ``gamma`` in ``prm``: the multiplier of FL and of the supports' motion.
 GAMMA = 0
+#: Index of the multiplier of the supports' motion alone (``continuation.parameter: support``).
+SUPPORT = 1
 
 
 class ApproximateWork(NamedTuple):
@@ -85,9 +88,10 @@ class ApproximateWork(NamedTuple):
     awk: ApproximateWorkspace
 
 
-def exact_work(eom) -> np.ndarray:
-    """Scratch space of :func:`exact_field`: the resisting force ``P``."""
-    return np.zeros(eom.n_dof)
+def exact_work(eom) -> tuple:
+    """Scratch space of :func:`exact_field`: the resisting force ``P`` and the support terms
+    of the acceleration."""
+    return (np.zeros(eom.n_dof), np.zeros(eom.n_dof))
 
 
 def approximate_work(eom) -> ApproximateWork:
@@ -101,8 +105,9 @@ def approximate_work(eom) -> ApproximateWork:
 
 
 @njit
-def _second_order(theta, x, model, prm, P, dx, J, dp, ipar, nd):
-    """Fill dx, the lower blocks of J (K already in ``J[nd:, :nd]``) and dp."""
+def _second_order(theta, x, model, prm, P, dx, J, dp, ipar, nd, extra):
+    """Fill dx, the lower blocks of J (K already in ``J[nd:, :nd]``) and dp for ``gamma``'s part
+    through FL (``extra``: the supports' terms of the force, added when supports move)."""
     sn = np.sin(theta)
     g = prm[GAMMA]
     m, C, F0, FL = model.mass, model.C, model.F0, model.FL
@@ -110,6 +115,8 @@ def _second_order(theta, x, model, prm, P, dx, J, dp, ipar, nd):
         dx[i] = x[nd + i]
         rm = 1.0 / m[i]
         acc = F0[i] + g * FL[i] * sn - P[i]
+        if model.moving:
+            acc += extra[i]
         for j in range(nd):
             cij = C[i, j]
             acc -= cij * x[nd + j]
@@ -129,13 +136,58 @@ def _second_order(theta, x, model, prm, P, dx, J, dp, ipar, nd):
 
 
 @njit
-def exact_field(theta, x, model, prm, work, dx, J, dp, ipar):
+def _support_motion(theta, omega, model, scale):
+    """The supports' displacements and velocities at phase ``theta``, their motion scaled by
+    ``scale``: ``(zA, zB, vA, vB)``."""
+    return (vscale(model.uA, scale * np.sin(theta + model.phA)), vscale(model.uB, scale * np.sin(theta + model.phB)),
+            vscale(model.uA, scale * omega * np.cos(theta + model.phA)),
+            vscale(model.uB, scale * omega * np.cos(theta + model.phB)))
+
+
+@njit
+def _support_derivatives(theta, omega, x, model, prm, dp, ipar, zA, zB):
+    """The supports' share of the derivatives of the field with respect to the multipliers and
+    to ``omega`` (added to ``dp``, after :func:`_second_order`): per unit multiplier the
+    displacement ``u sin`` pulls the end node through its segment, ``k(y) u sin``, and the
+    velocity ``u w cos`` pushes it through the damping, ``c u w cos``; at fixed phase only the
+    velocity's factor ``w`` depends on ``omega``, ``c u cos``."""
+    nd = model.mass.size
+    dim = len(model.A)
+    if ipar == IPAR_OMEGA:  # (dp for the other parameters was just set by _second_order)
+        for i in range(2 * nd):
+            dp[i] = 0.0
+        dA, dB, wA, wB = _support_motion(theta, 1.0, model, prm[GAMMA] * prm[SUPPORT])
+        rA, rB = mvec(model.cA, wA), mvec(model.cB, wB)
+    elif ipar == GAMMA or ipar == SUPPORT:
+        per = prm[SUPPORT] if ipar == GAMMA else prm[GAMMA]
+        dA, dB, wA, wB = _support_motion(theta, omega, model, per)
+        kA = asm.displaced_block(x, model.y0, 0, model.S, model.EA, model.A, model.B, zA, zB)
+        kB = asm.displaced_block(x, model.y0, model.S.size - 1, model.S, model.EA, model.A, model.B, zA, zB)
+        rA = vadd(mvec(kA, dA), mvec(model.cA, wA))
+        rB = vadd(mvec(kB, dB), mvec(model.cB, wB))
+    else:
+        return
+    for d in range(dim):
+        dp[nd + d] += rA[d] / model.mass[d]
+        dp[2 * nd - dim + d] += rB[d] / model.mass[nd - dim + d]
+
+
+@njit
+def exact_field(theta, omega, x, model, prm, work, dx, J, dp, ipar):
     """Exact analysis (module docstring)."""
     nd = model.mass.size
-    z = sg.zero_rate(model.A)
-    if asm.displaced_force_and_stiffness(x, model.y0, model.S, model.EA, model.A, model.B, z, z, work, J, nd, 0) >= 0:
+    P, extra = work
+    if model.moving:  # extra: minus the supports' part of the damping force, a1 K0s s'
+        zA, zB, vA, vB = _support_motion(theta, omega, model, prm[GAMMA] * prm[SUPPORT])
+        extra[:] = 0.0
+        add_support_damping(model, vA, vB, extra, 1.0)
+    else:
+        zA = zB = sg.zero_rate(model.A)
+    if asm.displaced_force_and_stiffness(x, model.y0, model.S, model.EA, model.A, model.B, zA, zB, P, J, nd, 0) >= 0:
         return SLACK
-    _second_order(theta, x, model, prm, work, dx, J, dp, ipar, nd)
+    _second_order(theta, x, model, prm, P, dx, J, dp, ipar, nd, extra)
+    if model.moving:
+        _support_derivatives(theta, omega, x, model, prm, dp, ipar, zA, zB)
     return OK
 
 
@@ -250,7 +302,7 @@ def _walk_to_loads(model, w):
 
 
 @njit
-def approximate_field(theta, x, model, prm, work, dx, J, dp, ipar):
+def approximate_field(theta, omega, x, model, prm, work, dx, J, dp, ipar):
     """Approximate analysis (module docstring)."""
     nd = model.mass.size
     w = work
@@ -265,5 +317,5 @@ def approximate_field(theta, x, model, prm, work, dx, J, dp, ipar):
         if w.awk.T[k] <= 0.0:
             return SLACK
     fx.dense_stiffness(w.awk.fac, w.awk.gi, J, nd, 0, w.Kb, w.U, model.A)  # K = N^-1 into J[nd:, :nd]
-    _second_order(theta, x, model, prm, w.P, dx, J, dp, ipar, nd)
+    _second_order(theta, x, model, prm, w.P, dx, J, dp, ipar, nd, w.d)  # (supports fixed: d unused)
     return OK

@@ -236,7 +236,7 @@ def flow_dense_directions(field, model, prm, work, x0, theta0, omega, duration, 
         for st in range(s if not last else 1):
             _stage_of(x, K, A, st, h, xs)
             theta = theta0 + omega * h * (k + c[st])
-            code = field(theta, xs, model, prm, work, dx, J, dp, ipar_f)
+            code = field(theta, omega, xs, model, prm, work, dx, J, dp, ipar_f)
             if code != OK:
                 return code
             for i in range(n):

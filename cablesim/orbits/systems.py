@@ -158,11 +158,15 @@ def cable_system(eom, gamma: float = 1.0) -> OdeSystem:
     Returns
     -------
     OdeSystem
-        State ``(z, v)`` of dimension ``2 n_dof``, with parameter ``"gamma"``.
+        State ``(z, v)`` of dimension ``2 n_dof``, with parameters ``"gamma"`` (multiplies FL
+        and the supports' motion) and ``"support"`` (the supports' motion alone).
     """
+    if eom.moving_supports and not eom.exact:
+        raise ValueError("moving supports need the exact analysis")
     nd = eom.n_dof
     model = eom.model(dense_damping=True)
-    prm = np.array([float(gamma)])
+    prm = np.zeros(2)
+    prm[cablefield.GAMMA], prm[cablefield.SUPPORT] = float(gamma), 1.0
     if eom.analysis == "exact":
         fld, work = cablefield.exact_field, cablefield.exact_work(eom)
     else:
@@ -189,10 +193,12 @@ def cable_system(eom, gamma: float = 1.0) -> OdeSystem:
     # would otherwise offset tiny orbits). The third-order time integration does the same: F0
     # enters it only through y''(0) = M^-1 (F(0) - P(y0) - C y'(0)).
     dx, J, dp = np.empty(nd2), np.zeros((nd2, nd2)), np.zeros(nd2)
-    code = fld(0.0, np.zeros(nd2), model, prm, copy_work(work), dx, J, dp, -1)
+    at_rest = model._replace(moving=False)  # the equilibrium with the supports where they rest
+    code = fld(0.0, float(eom.omega), np.zeros(nd2), at_rest, prm, copy_work(work), dx, J, dp, -1)
     if code == 0:
         model = model._replace(F0=model.F0 - eom.mass * dx[nd:])
-    mechanical = cable_mechanical(eom, model) if eom.exact else None
+    # the mechanical form holds the supports still (their motion enters the field only)
+    mechanical = cable_mechanical(eom, model) if eom.exact and not eom.moving_supports else None
     return OdeSystem(
         field=fld,
         dim=nd2,
@@ -200,7 +206,7 @@ def cable_system(eom, gamma: float = 1.0) -> OdeSystem:
         work=work,
         model=model,
         omega=float(eom.omega),
-        parameters={"gamma": cablefield.GAMMA},
+        parameters={"gamma": cablefield.GAMMA, "support": cablefield.SUPPORT},
         fastest_rate=rate,
         displacements=np.arange(nd),
         divergence=-float(np.trace(eom.C / eom.mass[:, None])),

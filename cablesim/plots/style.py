@@ -244,12 +244,16 @@ def lowest_modes_text(cable, y0, modes, count: int = 2) -> str:
     """``"1.84 rad/s (mode 1, symmetric), 2.86 rad/s (mode 2, antisymmetric)"``: the lowest
     modal frequencies, each named by its shape (:func:`mode_symmetry`) when the shapes are known."""
     shapes = getattr(modes, "shapes", None)
-    nodes = np.asarray(y0, dtype=float).reshape(-1, 2)
+    dim = getattr(cable, "dim", 2)
+    nodes = np.asarray(y0, dtype=float).reshape(-1, dim)[:, :2]
+    kinds = getattr(modes, "kinds", ())
     parts = []
     for k, w in enumerate(np.asarray(modes.omega, dtype=float)[:count]):
         sym = ""
-        if shapes is not None and k < np.shape(shapes)[1]:
-            sym = mode_symmetry(cable.L, cable.H, nodes, np.asarray(shapes)[:, k], cable.masses)
+        if shapes is not None and k < np.shape(shapes)[1] and (not kinds or kinds[k] == "in-plane"):
+            sym = mode_symmetry(cable.L, cable.H, nodes, np.asarray(shapes)[:, k].reshape(-1, dim)[:, :2], cable.masses)
+        if kinds:
+            sym = f"{kinds[k]}, {sym}" if sym else kinds[k]
         text = f"{w:.4g} rad/s ({mode_name(k + 1, sym).replace(' (', ', ').rstrip(')')})"
         parts.append(text.replace(" ", "\u00a0"))  # no line break inside one mode's text
     return ", ".join(parts)

@@ -29,15 +29,16 @@ from ...mechanics import banded as bd
 from ...mechanics import flexibility as fx
 from ...mechanics.linalg import solve_small
 from ...mechanics.model import STOP
-from ..field import approximate_stiffness
+from ...mechanics.supports import add_support_damping, support_positions, support_velocities
+from ..field import approximate_stiffness, exact_force_and_rate
 from ..status import INNER_SOLVE, NONFINITE, OK, SLACK
 from .base import Integrator, IntegratorState, hermite
 from .events import locate_event, start_events, transition
 
 
 @njit
-def _internal(model, z, P_n, z_n, warm, P1, K, first, wk, awk, check_slack):
-    """Internal force at the step end and its tangent; returns a status code.
+def _internal(model, z, P_n, z_n, warm, P1, K, first, wk, awk, check_slack, tb):
+    """Internal force at the step end ``tb`` and its tangent; returns a status code.
 
     Newton iterates may pass through configurations with a segment shorter than its natural
     length (for a stiff cable the margin is microns): only the converged state is checked
@@ -48,7 +49,8 @@ def _internal(model, z, P_n, z_n, warm, P1, K, first, wk, awk, check_slack):
     if awk is None:
         for i in range(nd):
             y[i] = model.y0[i] + z[i]
-        if asm.force_and_stiffness(y, model.S, model.EA, model.A, model.B, wk.taut, P1, K) >= 0 and check_slack \
+        A, B = support_positions(model, tb)
+        if asm.force_and_stiffness(y, model.S, model.EA, A, B, wk.taut, P1, K) >= 0 and check_slack \
                 and model.slack == STOP:
             return SLACK
         return OK
@@ -125,13 +127,13 @@ def _write_outputs(ta, tb, h, z, v, a, z1, v1, a1, sa, sb, da, db, t_out, out, j
 
 
 @njit
-def _dense_newton(model, z, v, a, z1, v1, a1, P_n, P1, K, J, R, warm, wk, awk, coef, c_m, c_c, sf, first):
-    """Residual ``R`` (minus the generalized-alpha equilibrium) and dense Newton matrix ``J``;
-    a status code."""
+def _dense_newton(model, z, v, a, z1, v1, a1, P_n, P1, K, J, R, warm, wk, awk, coef, c_m, c_c, sf, first, tb, ta):
+    """Residual ``R`` (minus the generalized-alpha equilibrium at ``ta``) and dense Newton matrix
+    ``J`` for the step ending at ``tb``; a status code."""
     m, C, F0, FL = model.mass, model.C, model.F0, model.FL
     am, af = coef[0], coef[1]
     nd = m.size
-    st = _internal(model, z1, P_n, z, warm, P1, K, first, wk, awk, False)
+    st = _internal(model, z1, P_n, z, warm, P1, K, first, wk, awk, False, tb)
     if st != OK:
         return st
     for q in range(nd):
@@ -142,25 +144,29 @@ def _dense_newton(model, z, v, a, z1, v1, a1, P_n, P1, K, J, R, warm, wk, awk, c
             J[q, r] = (1.0 - af) * K[q, r] + c_c * C[q, r]
         J[q, q] += c_m * m[q]
         R[q] = -acc
+    if model.moving:  # minus the supports' part of the damping force
+        vA, vB = support_velocities(model, ta)
+        add_support_damping(model, vA, vB, R, 1.0)
     return OK
 
 
 @njit
-def _band_newton(model, z, v, a, z1, v1, a1, P_n, P1, Kb, J, R, Cv, wk, coef, c_m, c_c, sf, check_slack):
+def _band_newton(model, z, v, a, z1, v1, a1, P_n, P1, Kb, J, R, Cv, wk, coef, c_m, c_c, sf, check_slack, tb, ta):
     """:func:`_dense_newton` in banded storage (exact analysis, banded damping), O(n): ``Kb``
     receives the tangent stiffness of the segment modes ``wk.taut``, ``Cv`` is scratch."""
     y = wk.y
     for q in range(model.mass.size):
         y[q] = model.y0[q] + z1[q]
-    if asm.force_and_stiffness_band(y, model.S, model.EA, model.A, model.B, wk.taut, P1, Kb) >= 0 and check_slack \
+    A, B = support_positions(model, tb)
+    if asm.force_and_stiffness_band(y, model.S, model.EA, A, B, wk.taut, P1, Kb) >= 0 and check_slack \
             and model.slack == STOP:
         return SLACK
-    _band_system(model, v, a, v1, a1, P_n, P1, Kb, J, R, Cv, coef, c_m, c_c, sf)
+    _band_system(model, v, a, v1, a1, P_n, P1, Kb, J, R, Cv, coef, c_m, c_c, sf, ta)
     return OK
 
 
 @njit
-def _band_system(model, v, a, v1, a1, P_n, P1, Kb, J, R, Cv, coef, c_m, c_c, sf):
+def _band_system(model, v, a, v1, a1, P_n, P1, Kb, J, R, Cv, coef, c_m, c_c, sf, ta):
     """The generalized-alpha residual ``R`` and the banded part of the Newton matrix
     ``J = c_m M + c_c C + (1 - af) K`` from the internal force ``P1`` and the banded ``Kb``."""
     m, C, F0, FL = model.mass, model.C, model.F0, model.FL
@@ -169,6 +175,9 @@ def _band_system(model, v, a, v1, a1, P_n, P1, Kb, J, R, Cv, coef, c_m, c_c, sf)
     for q in range(nd):
         R[q] = (1.0 - af) * v1[q] + af * v[q]  # the velocity C multiplies, for now
     bd.damping_product(C, model.Cr, R, 0, Cv)
+    if model.moving:  # the supports' part of the damping force at the alpha instant
+        vA, vB = support_velocities(model, ta)
+        add_support_damping(model, vA, vB, Cv, -1.0)
     for q in range(nd):
         acc = m[q] * ((1.0 - am) * a1[q] + am * a[q]) + (1.0 - af) * P1[q] + af * P_n[q] + Cv[q]
         R[q] = F0[q] + FL[q] * sf - acc
@@ -191,11 +200,11 @@ def _approximate_newton(model, z, v, a, z1, v1, a1, P_n, P1, Kb, J, R, Cv, warm,
     af = coef[1]
     nd = model.mass.size
     dim = len(model.A)
-    st = _internal(model, z1, P_n, z, warm, P1, Kb, first, wk, awk, False)
+    st = _internal(model, z1, P_n, z, warm, P1, Kb, first, wk, awk, False, 0.0)
     if st != OK:
         return st
     fx.stiffness_band(awk.fac, awk.gi, Kb, U, model.A)
-    _band_system(model, v, a, v1, a1, P_n, P1, Kb, J, R, Cv, coef, c_m, c_c, sf)
+    _band_system(model, v, a, v1, a1, P_n, P1, Kb, J, R, Cv, coef, c_m, c_c, sf, 0.0)
     D[:, :] = 0.0
     r = Cr.shape[1]
     for c in range(r):  # c_c C = c_c C_band - U (c_c G) U^T
@@ -266,7 +275,8 @@ def _galpha_step(model, z, v, a, P_n, warm, wk, awk, tb, h, coef, ztol, maxit, z
     approx_band = awk is not None and bd.is_band(model.C)
     c_m = (1.0 - am) / (beta * h * h)
     c_c = (1.0 - af) * gamma / (beta * h)
-    sf = np.sin(model.omega * (tb - af * h))
+    ta = tb - af * h  # the instant the generalized-alpha equilibrium holds at
+    sf = np.sin(model.omega * ta)
     for q in range(nd):
         z1[q] = z[q] + h * v[q] + 0.5 * h * h * a[q]  # predictor: constant acceleration
         P1[q] = P_n[q]
@@ -274,7 +284,7 @@ def _galpha_step(model, z, v, a, P_n, warm, wk, awk, tb, h, coef, ztol, maxit, z
     for it in range(maxit):
         _newmark_update(z, v, a, z1, v1, a1, h, beta, gamma)
         if banded:
-            _band_newton(model, z, v, a, z1, v1, a1, P_n, P1, K, J, R, dz, wk, coef, c_m, c_c, sf, False)
+            _band_newton(model, z, v, a, z1, v1, a1, P_n, P1, K, J, R, dz, wk, coef, c_m, c_c, sf, False, tb, ta)
             solved = bd.solve_band(J, R, dz, LU)
         elif approx_band:
             st = _approximate_newton(model, z, v, a, z1, v1, a1, P_n, P1, K, J, R, Cv, warm, wk, awk, coef, c_m, c_c,
@@ -283,7 +293,8 @@ def _galpha_step(model, z, v, a, P_n, warm, wk, awk, tb, h, coef, ztol, maxit, z
                 return st
             solved = solve_band_low_rank(J, V, D, R, dz, LU, Z, small)
         else:
-            st = _dense_newton(model, z, v, a, z1, v1, a1, P_n, P1, K, J, R, warm, wk, awk, coef, c_m, c_c, sf, it == 0)
+            st = _dense_newton(model, z, v, a, z1, v1, a1, P_n, P1, K, J, R, warm, wk, awk, coef, c_m, c_c, sf, it == 0,
+                               tb, ta)
             if st != OK:
                 return st
             solved = solve_small(J, R, dz, LU)
@@ -306,8 +317,8 @@ def _galpha_step(model, z, v, a, P_n, warm, wk, awk, tb, h, coef, ztol, maxit, z
         return INNER_SOLVE
     _newmark_update(z, v, a, z1, v1, a1, h, beta, gamma)
     if banded:
-        return _band_newton(model, z, v, a, z1, v1, a1, P_n, P1, K, J, R, dz, wk, coef, c_m, c_c, sf, True)
-    return _internal(model, z1, P_n, z, warm, P1, K, False, wk, awk, True)
+        return _band_newton(model, z, v, a, z1, v1, a1, P_n, P1, K, J, R, dz, wk, coef, c_m, c_c, sf, True, tb, ta)
+    return _internal(model, z1, P_n, z, warm, P1, K, False, wk, awk, True, tb)
 
 
 @njit
@@ -399,15 +410,13 @@ class GeneralizedAlpha(Integrator):
 
     @staticmethod
     def _force(eom, st):
-        """The internal force at the state: ``P(y)`` of the current segment modes (exact) or eq. 15."""
+        """The internal force at the state: ``P(y)`` of the current segment modes, with the
+        supports where they are at ``st.t`` (exact), or eq. 15."""
         nd = eom.n_dof
         if eom.exact:
-            c = eom.cable
-            P, Kv = np.empty(nd), np.empty(nd)  # no dense K: O(n) for heavy cables
-            zr = (0.0,) * c.dim  # fixed supports
-            asm.force_and_rate(eom.y0 + st.s[:nd], np.zeros(nd), c.S, c.EA, c.support_A, c.support_B, zr, zr,
-                               st.wk[0].taut, P, Kv)
-            return P
+            wk = st.wk[0]  # no dense K: O(n) for heavy cables
+            exact_force_and_rate(eom.model(), float(st.t), eom.y0 + st.s[:nd], np.zeros(nd), wk)
+            return wk.P.copy()
         return eom.internal_force(st.t, st.s)
 
     def advance(self, model, state, t_end, t_out, out):

@@ -10,7 +10,7 @@ of :class:`~cablesim.dynamics.integrators.base.Integrator`), it does not branch 
 Defaults (``docs/theory.md`` and the README's "Integrators" say why):
 
 - ``dopri5``: ``rtol`` :data:`DEFAULT_RTOL`, ``atol`` :data:`DEFAULT_ATOL_PER_CHORD` times the
-  chord (m);
+  chord (m) at that ``rtol``, following ``rtol`` when it is given (:func:`default_atol`);
 - ``rk4``, ``newmark``, ``generalized-alpha``: :data:`STEPS_PER_PERIOD` steps per period of the
   frequency of interest, rounded to divide the forcing period; ``rk4`` kept inside its stability
   limit (:data:`RK4_SAFE_STEP` over the fastest damped rate); ``generalized-alpha``'s
@@ -32,9 +32,11 @@ from .base import Integrator
 from .newmark import GeneralizedAlpha, Newmark
 from .rk import DOPRI5, RK4
 
-#: dopri5's default relative tolerance.
+#: Default tolerances of dopri5: relative, and absolute per metre of chord at that rtol. An atol
+#: not given follows rtol (``atol = DEFAULT_ATOL_PER_CHORD * chord * rtol / DEFAULT_RTOL``): a
+#: fixed atol would dominate the error test once rtol is tightened (the paper example's
+#: displacements are metres, atol 3e-8 m), and halving rtol would change nothing.
 DEFAULT_RTOL = 1e-8
-#: dopri5's default absolute displacement tolerance, per m of chord.
 DEFAULT_ATOL_PER_CHORD = 1e-10
 #: Fixed steps per period of the highest frequency of interest, when no ``dt`` is given.
 STEPS_PER_PERIOD = 100
@@ -60,6 +62,12 @@ def dividing_step(dt: float, omega: float) -> float:
         return dt
     period = 2.0 * np.pi / omega
     return period / np.ceil(period / dt - 1e-9)
+
+
+def default_atol(chord: float, rtol: float) -> float:
+    """dopri5's absolute tolerance on displacements (m) when the case gives none: it scales with
+    ``rtol``, ``1e-10`` of the chord at the default rtol 1e-8."""
+    return DEFAULT_ATOL_PER_CHORD * chord * (rtol / DEFAULT_RTOL)
 
 
 def _period_step(eom, omega_interest: float, steps: int) -> float:
@@ -94,8 +102,8 @@ class Scheme:
             raise ValueError(f"{self.name} takes {', '.join(self.keys)}, not {', '.join(bad)}")
         s = dict(given)
         if self.cls is DOPRI5:
-            return DOPRI5(rtol=s.get("rtol") or DEFAULT_RTOL,
-                          atol=s.get("atol") or DEFAULT_ATOL_PER_CHORD * eom.cable.chord_length)
+            rtol = s.get("rtol") or DEFAULT_RTOL
+            return DOPRI5(rtol=rtol, atol=s.get("atol") or default_atol(eom.cable.chord_length, rtol))
         dt = s.get("dt")
         if dt is None:
             dt = _period_step(eom, omega_interest, STEPS_PER_PERIOD)
@@ -115,7 +123,7 @@ class Scheme:
 _CLASSES = {"rk4": RK4, "dopri5": DOPRI5, "newmark": Newmark, "generalized-alpha": GeneralizedAlpha}
 _DEFAULTS = {
     "rk4": f"dt: {STEPS_PER_PERIOD} steps per period of interest, inside the stability limit",
-    "dopri5": f"rtol {DEFAULT_RTOL:g}, atol {DEFAULT_ATOL_PER_CHORD:g} x chord (m)",
+    "dopri5": f"rtol {DEFAULT_RTOL:g}, atol {DEFAULT_ATOL_PER_CHORD:g} x chord x rtol / {DEFAULT_RTOL:g} (m)",
     "newmark": f"dt: {STEPS_PER_PERIOD} steps per period of interest",
     "generalized-alpha": f"dt: {STEPS_PER_PERIOD} steps per period of interest ({STIFF_STEPS_PER_PERIOD} as the "
                          f"default of stiff cables), rho_inf {DEFAULT_RHO_INF:g}",

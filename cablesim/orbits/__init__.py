@@ -14,7 +14,7 @@
   implicit Radau IIA flow for stiff cables, :mod:`~cablesim.orbits.radau`), Newton-GMRES
   (:mod:`~cablesim.orbits.krylov`) and the leading Floquet multipliers
   (:mod:`~cablesim.orbits.floquet`); :mod:`~cablesim.orbits.mfproblem` makes it a continuation
-  problem (``matrix_free`` of :func:`continue_branches`, by default above 24 states);
+  problem (``matrix_free`` of :func:`continue_branches`, by default above 40 states);
 - :mod:`~cablesim.orbits.systems`, :mod:`~cablesim.orbits.cablefield`: the vector fields;
   :mod:`~cablesim.orbits.starting`: starting states.
 

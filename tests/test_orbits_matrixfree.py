@@ -200,3 +200,39 @@ def test_leading_multipliers_of_a_known_matrix():
     assert lead.multipliers.size == expect.size
     assert max(np.abs(expect - m).min() for m in lead.multipliers) < 1e-9
     assert lead.discarded == pytest.approx(np.abs(mods[4:n - 4]).max(), abs=DISCARDED_TOL)
+
+
+def test_leading_multipliers_with_a_complex_pair_below_the_bound():
+    """The largest discarded multipliers a complex pair: the kept subspace's cut must not fall
+    between the two (it did, and the ordered Schur form failed on the ambiguous pair)."""
+    rng = np.random.default_rng(6)
+    n = 120
+    D = np.diag(np.concatenate([[1.2, -0.8, 0.0, 0.0], 0.2 * rng.random(n - 4)]))
+    D[2:4, 2:4] = 0.45 * np.array([[np.cos(1.0), -np.sin(1.0)], [np.sin(1.0), np.cos(1.0)]])
+    S = np.eye(n) + 0.3 * rng.standard_normal((n, n)) / np.sqrt(n)
+    M = S @ D @ np.linalg.inv(S)
+    lead = leading_multipliers(lambda X: M @ X, n, bound=0.5)
+    assert lead.multipliers.size == 2 and not lead.complete
+    assert max(np.abs(np.array([1.2, -0.8]) - m).min() for m in lead.multipliers) < 1e-9
+    assert lead.discarded == pytest.approx(0.45, abs=DISCARDED_TOL)
+    assert np.abs(M @ lead.basis - lead.basis @ lead.schur).max() < DISCARDED_TOL
+
+
+def test_leading_subspace_when_the_ordered_schur_form_fails(monkeypatch):
+    """Where LAPACK's reordering fails (seen on a 20-node branch), the kept subspace comes from
+    the eigenvectors and is still invariant."""
+    import cablesim.orbits.floquet as fq
+
+    def refuse(*args, **kwargs):
+        raise np.linalg.LinAlgError("Leading eigenvalues do not satisfy sort condition.")
+
+    rng = np.random.default_rng(7)
+    n = 60
+    D = np.diag(np.concatenate([[1.1, 0.9, -0.7], 0.2 * rng.random(n - 3)]))
+    S = np.eye(n) + 0.3 * rng.standard_normal((n, n)) / np.sqrt(n)
+    M = S @ D @ np.linalg.inv(S)
+    monkeypatch.setattr(fq.sla, "schur", refuse)
+    lead = fq.leading_multipliers(lambda X: M @ X, n, bound=0.5)
+    assert lead.multipliers.size == 3
+    # the subspace holds one Ritz vector below the bound too, converged to DISCARDED_TOL only
+    assert np.abs(M @ lead.basis - lead.basis @ lead.schur).max() < DISCARDED_TOL

@@ -203,14 +203,31 @@ def leading_multipliers(apply, n: int, bound: float = DEFAULT_BOUND, tol: float 
     return _result(B, MB, H, theta, X, res, nk, bound, products, complete=B.shape[1] >= n)
 
 
+def _leading_schur(H: np.ndarray, cut: float):
+    """``(Z, T)``: an orthonormal basis ``Z`` of the invariant subspace of ``H`` for its
+    eigenvalues of modulus above ``cut``, and ``T = Z^T H Z``. The ordered real Schur form, or,
+    where LAPACK's reordering moves an eigenvalue across the cut (moduli that close to it), the
+    real span of those eigenvectors."""
+    try:
+        T, Z, sdim = sla.schur(H, output="real", sort=lambda x, y: np.hypot(x, y) > cut)
+        sdim = max(int(sdim), 1)
+        return Z[:, :sdim], T[:sdim, :sdim]
+    except np.linalg.LinAlgError:
+        theta, Y = np.linalg.eig(H)
+        keep = np.abs(theta) > cut
+        if not np.any(keep):
+            keep[int(np.argmax(np.abs(theta)))] = True
+        Z = _orth(np.hstack([Y[:, keep].real, Y[:, keep].imag]))
+        return Z, Z.T @ H @ Z
+
+
 def _restart(B, MB, H, nk):
     """Keep the real Schur vectors of the wanted Ritz values and a few below them."""
     m = H.shape[0]
     keep = min(m, nk + max(4, nk // 4))
     mods = np.sort(np.abs(np.linalg.eigvals(H)))[::-1]
     cut = 0.5 * (mods[keep - 1] + mods[keep]) if keep < m else -1.0
-    T, Z, sdim = sla.schur(H, output="real", sort=lambda x, y: np.hypot(x, y) > cut)
-    Z = Z[:, : max(sdim, 1)]
+    Z, _ = _leading_schur(H, cut)
     return B @ Z, MB @ Z
 
 
@@ -220,10 +237,8 @@ def _result(B, MB, H, theta, X, res, nk, bound, products, complete) -> Leading:
     if complete:
         q = m
     cut = 0.5 * (abs(theta[q - 1]) + abs(theta[q])) if q < m else -1.0
-    T, Z, sdim = sla.schur(H, output="real", sort=lambda x, y: np.hypot(x, y) > cut)
-    sdim = max(int(sdim), 1)
-    basis = B @ Z[:, :sdim]
-    schur = T[:sdim, :sdim]
+    Z, schur = _leading_schur(H, cut)
+    basis = B @ Z
     k = m if complete else nk
     vec = X[:, :k] / np.linalg.norm(X[:, :k], axis=0)
     discarded = 0.0 if complete or nk >= m else float(abs(theta[nk]))

@@ -296,7 +296,8 @@ def history(
 
     stem = history_stem(w, dur, analysis.value if analysis else None, integrator.value if integrator else None)
     out = output if output is not None else Path("runs") / case.name / f"{stem}.h5"
-    chans = parse_channels(channels, case.history.channels, 2 * case.cable.n_nodes, kept=case.outputs.channels)
+    chans = parse_channels(channels, case.history.channels, case.dim * case.cable.n_nodes, kept=case.outputs.channels,
+                           dim=case.dim)
     _check_outputs(out, case_file, (lambda o: figures(o, "history")[:5]) if plot else [])
     from . import api
     from .io.finish import finish_history, guard, simulate
@@ -352,7 +353,7 @@ def free_vibration(
     stem = free_vibration_stem(k, v, damping_ratio, analysis.value if analysis else None,
                                integrator.value if integrator else None)
     out = output if output is not None else Path("runs") / case.name / f"{stem}.h5"
-    chans = parse_channels(channels, fv.channels, 2 * case.cable.n_nodes, kept=case.outputs.channels)
+    chans = parse_channels(channels, fv.channels, case.dim * case.cable.n_nodes, kept=case.outputs.channels, dim=case.dim)
     _check_outputs(out, case_file, (lambda o: figures(o, "history")[:5]) if plot else [])
     from . import api
     from .io.finish import finish_history, guard, simulate

@@ -388,6 +388,39 @@ def equilibrium_plane(points: np.ndarray, chord: np.ndarray) -> np.ndarray | Non
     return -normal if normal[2] < 0 or (normal[2] == 0 and normal[0] < 0) else normal
 
 
+def out_of_plane_shape(y0: np.ndarray, support_A: np.ndarray, support_B: np.ndarray) -> np.ndarray:
+    """A displacement of the nodes out of the plane of the equilibrium ``y0`` (3n), largest
+    component 1: along the plane's normal (:func:`equilibrium_plane`; ``w`` if the equilibrium is
+    not planar), with the profile ``sin(pi xi) + sin(2 pi xi) / 2`` over the node number
+    ``xi = i / (n + 1)``, so that symmetric and antisymmetric out-of-plane motions are both seeded."""
+    nodes = np.reshape(np.asarray(y0, dtype=float), (-1, 3))
+    chord = np.asarray(support_B, dtype=float) - np.asarray(support_A, dtype=float)
+    normal = equilibrium_plane(np.vstack([support_A, nodes, support_B]), chord)
+    normal = np.array([0.0, 0.0, 1.0]) if normal is None else normal
+    xi = np.arange(1, nodes.shape[0] + 1) / (nodes.shape[0] + 1)
+    profile = np.sin(np.pi * xi) + 0.5 * np.sin(2 * np.pi * xi)
+    shape = np.outer(profile, normal).ravel()
+    return shape / np.abs(shape).max()
+
+
+def mirror_plane(points: np.ndarray, chord: np.ndarray, vectors=()) -> np.ndarray | None:
+    """Unit normal of a plane of mirror symmetry of a spatial cable, or None.
+
+    The plane of the equilibrium (:func:`equilibrium_plane`, nodes and supports in ``points``)
+    is a mirror of the motion when every load and support motion in ``vectors`` (each a flat
+    array of 3-vectors, one per node or support) lies in it as well, to :data:`PLANE_TOL` of the
+    largest of them: reflected through it, a motion is again a motion.
+    """
+    normal = equilibrium_plane(points, chord)
+    if normal is None:
+        return None
+    for v in vectors:
+        v = np.reshape(np.asarray(v, dtype=float), (-1, 3))
+        if v.size and np.abs(v @ normal).max() > PLANE_TOL * max(float(np.abs(v).max()), 1e-300):
+            return None
+    return normal
+
+
 def plane_basis(normal: np.ndarray, chord: np.ndarray) -> np.ndarray:
     """Columns ``(e1, e2, normal)``: ``e1`` along the chord's part in the plane, ``e2`` the
     third axis of a right-handed frame (3 x 3, orthonormal)."""

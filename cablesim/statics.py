@@ -440,7 +440,7 @@ def band_to_dense(band: np.ndarray) -> np.ndarray:
     """The full symmetric matrix of a lower band form (``band[d, j] = A[j + d, j]``)."""
     m = band.shape[1]
     A = np.zeros((m, m))
-    for d in range(band.shape[0]):
+    for d in range(min(band.shape[0], m)):  # a band deeper than the matrix (one node) is cut
         idx = np.arange(m - d)
         A[idx + d, idx] = band[d, : m - d]
         A[idx, idx + d] = band[d, : m - d]

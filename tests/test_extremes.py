@@ -149,7 +149,7 @@ def _sweep_against_orbits(source, omegas):
         assert d["steady"][i] and d["period"][i] == 1, d["status"][i]
         eom = build_equations(case, static, omega=w)
         sh = Shooting(cable_system(eom))
-        sol = solve_orbit(sh, state_from_history(np.asarray(res.states[(0, i)])[: 2 * nd], nd), w)
+        sol = solve_orbit(sh, state_from_history(np.asarray(res.state(0, w))[: 2 * nd], nd), w)
         assert sol.converged
         ev = sh.evaluate(sol.u, w, jac=False)
         cont = np.maximum(np.abs(ev.xmax[:nd]), np.abs(ev.xmin[:nd]))

@@ -18,7 +18,9 @@ from ..case import Case
 from ..channels import channel_index
 from ..errors import CablesimError
 from ..dynamics.steady import SteadyCriterion, steady_response
+from ..modal import COUPLED, IN_PLANE
 from ..orbits import OrbitPoint, Settings, continue_branches
+from ..orbits.stability import frequency_ratio
 from .setup import build_equations, frequency_of_interest, make_integrator
 from .static import run_static
 
@@ -52,6 +54,19 @@ class BranchResult:
         Branch it was switched from (period doubling).
     end : str
         Why the branch ended.
+    planes : ndarray of str (points, 2 n_dof) or None
+        The block of every multiplier, ``in-plane`` or ``out-of-plane``, on a branch of planar
+        orbits of a spatial cable symmetric about its plane (``coupled`` on a nonplanar branch
+        of a spatial cable, ``in-plane`` for a planar cable).
+    planar : bool
+        Whether its orbits lie in the plane of a mirror-symmetric spatial cable.
+    mirror_image : bool
+        A nonplanar branch born at a pitchfork: its mirror image ``w -> -w`` exists too.
+    whirl_area : ndarray (points, n_nodes) or None
+        Spatial cable: the signed area of each node's path in its cross-section plane ``(w, v)``
+        over the orbit, m^2 (positive counter-clockwise; zero on a planar orbit).
+    tilt : ndarray (points,) or None
+        Spatial cable: the angle of the orbit's mean plane of motion from the cable's plane, deg.
     """
 
     name: str
@@ -67,6 +82,11 @@ class BranchResult:
     state: np.ndarray
     parent: int | None
     end: str
+    planes: np.ndarray | None = None
+    planar: bool = False
+    mirror_image: bool = False
+    whirl_area: np.ndarray | None = None
+    tilt: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -74,7 +94,12 @@ class BifurcationResult:
     """A located bifurcation: ``kind`` (``fold``, ``period-doubling``, ``neimark-sacker``,
     ``branch-point``, or ``grazing``: the last orbit before a segment goes slack), where (``parameter``, ``omega``), on which ``branch`` (index), the orbit's
     ``period`` and ``amplitude`` per channel (m), the critical ``multiplier``, and whether the
-    location converged (``located``) and its multipliers passed the accuracy checks (``trusted``)."""
+    location converged (``located``) and its multipliers passed the accuracy checks (``trusted``);
+    ``plane``: the block of the critical multiplier (``in-plane``, ``out-of-plane``; ``coupled``
+    on a nonplanar orbit of a spatial cable), where an out-of-plane multiplier through +1 is a
+    ``pitchfork``; ``frequency_ratio``: ``|arg(mu)| / 2 pi`` of the critical multiplier (0 at a fold or
+    pitchfork, 1/2 at a period doubling, the new frequency over the orbit's at a Neimark-Sacker
+    point)."""
 
     kind: str
     parameter: float
@@ -85,6 +110,8 @@ class BifurcationResult:
     multiplier: complex
     located: bool
     trusted: bool
+    plane: str = IN_PLANE
+    frequency_ratio: float = 0.0
 
 
 @dataclass
@@ -111,9 +138,10 @@ class ContinuationResult:
 
 
 def _channels(case: Case) -> tuple[list[str], np.ndarray]:
-    n_dof = 2 * case.cable.n_nodes
+    dim = case.dim
+    n_dof = dim * case.cable.n_nodes
     names = case.continuation.channels or case.history.channels or [f"z{i + 1}" for i in range(n_dof)]
-    idx = np.array([channel_index(c, n_dof) for c in names], dtype=int)
+    idx = np.array([channel_index(c, n_dof, dim) for c in names], dtype=int)
     return [f"z{i + 1}" for i in idx], idx
 
 
@@ -131,7 +159,7 @@ def _end_text(br) -> str:
     return text
 
 
-def _grazing_points(diagram, parameter: str, fixed: float, idx: np.ndarray) -> list:
+def _grazing_points(diagram, parameter: str, fixed: float, idx: np.ndarray, dim: int = 2) -> list:
     """A branch that ended because a segment went slack ends at a *grazing* orbit: its last
     orbit, whose smallest tension is about to reach zero (orbits with slack intervals are not
     followed). One record per such branch, at its last orbit."""
@@ -144,11 +172,19 @@ def _grazing_points(diagram, parameter: str, fixed: float, idx: np.ndarray) -> l
         out.append(BifurcationResult(
             kind="grazing", parameter=float(p.parameter), omega=float(p.omega),
             branch=k, period=int(br.period), amplitude=np.asarray(p.amplitude)[idx],
-            multiplier=complex(p.multipliers[0]), located=False, trusted=bool(p.trusted)))
+            multiplier=complex(p.multipliers[0]), located=False, trusted=bool(p.trusted),
+            frequency_ratio=frequency_ratio(complex(p.multipliers[0])), plane=IN_PLANE if dim == 2 or br.planar else COUPLED))
     return out
 
 
-def _branch(k: int, br, parameter: str, fixed: float, idx: np.ndarray) -> BranchResult:
+def _planes(br, dim: int) -> np.ndarray:
+    """The block of every multiplier of every point (:attr:`BranchResult.planes`)."""
+    other = IN_PLANE if dim == 2 else COUPLED
+    return np.array([p.planes if p.planes is not None else (other,) * len(p.multipliers) for p in br.points],
+                    dtype=str).reshape(len(br.points), -1)
+
+
+def _branch(k: int, br, parameter: str, fixed: float, idx: np.ndarray, dim: int = 2) -> BranchResult:
     pts = br.points
     values = np.array([p.parameter for p in pts], dtype=float)
     omega = np.array([p.omega for p in pts], dtype=float)
@@ -167,7 +203,21 @@ def _branch(k: int, br, parameter: str, fixed: float, idx: np.ndarray) -> Branch
         state=np.array([p.state for p in pts]),
         parent=br.parent,
         end=_end_text(br),
+        planes=_planes(br, dim),
+        planar=bool(getattr(br, "planar", False)),
+        mirror_image=bool(getattr(br, "mirror_image", False)),
+        **_whirling(br, dim),
     )
+
+
+def _whirling(br, dim: int) -> dict:
+    """The whirling measures of a spatial branch's points (zero on planar orbits)."""
+    if dim == 2:
+        return {}
+    n = br.points[0].state.size // 6 if br.points else 0
+    area = np.array([p.whirl.area if p.whirl is not None else np.zeros(n) for p in br.points]).reshape(-1, n)
+    tilt = np.array([p.whirl.tilt if p.whirl is not None else 0.0 for p in br.points], dtype=float)
+    return {"whirl_area": area, "tilt": tilt}
 
 
 def _integrated_start(case: Case, static, omega: float, gamma: float, names, idx) -> np.ndarray:
@@ -213,8 +263,9 @@ def run_continuation(
             "`continuation: {omega: {start: 0.5, stop: 6.0}, channels: [z2, z4]}`.",
             field="continuation",
         )
-    if not np.any(case.FL):
-        raise CablesimError("loads.FL is zero, so there is no forced response to continue.", field="loads.FL")
+    if not case.forced:
+        raise CablesimError("loads.FL is zero and no support moves, so there is no forced response to continue; "
+                            "give peak harmonic loads FL or a support amplitude (supports:).", field="loads.FL")
     static = run_static(case, analysis, all_models=False)
     rng, fixed = spec.range, spec.fixed
     omega0 = rng.start if spec.parameter == "omega" else fixed
@@ -236,17 +287,20 @@ def run_continuation(
         callback=callback, gamma=fixed if spec.parameter == "omega" else 1.0, initial_state=initial,
         segments=spec.segments, max_period=spec.max_period, settings=Settings(max_points=spec.max_points),
     )
-    branches = [_branch(k, br, spec.parameter, fixed, idx) for k, br in enumerate(diagram.branches) if br.points]
+    branches = [_branch(k, br, spec.parameter, fixed, idx, case.dim) for k, br in enumerate(diagram.branches)
+                if br.points]
+    other = IN_PLANE if case.dim == 2 else COUPLED
     bifs = [
         BifurcationResult(
             kind=b.kind, parameter=float(b.parameter),
             omega=float(b.parameter) if spec.parameter == "omega" else fixed,
             branch=int(b.branch), period=int(b.period), amplitude=np.asarray(b.amplitude)[idx],
             multiplier=complex(b.multiplier), located=bool(b.located), trusted=bool(b.trusted),
+            plane=b.plane or other, frequency_ratio=frequency_ratio(complex(b.multiplier)),
         )
         for b in diagram.bifurcations
     ]
-    bifs += _grazing_points(diagram, spec.parameter, fixed, idx)
+    bifs += _grazing_points(diagram, spec.parameter, fixed, idx, case.dim)
     stats = dict(diagram.stats)
     stats["wall"] = time.perf_counter() - t0
     return ContinuationResult(

@@ -17,7 +17,8 @@ from ..errors import CablesimError
 from ..modal import modal_damping_ratios
 from ..statics import segment_geometry
 from .cost import Cost, history_cost
-from .setup import build_equations, make_integrator, mode_velocity, need_inextensible, output_interval
+from .setup import (build_equations, disturbed_start, make_integrator, mode_velocity, need_inextensible,
+                    output_interval, taut)
 from .static import StaticResult, run_static
 
 
@@ -27,13 +28,20 @@ from .static import StaticResult, run_static
 SPLIT_NODES = 100
 
 
-def split_outputs(case: Case, split: bool | None = None) -> bool:
+def split_outputs(case: Case, split: bool | None = None, taut_cable: bool = False) -> bool:
     """Whether a time history computes the split: the argument, the case's ``outputs.split``,
-    or by default up to :data:`SPLIT_NODES` nodes."""
-    if split is not None:
-        return bool(split)
-    if case.outputs.split is not None:
-        return case.outputs.split
+    or by default up to :data:`SPLIT_NODES` nodes; never for a ``taut_cable`` (no natural state
+    to split from), which refuses an explicit request."""
+    wanted = bool(split) if split is not None else case.outputs.split
+    if taut_cable:
+        if wanted:
+            raise CablesimError(
+                "outputs.split asks for the configurational and elastic parts of the motion, which a cable "
+                "not longer than its chord has not (no inextensible natural state); set outputs.split: false "
+                "or remove it.", field="outputs.split")
+        return False
+    if wanted is not None:
+        return wanted
     return case.cable.n_nodes <= SPLIT_NODES
 
 
@@ -82,10 +90,10 @@ def plan_history(
             "No forcing frequency: give omega (rad/s; on the command line --omega W) or history.omega in the "
             "case file.", field="history.omega",
         )
-    if not np.any(case.FL):
+    if not case.forced:
         raise CablesimError(
-            "loads.FL is zero, so there is no forcing; give peak harmonic loads FL in the case "
-            "file (or use free-vibration).",
+            "loads.FL is zero and no support moves, so there is no forcing; give peak harmonic loads FL "
+            "or a support amplitude (supports:) in the case file (or use free-vibration).",
             field="loads.FL",
         )
     duration = duration if duration is not None else case.history.duration
@@ -95,10 +103,10 @@ def plan_history(
     w_int = max(omega, float(static.modes.omega[0]))
     step = output_interval(output_step or case.history.output_step, w_int, duration)
     integ = make_integrator(case.integrator, eom, w_int, integrator)
-    split = split_outputs(case, split)
-    s0 = eom.initial_state()
-    check_initial_state(s0, "loads.F0")
-    return HistoryPlan("history", static, eom, integ, w_int, duration, step, None, split)
+    split = split_outputs(case, split, taut(static))
+    check_initial_state(eom.initial_state(), "loads.F0")
+    s0 = disturbed_start(eom, static, case.history.disturbance, "history.disturbance")
+    return HistoryPlan("history", static, eom, integ, w_int, duration, step, s0, split)
 
 
 def run_history(
@@ -186,7 +194,7 @@ def plan_free_vibration(
         duration = decay_duration(static.modes.omega, eom.a0, eom.a1, mode)
     step = output_interval(output_step or fv.output_step, w_int, duration)
     integ = make_integrator(case.integrator, eom, w_int, integrator)
-    split = split_outputs(case, split)
+    split = split_outputs(case, split, taut(static))
     return HistoryPlan("free-vibration", static, eom, integ, w_int, duration, step, s0, split)
 
 

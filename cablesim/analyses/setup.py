@@ -16,7 +16,7 @@ from ..dynamics.integrators.settings import (DEFAULT_ATOL_PER_CHORD, DEFAULT_RTO
                                               STEPS_PER_PERIOD, STIFF_RATIO, STIFF_STEPS_PER_PERIOD, default_atol,
                                               dividing_step, ignored_keys, is_stiff, make, rk4_stable_step)
 from ..errors import CablesimError
-from ..modal import fastest_rate, modal_analysis_banded, rayleigh_coefficients
+from ..modal import fastest_rate, modal_analysis_banded, out_of_plane_shape, rayleigh_coefficients
 from .static import StaticResult, damping_modes
 
 #: Saved instants per period of the highest frequency of interest, by default.
@@ -64,7 +64,9 @@ def build_equations(
     banded = static.K0_band is not None  # exact analysis: K0 is block-tridiagonal, so is C
     inext = static.inextensible
     uA, uB, phA, phB = case.support_motion()  # scaled with FL by load_scale, like the loads
-    x0 = inext.x
+    # A taut cable (exact analysis only) has no natural state x(F0): x0 = y0, no elastic split.
+    x0 = inext.x if inext is not None else static.y0.copy()
+    F1 = inext.segments.F[0].copy() if inext is not None else _segment_one_force(static)
     return EquationsOfMotion(
         cable=cable,
         analysis=static.analysis,
@@ -76,7 +78,7 @@ def build_equations(
         x0=x0.copy(),
         u0=static.y0 - x0,
         T0=static.T0.copy(),
-        F1=inext.segments.F[0].copy(),
+        F1=F1,
         a0=float(a0),
         a1=float(a1),
         modal_omega=static.modes.omega_with_highest().copy(),  # with the highest: explicit steps need it
@@ -91,14 +93,30 @@ def build_equations(
 
 
 def need_inextensible(static: StaticResult) -> None:
-    """Refuse a pretensioned cable (no inextensible state) for dynamics, with the reason."""
-    if static.inextensible is None:
+    """Refuse a pretensioned cable (no inextensible state) for the dynamics of the approximate
+    analysis, which is built on that state, with the reason; the exact analysis needs none."""
+    if static.inextensible is None and static.analysis != "exact":
         raise CablesimError(
             "This cable is not longer than its chord (pretensioned, or within 1e-12 of it), so it "
             "has no inextensible natural state and the configurational/elastic split of the paper "
-            "does not exist; time histories need sum(cable.S) (or cable.length) greater than the chord.",
+            "does not exist; the approximate analysis is built on it. Use the exact analysis "
+            "(analysis: exact, or --analysis exact), or make sum(cable.S) greater than the chord.",
             field="cable.S",
         )
+
+
+def taut(static: StaticResult) -> bool:
+    """Whether the cable has no inextensible natural state (not longer than its chord), so its
+    displacements have no configurational/elastic split."""
+    return static.inextensible is None
+
+
+def _segment_one_force(static: StaticResult) -> np.ndarray:
+    """The force of segment 1 at the equilibrium, ``T_1`` along it (N): the warm start of
+    inner solves where no inextensible state gives one."""
+    cable = static.cable
+    d = np.asarray(static.y0[:cable.dim], dtype=float) - np.asarray(cable.support_A, dtype=float)
+    return float(static.T0[0]) * d / np.linalg.norm(d)
 
 
 def frequency_of_interest(eom: EquationsOfMotion, omega: float = 0.0) -> float:
@@ -185,3 +203,44 @@ def integrator_record(integ: Integrator) -> dict:
     if not integ.fixed_step:
         out.update({f"integrator_{k}": float(v) for k, v in integ.settings().items()})
     return out
+
+
+#: Default size of the out-of-plane disturbance of a spatial sweep's points, per m of chord.
+DISTURBANCE_PER_CHORD = 1e-6
+
+
+def sweep_disturbance(case: Case, analysis: str) -> float:
+    """The out-of-plane disturbance of each sweep point, m: ``sweep.disturbance``, else
+    :data:`DISTURBANCE_PER_CHORD` of the chord for a spatial cable in the exact ``analysis`` (the
+    one that can start displaced) and none otherwise."""
+    if case.sweep is not None and case.sweep.disturbance is not None:
+        return float(case.sweep.disturbance)
+    spatial_exact = case.dim == 3 and analysis == "exact"
+    return DISTURBANCE_PER_CHORD * case.to_cable().chord_length if spatial_exact else 0.0
+
+
+def disturbed_start(eom: EquationsOfMotion, static: StaticResult, size: float, field: str,
+                    s0: np.ndarray | None = None) -> np.ndarray | None:
+    """The state ``s0`` (or the equilibrium at rest) with the nodes moved out of the plane by at
+    most ``size`` m (:func:`cablesim.modal.out_of_plane_shape`), ``y''(0)`` from eq. 19 again;
+    ``s0`` unchanged when ``size`` is 0.
+
+    Raises
+    ------
+    CablesimError
+        For the approximate analysis, whose configuration cannot start displaced (``field``
+        names the setting).
+    """
+    if size <= 0.0:
+        return s0
+    if static.analysis != "exact":
+        raise CablesimError(
+            f"{field} = {size:g} m displaces the cable at the start, which only the exact analysis can do; "
+            f"set analysis: exact (or --analysis exact), or {field}: 0.", field=field)
+    cable = static.cable
+    d = size * out_of_plane_shape(static.y0, np.asarray(cable.support_A), np.asarray(cable.support_B))
+    nd = eom.n_dof
+    if s0 is None:
+        return eom.initial_state(d)
+    s0 = np.asarray(s0, dtype=float)
+    return eom.initial_state(s0[:nd] + d, s0[nd:2 * nd])

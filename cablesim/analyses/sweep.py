@@ -37,7 +37,7 @@ from ..orbits.accelerate import accelerated_steady_response
 from . import pool
 from .cost import Cost, sweep_cost
 from .refine import BUDGET, BUDGET_FLOOR, finest_step, refinements
-from .setup import build_equations, integrator_record, make_integrator
+from .setup import build_equations, disturbed_start, need_inextensible, integrator_record, make_integrator, sweep_disturbance
 from .static import StaticResult, run_static
 from .sweep_points import BadRecord, CurveTable, SweepPoint
 
@@ -61,8 +61,8 @@ class SweepResult:
     ``(P,)`` ``period``, ``steady``, ``t_end``, ``floquet``, ``done``, ...). ``settings`` holds
     the sweep's ``cap``, ``window``, ``tol``, ``max_period``, ``floquet_check``, ``accelerate``
     and ``refine`` (halvings allowed), ``grid_points`` and ``finest_step``; ``modal_omega`` the
-    linear modal frequencies, rad/s. Sizes come from the cable: ``n_dof`` (2n) and
-    ``n_segments`` (n + 1).
+    linear modal frequencies, rad/s. Sizes come from the cable: ``n_dof`` (``dim n``, with
+    ``dim`` the components per node, 2 planar or 3 spatial) and ``n_segments`` (n + 1).
     """
 
     omega: np.ndarray
@@ -71,6 +71,7 @@ class SweepResult:
     channels: list[str]
     curves: list[Curve]
     n_dof: int
+    dim: int = 2
     analysis: str = "exact"
     modal_omega: np.ndarray = field(default_factory=lambda: np.empty(0))
     case_name: str = "case"
@@ -83,7 +84,7 @@ class SweepResult:
     @property
     def n_segments(self) -> int:
         """Segments of the cable (n + 1)."""
-        return self.n_dof // 2 + 1
+        return self.n_dof // self.dim + 1
 
     def add(self, p: SweepPoint) -> None:
         """Enter a finished point."""
@@ -103,7 +104,8 @@ class SweepResult:
         """The columns of one curve over :attr:`omega`."""
         if curve not in self._tables:
             mine = {w: p for (c, w), p in self.points.items() if c == curve}
-            self._tables[curve] = CurveTable.from_points(self.omega, mine, len(self.channels), self.n_dof)
+            self._tables[curve] = CurveTable.from_points(self.omega, mine, len(self.channels), self.n_dof,
+                                                           self.n_segments)
         return self._tables[curve]
 
     @property
@@ -157,10 +159,10 @@ class SweepResult:
 
 def channel_indices(case: Case, names: Iterable[str] | None) -> tuple[list[str], np.ndarray]:
     """Channel names and 0-based DOF indices (default: every DOF)."""
-    n_dof = case.cable.n_nodes * 2
+    n_dof = case.dim * case.cable.n_nodes
     if not names:
         names = [f"z{i + 1}" for i in range(n_dof)]
-    idx = np.array([channel_index(c, n_dof) for c in names], dtype=int)
+    idx = np.array([channel_index(c, n_dof, case.dim) for c in names], dtype=int)
     return [f"z{i + 1}" for i in idx], idx
 
 
@@ -188,6 +190,7 @@ class SweepContext:
     static: StaticResult
     integrator: str | None
     channels: tuple[int, ...]
+    disturbance: float = 0.0  # m, out of the plane at each point's start (spatial cables)
 
     def fundamental(self):
         """The equations of motion and the integrator of this sweep forced at the first mode's
@@ -221,6 +224,7 @@ def solve_point(ctx: SweepContext, job: PointJob) -> SweepPoint:
     integ = make_integrator(case.integrator, eom, max(job.omega, float(static.modes.omega[0])), ctx.integrator)
     crit = SteadyCriterion(cap=sw.duration, window=sw.window, tol=sw.tol, max_period=sw.max_period, floquet=sw.floquet)
     s0 = None if job.start is None else np.array(job.start)
+    s0 = disturbed_start(eom, static, ctx.disturbance, "sweep.disturbance", s0)
     t0 = time.perf_counter()
     decide = accelerated_steady_response if sw.accelerate else steady_response
     r = decide(eom, integ, np.array(ctx.channels), crit, s0=s0)
@@ -239,10 +243,10 @@ def _solve_remote(ctx: SweepContext, job: PointJob) -> SweepPoint:
 # Setting up: the statics once
 # ----------------------------------------------------------------------------------------------
 def _check_sweepable(case: Case, static) -> None:
-    if static.inextensible is None:
-        raise CablesimError("Sweeps need sum(cable.S) greater than the chord (see `history`).", field="cable.S")
-    if not np.any(case.FL):
-        raise CablesimError("loads.FL is zero, so a sweep has nothing to force the cable with.", field="loads.FL")
+    need_inextensible(static)
+    if not case.forced:
+        raise CablesimError("loads.FL is zero and no support moves, so a sweep has nothing to force the cable with; "
+                            "give peak harmonic loads FL or a support amplitude (supports:).", field="loads.FL")
 
 
 #: The last statics solved for a sweep, by (case text, analysis): the estimate and the sweep share them.
@@ -281,9 +285,10 @@ def new_sweep_result(case: Case, case_text: str, analysis: str | None = None,
     sw = case.sweep
     settings = dict(cap=sw.duration, window=sw.window, tol=sw.tol, max_period=sw.max_period, floquet_check=sw.floquet,
                     accelerate=sw.accelerate, refine=sw.refine_levels, grid_points=int(omega.size),
-                    finest_step=finest_step(omega, sw.refine_levels))
+                    finest_step=finest_step(omega, sw.refine_levels),
+                    disturbance=sweep_disturbance(case, static.analysis))
     return SweepResult(omega=omega, gamma=gamma, direction=sw.direction, channels=names, curves=curves,
-                       n_dof=2 * case.cable.n_nodes, analysis=static.analysis, modal_omega=static.modes.omega.copy(),
+                       n_dof=case.dim * case.cable.n_nodes, dim=case.dim, analysis=static.analysis, modal_omega=static.modes.omega.copy(),
                        case_name=case.name, case_text=case_text, settings=settings)
 
 
@@ -350,7 +355,7 @@ def _read_previous(res: SweepResult, records) -> dict:
     for rec in records:
         where = f"journal line {rec['line']}" if isinstance(rec, dict) and "line" in rec else "a journal record"
         try:
-            p = SweepPoint.from_json(rec, len(res.channels), res.n_dof)
+            p = SweepPoint.from_json(rec, len(res.channels), res.n_dof, res.n_segments)
             if not 0 <= p.curve < len(res.curves):
                 raise BadRecord(f"curve {p.curve} is not a curve of this sweep")
             on_grid = np.abs(res.omega - p.omega) <= 1e-9 * p.omega
@@ -522,7 +527,7 @@ def run_sweep(
     _, idx = channel_indices(case, case.sweep.channels)
     stored = _read_previous(res, recorder.previous())
     res.warnings[:0] = list(getattr(recorder, "warnings", ()))
-    ctx = SweepContext(case, static, integrator, tuple(int(x) for x in idx))
+    ctx = SweepContext(case, static, integrator, tuple(int(x) for x in idx), res.settings["disturbance"])
 
     def make_job(c: int, w: float, start) -> PointJob:
         g = 1.0 if res.gamma is None else float(res.gamma[res.curves[c].gamma_index])

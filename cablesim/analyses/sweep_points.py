@@ -6,7 +6,8 @@ the plots as one :class:`SweepPoint` (frozen); its JSON form (:meth:`SweepPoint.
 frequency, become the arrays of a :class:`CurveTable`: the HDF5 writer writes those columns,
 the reader reads them back into the same class, and the plots draw from it.
 
-Sizes come from the cable: ``C`` channels, ``n_dof = 2 n`` degrees of freedom (the state
+Sizes come from the cable: ``C`` channels, ``n_dof = dim n`` degrees of freedom (``dim`` = 2
+planar, 3 spatial) (the state
 ``(z, y', y'')`` of a chain's end has ``3 n_dof`` values, the multipliers of the shooting
 state ``(z, y')`` at most ``2 n_dof``) and ``n + 1`` segments.
 """
@@ -139,7 +140,7 @@ class SweepPoint:
         }
 
     @classmethod
-    def from_json(cls, rec, n_channels: int, n_dof: int) -> "SweepPoint":
+    def from_json(cls, rec, n_channels: int, n_dof: int, n_segments: int | None = None) -> "SweepPoint":
         """A point from its journal form, checked against the sweep's sizes.
 
         Raises
@@ -149,7 +150,7 @@ class SweepPoint:
         """
         _check_json(rec, n_channels, n_dof)
         mu = rec.get("multipliers") or ()
-        seg = n_dof // 2 + 1
+        seg = n_segments if n_segments is not None else n_dof // 2 + 1
 
         def per_segment(key):
             v = rec.get(key)
@@ -240,9 +241,9 @@ class CurveTable:
     status: np.ndarray
 
     @classmethod
-    def empty(cls, P: int, n_channels: int, n_dof: int) -> "CurveTable":
+    def empty(cls, P: int, n_channels: int, n_dof: int, n_segments: int | None = None) -> "CurveTable":
         """Nothing computed yet."""
-        C, seg = n_channels, n_dof // 2 + 1
+        C, seg = n_channels, (n_segments if n_segments is not None else n_dof // 2 + 1)
         return cls(
             amplitude=np.full((P, C), np.nan), halfrange=np.full((P, C), np.nan),
             response_frequency=np.full((P, C), np.nan), period=np.zeros(P, dtype=np.int64),
@@ -254,9 +255,10 @@ class CurveTable:
         )
 
     @classmethod
-    def from_points(cls, omega: np.ndarray, points: dict, n_channels: int, n_dof: int) -> "CurveTable":
+    def from_points(cls, omega: np.ndarray, points: dict, n_channels: int, n_dof: int,
+                    n_segments: int | None = None) -> "CurveTable":
         """The columns of one curve's ``points`` (``{omega: SweepPoint}``) over ``omega``."""
-        table = cls.empty(omega.size, n_channels, n_dof)
+        table = cls.empty(omega.size, n_channels, n_dof, n_segments)
         for i, w in enumerate(omega):
             p = points.get(float(w))
             if p is not None:

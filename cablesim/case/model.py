@@ -124,6 +124,11 @@ class Case(StrictModel):
                              "give displacements from the equilibrium smaller than that, in m")
         if fv.mode is not None and fv.mode > nd:
             raise ValueError(f"free_vibration.mode must be between 1 and {dim}n = {nd}")
+        for section in ("history", "sweep"):
+            spec = getattr(self, section)
+            if spec is not None and (spec.disturbance or 0.0) > 0 and dim != 3:
+                raise ValueError(f"{section}.disturbance is an out-of-plane displacement, for spatial cases only; set "
+                                 "spatial: true, or remove it")
         if self.supports is not None and self.supports.moving and self.analysis != "exact":
             raise ValueError("supports: moving supports need the exact analysis; set analysis: exact")
         for section in ("history", "free_vibration", "sweep", "outputs", "continuation", "figure"):
@@ -208,6 +213,11 @@ class Case(StrictModel):
         if self.loads.FL is None:
             return np.zeros(self._dim * self.cable.n_nodes)
         return node_components(self.loads.FL, self.cable.n_nodes, self._dim)
+
+    @property
+    def forced(self) -> bool:
+        """Whether the cable is forced: harmonic loads FL or a moving support."""
+        return bool(np.any(self.FL)) or (self.supports is not None and self.supports.moving)
 
     def support_motion(self) -> tuple[np.ndarray, np.ndarray, float, float]:
         """``(uA, uB, phA, phB)``: the supports' amplitudes (m, ``dim`` components) and phases (rad)."""

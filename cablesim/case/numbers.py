@@ -82,6 +82,8 @@ def in_range(values, lo, hi, unit, what="value") -> None:
 OMEGA = real(1e-4, 1e4, "rad/s")
 DURATION = real(0.0, 1e7, "s", lo_open=True)
 OUTPUT_STEP = real(0.0, 1e7, "s", lo_open=True)
+#: Size of an initial out-of-plane disturbance of a spatial cable, m.
+DISTURBANCE = real(0.0, 1e3, "m")
 DAMPING_RATIO = real(0.0, 1.0, "", hi_open=True)
 PEAK_VELOCITY = real(0.0, 1e3, "m/s", lo_open=True)
 MODE = integer(1, 2000)

@@ -12,6 +12,7 @@ from pydantic_core import PydanticCustomError
 from ..names import CONTINUATION_PARAMETERS, DIRECTIONS, INTEGRATOR_KEYS, INTEGRATOR_SETTINGS, INTEGRATORS
 from .numbers import (
     DAMPING_RATIO,
+    DISTURBANCE,
     DURATION,
     MODE,
     OMEGA,
@@ -336,6 +337,8 @@ class HistorySpec(StrictModel):
     duration: DURATION = Field(default=600.0, description="simulated time, s")
     output_step: OUTPUT_STEP | None = Field(default=None, description="interval between saved instants, s")
     channels: tuple[str, ...] | None = Field(default=None, description="DOF to plot, e.g. [z2, z4]")
+    disturbance: DISTURBANCE = Field(default=0.0, description="largest initial out-of-plane displacement of a "
+                                     "spatial cable, m (a planar response can then leave its plane)")
 
 
 class FreeVibrationSpec(StrictModel):
@@ -395,6 +398,9 @@ class SweepSpec(StrictModel):
     max_period: integer(1, 50) = Field(default=6, description="largest response period sought")
     floquet: bool = Field(default=True, description="check the stability of periodic responses")
     accelerate: bool = Field(default=True, description="decide steady points by shooting from the transient")
+    disturbance: DISTURBANCE | None = Field(
+        default=None, description="largest out-of-plane displacement added to each point's start, m (spatial "
+        "cables; default: 1e-6 of the chord, so that a planar response unstable out of its plane leaves it)")
     refine: bool | integer(0, REFINE_MOST) | None = Field(
         default=None, description="halvings of the grid step where neighbouring points disagree (true: "
         f"{REFINE_LEVELS}, false or 0: none; default: {REFINE_LEVELS} for a grid, none for a list)")

@@ -188,6 +188,18 @@ def equilibrium_factors(model, warm, awk):
 
 
 @njit
+def _force_scale(f0norm, T):
+    """What the drift is relative to: ``|F0|``, or the largest tension when there are no
+    sustained loads (a weightless taut cable)."""
+    if f0norm > 0.0:
+        return f0norm
+    top = 0.0
+    for k in range(T.size):
+        top = max(top, T[k])
+    return top if top > 0.0 else 1.0
+
+
+@njit
 def observe(model, t, s, warm, zc, ze, T, segment_state, awk, split, k0):
     """Derived outputs at one instant: ``z_c``, ``z_e``, tensions and the drift of eq. 15.
 
@@ -196,7 +208,7 @@ def observe(model, t, s, warm, zc, ze, T, segment_state, awk, split, k0):
     ``|M y'' + C y' + P - F| / |F0|`` (exact analysis) or, for the approximate analysis where
     eq. 15 defines P, the mismatch between the integrated ``y`` and ``x(P) + u(P)`` expressed as
     a force through ``K0`` (its factors ``k0`` from :func:`equilibrium_factors`), also relative
-    to ``|F0|``. NaN if the inner solve fails. Without ``split`` the exact analysis skips the
+    to ``|F0|`` (to the largest tension when F0 = 0). NaN if the inner solve fails. Without ``split`` the exact analysis skips the
     inner solve (``zc``, ``ze`` set to zero).
     """
     m = model.mass
@@ -234,7 +246,7 @@ def observe(model, t, s, warm, zc, ze, T, segment_state, awk, split, k0):
         Cv = np.empty(nd)
         damping_force(model, t, v, Cv)
         r = m * a + P - F + Cv
-        return np.sqrt(np.sum(r * r)) / f0norm
+        return np.sqrt(np.sum(r * r)) / _force_scale(f0norm, T)
     P = np.empty(nd)
     resisting_from_eq15(model, t, v, a, P)
     segment_state[0] = -1
@@ -250,4 +262,4 @@ def observe(model, t, s, warm, zc, ze, T, segment_state, awk, split, k0):
     mismatch = z - zc - ze
     d = np.empty(nd)
     fx.stiffness_product(k0[0], k0[1], mismatch, d, awk.scratch, model.A)
-    return np.sqrt(np.sum(d * d)) / f0norm
+    return np.sqrt(np.sum(d * d)) / _force_scale(f0norm, T)

@@ -274,7 +274,7 @@ def simulate(
         residual=residual[:m],
         y0=eom.y0,
         T0=eom.T0,
-        omega=eom.omega if np.any(eom.FL != 0) else None,
+        omega=eom.omega if np.any(eom.FL != 0) or eom.moving_supports else None,  # forced
         analysis=eom.analysis,
         integrator=integrator.name,
         status=status,

@@ -8,7 +8,16 @@ Layout (with the root attributes of every cablesim file, see :mod:`cablesim.io.h
   over the orbit), halfrange, stable, trusted, multipliers (complex), state}`` with attributes
   ``period``, ``channels``, ``parent`` (-1: none) and ``end``;
 - ``/continuation/bifurcations/{kind, parameter, omega, branch, period, amplitude (x channels),
-  multiplier (complex), located, trusted}``;
+  multiplier (complex), located, trusted, plane (in-plane, out-of-plane or coupled),
+  frequency_ratio (``|arg(mu)| / 2 pi`` of the critical multiplier: the new frequency over the
+  orbit's at a Neimark-Sacker point)}``; an out-of-plane
+  multiplier of a planar orbit through +1 is a ``pitchfork`` (symmetry breaking);
+- per branch also ``multiplier_plane`` (points x multipliers: the block of each multiplier),
+  the attributes ``planar`` (orbits in the mirror plane of a symmetric spatial cable) and
+  ``mirror_image`` (a nonplanar branch born at a pitchfork, whose mirror image ``w -> -w`` is a
+  branch too) and, for a spatial cable, ``whirl_area`` (points x nodes, m^2: the signed area of
+  each node's path in its ``(w, v)`` plane) and ``tilt`` (deg: the orbit's mean plane of motion
+  from the cable's plane);
 - ``/modal/omega``: the linear modal frequencies, rad/s.
 """
 
@@ -23,7 +32,7 @@ from ..errors import CablesimError
 from .hdf5 import atomic_h5, attr_text, put, stamp
 
 #: Bifurcation kinds, in the order the files store their names.
-KINDS = ("fold", "period-doubling", "neimark-sacker", "branch-point", "grazing")
+KINDS = ("fold", "period-doubling", "neimark-sacker", "branch-point", "pitchfork", "grazing")
 
 
 def write_continuation(path: str | Path, res) -> Path:
@@ -52,6 +61,16 @@ def write_continuation(path: str | Path, res) -> Path:
             put(h, "trusted", b.trusted, "1", "multipliers passed the residual and Liouville checks")
             put(h, "multipliers", b.multipliers, "1", "Floquet multipliers, by decreasing modulus")
             put(h, "state", b.state, "m, m/s", "(z, y') at forcing phase 0")
+            if b.planes is not None:
+                put(h, "multiplier_plane", np.asarray(b.planes, dtype="S"), "1",
+                    "block of each multiplier: in-plane, out-of-plane (a planar orbit of a symmetric "
+                    "spatial cable) or coupled")
+            h.attrs["planar"] = bool(b.planar)
+            h.attrs["mirror_image"] = bool(b.mirror_image)
+            if b.whirl_area is not None:
+                put(h, "whirl_area", b.whirl_area, "m^2", "signed area of each node's path in its (w, v) "
+                    "cross-section plane over the orbit (positive counter-clockwise)")
+                put(h, "tilt", b.tilt, "deg", "angle of the orbit's mean plane of motion from the cable's plane")
         fg = g.create_group("bifurcations")
         bifs = res.bifurcations
         put(fg, "kind", np.array([b.kind for b in bifs], dtype="S"), "1", "fold, period-doubling, neimark-sacker")
@@ -64,6 +83,10 @@ def write_continuation(path: str | Path, res) -> Path:
         put(fg, "multiplier", np.array([b.multiplier for b in bifs], dtype=complex), "1", "critical multiplier")
         put(fg, "located", np.array([b.located for b in bifs], dtype=bool), "1", "location converged")
         put(fg, "trusted", np.array([b.trusted for b in bifs], dtype=bool), "1", "multipliers trusted")
+        put(fg, "plane", np.array([b.plane for b in bifs], dtype="S"), "1",
+            "block of the critical multiplier: in-plane, out-of-plane or coupled")
+        put(fg, "frequency_ratio", np.array([b.frequency_ratio for b in bifs], dtype=float), "1",
+            "|arg(mu)| / 2 pi of the critical multiplier (0: fold, pitchfork; 1/2: period doubling)")
         m = f.create_group("modal")
         put(m, "omega", res.modal_omega, "rad/s", "linear modal frequencies about the equilibrium")
     return Path(path)
@@ -98,6 +121,10 @@ def read_continuation(path: str | Path) -> dict:
         branches = []
         for name, h in g["branches"].items():
             b = {k: np.asarray(h[k][()]) for k in h}
+            if "multiplier_plane" in b:
+                b["multiplier_plane"] = np.char.decode(b["multiplier_plane"].astype("S"))
+            b["planar"] = bool(h.attrs.get("planar", False))
+            b["mirror_image"] = bool(h.attrs.get("mirror_image", False))
             b.update(name=name, period=int(h.attrs["period"]), parent=int(h.attrs["parent"]),
                      end=attr_text(h.attrs["end"]), index=int(h.attrs.get("index", len(branches))))
             branches.append(b)
@@ -105,5 +132,7 @@ def read_continuation(path: str | Path) -> dict:
         fg = g["bifurcations"]
         bif = {k: np.asarray(fg[k][()]) for k in fg}
         bif["kind"] = [attr_text(k) for k in bif.get("kind", [])]
+        if "plane" in bif:
+            bif["plane"] = [attr_text(k) for k in bif["plane"]]
         out["bifurcations"] = bif
     return out

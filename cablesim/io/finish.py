@@ -60,7 +60,7 @@ def finish_history(run, out: Path, plot: bool, channels, wall: float, full: bool
     seconds; `cablesim plot` draws them), report; exit 3 (stopped early) or 130/143."""
     case, hist = run.case, run.history
     if case.outputs.channels:  # a scene keeps only the channels it draws
-        keep = list(dict.fromkeys(channel_index(c, hist.n_dof) + 1 for c in case.outputs.channels))  # node20.v = z40
+        keep = list(dict.fromkeys(channel_index(c, hist.n_dof, case.dim) + 1 for c in case.outputs.channels))  # node20.v = z40
         run = replace(run, history=hist.keep(keep))
         hist = run.history
     target = out

@@ -17,7 +17,7 @@ from __future__ import annotations
 from pathlib import Path
 
 #: The figures each kind of result draws beside ``NAME.h5``: ``NAME.png``, or ``NAME-<kind>.png``.
-HISTORY_FIGURES = ("waveforms", "phase", "lissajous", "tensions", "fft", "snapshots")
+HISTORY_FIGURES = ("waveforms", "phase", "lissajous", "tensions", "fft", "snapshots", "across")
 
 
 def _number(x: float) -> str:

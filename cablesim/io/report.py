@@ -297,6 +297,22 @@ def sweep_summary(case, res, wall: float, full: bool = False) -> str:
     return "\n".join(lines)
 
 
+def _whirling_lines(res) -> list:
+    """One line per nonplanar branch of a spatial cable: its mirror image, the largest tilt of its
+    orbits' mean plane and the sense in which each node goes round."""
+    out = []
+    for b in res.branches:
+        if getattr(b, "tilt", None) is None or b.planar or not b.tilt.size:
+            continue
+        k = int(np.argmax(b.tilt))
+        area = b.whirl_area[k]
+        sense = ", ".join(f"node {i + 1} {'counter-clockwise' if a > 0 else 'clockwise' if a < 0 else 'on a line'}"
+                          f" ({abs(a):.3g} m^2)" for i, a in enumerate(area))
+        out.append(f"  {b.name}: nonplanar{' (its mirror image w -> -w is a branch too)' if b.mirror_image else ''}; "
+                   f"mean plane tilted up to {b.tilt[k]:.3g} deg from the cable's plane, there {sense} in (w, v)")
+    return ([""] + out) if out else []
+
+
 def continuation_summary(case, res, wall: float) -> str:
     """Summary of a continuation: branches, their stable parts, and the bifurcations found."""
     unit = "rad/s" if res.parameter == "omega" else ""
@@ -317,12 +333,16 @@ def continuation_summary(case, res, wall: float) -> str:
                      ", ".join(f"{p:.4g}" for p in peak), b.end])
     lines.append(_table(["branch", "period", f"range {unit}".strip(), "orbits", "stable",
                          f"max {', '.join(res.channels)} (m)", "ended"], rows))
+    lines += _whirling_lines(res)
     lines += ["", "Bifurcations:" if res.bifurcations else "No bifurcations in the range."]
+    spatial = any(b.plane != "in-plane" for b in res.bifurcations) or any(
+        b.planes is not None and np.any(b.planes != "in-plane") for b in res.branches)
     if res.bifurcations:
-        rows = [[b.kind, f"{b.parameter:.6g}", res.branches[b.branch].name if b.branch < len(res.branches) else str(b.branch),
+        rows = [[b.kind] + ([b.plane] if spatial else []) + [f"{b.parameter:.6g}", res.branches[b.branch].name if b.branch < len(res.branches) else str(b.branch),
                  str(b.period), ", ".join(f"{a:.4g}" for a in b.amplitude), f"{abs(b.multiplier):.4f}",
-                 ("" if b.located else "not located; ") + ("" if b.trusted else "multipliers not trusted")]
+                 ("" if b.located else "not located; ") + ("" if b.trusted else "multipliers not trusted")
+                 + (f"frequency ratio {b.frequency_ratio:.4f}" if b.kind == "neimark-sacker" else "")]
                 for b in sorted(res.bifurcations, key=lambda b: (b.branch, b.parameter))]
-        lines.append(_table(["kind", res.parameter, "branch", "period", f"{', '.join(res.channels)} (m)", "|mu|",
+        lines.append(_table(["kind"] + (["plane"] if spatial else []) + [res.parameter, "branch", "period", f"{', '.join(res.channels)} (m)", "|mu|",
                              "notes"], rows))
     return "\n".join(lines)

@@ -36,7 +36,7 @@ COLUMN_UNITS = {
 }
 #: The sweep's settings stored as attributes of /sweep.
 SETTINGS_ATTRS = ("cap", "window", "tol", "max_period", "floquet_check", "accelerate", "refine", "grid_points",
-                  "finest_step", "integrator", "integrator_rtol", "integrator_atol", "integrator_dt_max")
+                  "finest_step", "disturbance", "integrator", "integrator_rtol", "integrator_atol", "integrator_dt_max")
 
 
 def write_sweep(path: str | Path, res, fingerprint: str | None = None) -> Path:

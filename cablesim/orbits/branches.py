@@ -38,12 +38,28 @@ from .mfproblem import MatrixFreeOrbitProblem, use_matrix_free
 from .diagram import Bifurcation, BranchEnd, OrbitBranch, OrbitPoint, ResponseDiagram
 from .shooting import Evaluation, FlowStatus, Shooting, solve_orbit
 from .starting import integrate_to_steady, linear_response, linear_response_state
-from .switching import MergeWatch, doubled_point, doubling_direction, lap_separation, start_factor
+from .switching import (
+    MergeWatch,
+    PlaneWatch,
+    doubled_point,
+    doubling_direction,
+    lap_separation,
+    pitchfork_direction,
+    start_factor,
+)
+from .symmetry import Mirror, split_multipliers, whirling_measures
 from .systems import OdeSystem, cable_system
 
 
 #: Perturbation sizes tried at a period doubling before giving up (each a quarter of the last).
 SWITCH_ATTEMPTS = 3
+#: The special point of a period doubling, by the plane of its critical multiplier (None: an
+#: orbit whose monodromy is not split). An out-of-plane one is switched at like any other: the
+#: eigenvector nearest -1 of the whole monodromy is then the out-of-plane one.
+DOUBLINGS = {None: "period-doubling", "in-plane": "period-doubling",
+             "out-of-plane": "out-of-plane period-doubling"}
+#: Samples per forcing period of a nonplanar orbit for its whirling measures.
+WHIRL_SAMPLES = 256
 
 
 class OrbitProblem:
@@ -76,12 +92,50 @@ class OrbitProblem:
         return stability.step_ratio(ev_a.multipliers, ev_b.multipliers)
 
 
+class PlanarOrbitProblem(OrbitProblem):
+    """:class:`OrbitProblem` on a branch of planar orbits of a mirror-symmetric system: the
+    bifurcation tests run on the in-plane and the out-of-plane blocks of the monodromy apart
+    (:mod:`cablesim.orbits.symmetry`), so that an out-of-plane multiplier through +1 is a
+    pitchfork, never a fold or branch point of the planar branch."""
+
+    test_names = stability.TEST_NAMES + stability.OUT_OF_PLANE_TESTS
+
+    def __init__(self, shooting: Shooting, state_scale: np.ndarray, lam_scale: float, mirror: Mirror):
+        super().__init__(shooting, state_scale, lam_scale)
+        self.mirror = mirror
+
+    def test_functions(self, ev: Evaluation) -> np.ndarray:
+        return stability.split_test_functions(*split_multipliers(self.mirror, ev.monodromy))
+
+    def confirm(self, name: str, ev: Evaluation) -> str | None:
+        mu_in, mu_out = split_multipliers(self.mirror, ev.monodromy)
+        if name.startswith("out-of-plane "):
+            base = stability.confirm(name[len("out-of-plane "):], mu_out)
+            return None if base is None else name
+        return stability.confirm(name, mu_in)
+
+
+def labelled_multipliers(mirror: Mirror, monodromy: np.ndarray) -> tuple[np.ndarray, tuple]:
+    """The multipliers of a planar orbit from the two blocks of its monodromy, sorted together
+    (:func:`~cablesim.orbits.stability.sort_multipliers`), and the block of each."""
+    mu_in, mu_out = split_multipliers(mirror, monodromy)
+    mu = np.concatenate([mu_in, mu_out])
+    labels = np.array([mirror.labels[0]] * mu_in.size + [mirror.labels[1]] * mu_out.size)
+    order = np.lexsort((-mu.imag, -np.abs(mu)))
+    return mu[order], tuple(str(x) for x in labels[order])
+
+
 def _orbit_point(system: OdeSystem, shooting: Shooting, cp, branch: int, index: int, residual_tol: float,
-                 liouville_tol: float) -> OrbitPoint:
+                 liouville_tol: float, mirror: Mirror | None = None) -> OrbitPoint:
     ev: Evaluation = cp.evaluation
     d = system.displacements
     xmax, xmin = ev.xmax[d], ev.xmin[d]
-    mu = ev.multipliers
+    mu, planes, whirl = ev.multipliers, None, None
+    if mirror is not None:
+        mu, planes = labelled_multipliers(mirror, ev.monodromy)
+    elif system.mirror is not None and hasattr(shooting, "trajectory"):  # a nonplanar orbit of a symmetric system
+        t, x = shooting.trajectory(cp.u, cp.lam, samples_per_period=WHIRL_SAMPLES)
+        whirl = whirling_measures(system.mirror, x, float(t[1] - t[0]))
     # Liouville's formula needs the whole spectrum; the leading multipliers' eigenpair residuals
     # are the check of a matrix-free orbit
     check = ev.liouville <= liouville_tol if ev.monodromy is not None or ev.leading is None \
@@ -92,16 +146,24 @@ def _orbit_point(system: OdeSystem, shooting: Shooting, cp, branch: int, index: 
         state=cp.u[: shooting.n].copy(), u=cp.u.copy(), amplitude=np.maximum(np.abs(xmax), np.abs(xmin)),
         halfrange=0.5 * (xmax - xmin), multipliers=mu.copy(), stable=stability.is_stable(mu), trusted=trusted,
         residual=float(cp.residual), liouville=float(ev.liouville), special=cp.special, located=cp.located,
+        planes=planes, whirl=whirl,
     )
 
 
 def _bifurcation(p: OrbitPoint, branch: int) -> Bifurcation:
-    """The bifurcation at special point ``p`` of branch ``branch``."""
+    """The bifurcation at special point ``p`` of branch ``branch`` (on a planar branch of a
+    symmetric system: its kind and the block of the critical multiplier)."""
+    kind, plane, mu = p.special, None, p.multipliers
+    if p.planes is not None:
+        kind, plane = stability.SPLIT_KINDS[p.special]
+        mu = p.multipliers[np.array(p.planes) == plane]
+    crit = stability.critical_multiplier(kind, mu)
     return Bifurcation(
-        kind=p.special, parameter=p.parameter, branch=branch, period=p.period,
+        kind=kind, parameter=p.parameter, branch=branch, period=p.period,
         amplitude=p.amplitude, halfrange=p.halfrange, state=p.state,
-        multiplier=stability.critical_multiplier(p.special, p.multipliers), multipliers=p.multipliers,
-        located=p.located, trusted=p.trusted, point=p.index,
+        multiplier=crit, multipliers=p.multipliers,
+        located=p.located, trusted=p.trusted, point=p.index, plane=plane,
+        frequency_ratio=stability.frequency_ratio(crit),
     )
 
 
@@ -169,13 +231,25 @@ class _Tracer:
         br = OrbitBranch(index=idx, period=sh.period, parameter=self.parameter, parent=parent, origin=origin)
         br.segments = sh.segments
         self.diagram.branches.append(br)
-        kind = MatrixFreeOrbitProblem if self.matrix_free else OrbitProblem
-        problem = kind(sh, self.state_scale, self.lam_scale)
+        mirror = self.system.mirror
+        # the matrix-free shooting forms no monodromy to split by planes
+        br.planar = not self.matrix_free and mirror is not None and mirror.is_planar(u_start[: self.n],
+                                                                                     self.state_scale)
+        if br.planar:
+            problem = PlanarOrbitProblem(sh, self.state_scale, self.lam_scale, mirror)
+        elif self.matrix_free:
+            problem, mirror = MatrixFreeOrbitProblem(sh, self.state_scale, self.lam_scale), None
+        else:
+            problem, mirror = OrbitProblem(sh, self.state_scale, self.lam_scale), None
         watch = None
-        if parent is not None:
+        if origin is not None and origin.kind == "pitchfork":
+            size = self.switch_size if size is None else size
+            watch = PlaneWatch(self.system.mirror, self.n, self.state_scale, size)
+        elif parent is not None:
             size = self.switch_size if size is None else size
             self.sizes[idx] = size
-            partners = [q for q in self.diagram.branches[parent].points if q.special == "period-doubling"]
+            kind = origin.plane if origin is not None else None
+            partners = [q for q in self.diagram.branches[parent].points if q.special == DOUBLINGS.get(kind)]
             watch = MergeWatch(partners, idx, sh.period, self.n, sh.segments // 2, self.state_scale, size)
         for p in prefix:
             p.branch, p.index = idx, len(br.points)
@@ -187,14 +261,15 @@ class _Tracer:
             return bool(self.callback(op)) if self.callback is not None else False
 
         def on_point(cp) -> bool:
-            op = _orbit_point(self.system, sh, cp, idx, -1, self.settings.residual_tol, self.liouville_tol)
+            op = _orbit_point(self.system, sh, cp, idx, -1, self.settings.residual_tol, self.liouville_tol, mirror)
             return deliver(op) if watch is None else watch.observe(cp, op, deliver)
 
         res = continuation(problem, u_start, lam_start, self.settings, callback=on_point, direction=self.direction,
                            tangent=tangent)
         br.evaluations = res.evaluations
-        br.merged_at = watch.merged_at if watch is not None else None
-        br.end = BranchEnd.MERGED if br.merged_at is not None else BranchEnd(int(res.status))
+        br.merged_at = getattr(watch, "merged_at", None)
+        returned = bool(getattr(watch, "returned", False))
+        br.end = BranchEnd.MERGED if br.merged_at is not None or returned else BranchEnd(int(res.status))
         if br.end in (BranchEnd.STEP_TOO_SMALL, BranchEnd.START_FAILED):
             br.failure = problem.last_failure
         return br
@@ -224,6 +299,30 @@ class _Tracer:
             factor *= 0.25
         return None
 
+    def switch_pitchfork(self, br: OrbitBranch, p: OrbitPoint, bif: Bifurcation) -> OrbitBranch | None:
+        """Start the nonplanar branch at pitchfork ``p`` of planar branch ``br`` along the
+        out-of-plane null vector (:func:`~cablesim.orbits.switching.pitchfork_direction`); its
+        mirror image (``w -> -w``) is the other branch born there, not computed. The
+        perturbation shrinks by quarters while the start fails."""
+        sh = self.shooting(br.period, br.segments)
+        ev = sh.evaluate(p.u, p.parameter)
+        if ev.status != ok.OK:
+            return None
+        dirn, eps = pitchfork_direction(ev, self.system.mirror, br.segments, self.state_scale, self.switch_size)
+        size = self.switch_size
+        for _ in range(SWITCH_ATTEMPTS):
+            first = replace(p, planes=None)
+            child = self.run_branch(sh, p.u + eps * dirn, p.parameter, np.concatenate([dirn, [0.0]]), br.index,
+                                    bif, [first], size)
+            odd = self.system.mirror.odd_size(child.points[-1].state, self.state_scale) if child.points else 0.0
+            if child.end != BranchEnd.START_FAILED and len(child.points) > 1 and odd > 0.1 * size:
+                child.mirror_image = True
+                return child
+            self.diagram.branches.pop()
+            self.sizes.pop(child.index, None)
+            eps, size = 0.25 * eps, 0.25 * size
+        return None
+
     def start_doubled(self, br: OrbitBranch, p: OrbitPoint, bif: Bifurcation, sh2: Shooting, base: np.ndarray,
                       direction: np.ndarray, eps: float, size: float) -> OrbitBranch | None:
         """The period-doubled branch started from ``base + eps direction`` or
@@ -246,6 +345,9 @@ class _Tracer:
             return False
         if p.index == 0 and br.origin is not None:
             return False  # the branch's own origin
+        if br.mirror_image:  # near its return to the plane the tests trip at the pitchfork there
+            return not (br.end == BranchEnd.MERGED and p.index >= len(br.points) - 4 and self.system.mirror.odd_size(
+                p.state, self.state_scale) < 2.0 * self.sizes.get(br.index, self.switch_size))
         if br.end == BranchEnd.MERGED and (p is br.points[-1] or (
                 p.index >= len(br.points) - 4
                 and lap_separation(p.u, self.n, br.segments // 2, self.state_scale)
@@ -268,7 +370,17 @@ class _Tracer:
                     continue
                 bif = _bifurcation(p, br.index)
                 self.diagram.bifurcations.append(bif)
-                if not (switch_branches and p.special == "period-doubling" and 2 * br.period <= max_period):
+                if switch_branches and bif.kind == "pitchfork" and (br.index, p.index) not in done_pd:
+                    child = self.switch_pitchfork(br, p, bif)
+                    if child is not None:
+                        bif.child = child.index
+                        if child.end == BranchEnd.MERGED:  # back in the plane at another pitchfork
+                            others = [q for q in br.points if q.special == "pitchfork" and q is not p]
+                            if others:
+                                q = min(others, key=lambda q: abs(q.parameter - child.points[-1].parameter))
+                                done_pd.add((br.index, q.index))
+                    continue
+                if not (switch_branches and p.special in DOUBLINGS.values() and 2 * br.period <= max_period):
                     continue
                 if (br.index, p.index) in done_pd:
                     continue

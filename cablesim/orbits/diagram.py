@@ -66,6 +66,15 @@ class OrbitPoint:
         bifurcation, else None.
     located : bool
         For a special point: whether the location converged.
+    planes : tuple of str or None
+        On a planar orbit of a mirror-symmetric system (:mod:`cablesim.orbits.symmetry`): the
+        block of every multiplier, ``"in-plane"`` or ``"out-of-plane"``; special points are then
+        also ``"pitchfork"``, ``"out-of-plane period-doubling"`` or
+        ``"out-of-plane neimark-sacker"``.
+    whirl : Whirling or None
+        On a nonplanar orbit of a mirror-symmetric system: the signed area of every node's path
+        across the plane and the tilt of the orbit's mean plane
+        (:func:`~cablesim.orbits.symmetry.whirling_measures`).
     """
 
     branch: int
@@ -84,6 +93,8 @@ class OrbitPoint:
     liouville: float
     special: str | None = None
     located: bool = True
+    planes: tuple | None = None
+    whirl: object = None
 
 
 @dataclass
@@ -111,6 +122,14 @@ class Bifurcation:
         Index of the point on its branch.
     child : int or None
         Branch started here (period doubling), if any.
+    plane : str or None
+        Which block of a split monodromy the critical multiplier belongs to (``"in-plane"`` or
+        ``"out-of-plane"``; :mod:`cablesim.orbits.symmetry`), None on an orbit whose monodromy
+        is not split.
+    frequency_ratio : float or None
+        ``|arg(mu)| / 2 pi`` of the critical multiplier: 0 at a fold or pitchfork, 1/2 at a
+        period doubling, between them at a Neimark-Sacker point (the ratio of the new frequency
+        to the orbit's).
     """
 
     kind: str
@@ -126,6 +145,8 @@ class Bifurcation:
     trusted: bool
     point: int
     child: int | None = None
+    plane: str | None = None
+    frequency_ratio: float | None = None
 
 
 @dataclass
@@ -151,6 +172,13 @@ class OrbitBranch:
     failure : FlowStatus or None
         When the step fell below its minimum or the start failed: why the last refused flow
         failed (a slack segment, a failed inner solve), if a flow failed at all.
+    planar : bool
+        Its orbits lie in the mirror plane of a symmetric system, and their monodromy is split
+        into in-plane and out-of-plane blocks (:mod:`cablesim.orbits.symmetry`).
+    mirror_image : bool
+        A nonplanar branch born at a pitchfork: its mirror image through the plane
+        (``w -> -w``) is a branch too, not computed. It ends (:attr:`BranchEnd.MERGED`) where
+        it returns to the plane.
     """
 
     index: int
@@ -164,6 +192,8 @@ class OrbitBranch:
     segments: int = 1
     merged_at: OrbitPoint | None = None
     failure: FlowStatus | None = None
+    planar: bool = False
+    mirror_image: bool = False
 
     @property
     def values(self) -> np.ndarray:

@@ -24,6 +24,18 @@ import numpy as np
 TEST_NAMES = ("period-doubling", "neimark-sacker", "branch-point")
 #: Tests that duplicate a turning point (ignored where the fold test changes sign too).
 FOLD_TESTS = ("branch-point",)
+#: Tests on the out-of-plane block of a planar orbit of a mirror-symmetric system
+#: (:mod:`cablesim.orbits.symmetry`), in the order of :func:`test_functions`: -1, a complex
+#: pair, +1 (the symmetry-breaking pitchfork; never a turning point of the planar branch).
+OUT_OF_PLANE_TESTS = ("out-of-plane period-doubling", "out-of-plane neimark-sacker", "pitchfork")
+#: ``(kind, plane)`` of every special point of a planar orbit whose monodromy is split.
+SPLIT_KINDS = {
+    "fold": ("fold", "in-plane"), "period-doubling": ("period-doubling", "in-plane"),
+    "neimark-sacker": ("neimark-sacker", "in-plane"), "branch-point": ("branch-point", "in-plane"),
+    "out-of-plane period-doubling": ("period-doubling", "out-of-plane"),
+    "out-of-plane neimark-sacker": ("neimark-sacker", "out-of-plane"),
+    "pitchfork": ("pitchfork", "out-of-plane"),
+}
 
 
 def sort_multipliers(mu: np.ndarray) -> np.ndarray:
@@ -40,6 +52,18 @@ def test_functions(mu: np.ndarray) -> np.ndarray:
     ns = np.prod(mu[i] * mu[j] - 1.0).real
     bp = np.prod(mu - 1.0).real
     return np.array([pd, ns, bp])
+
+
+def split_test_functions(mu_in: np.ndarray, mu_out: np.ndarray) -> np.ndarray:
+    """The tests of :data:`TEST_NAMES` on the in-plane multipliers, then those of
+    :data:`OUT_OF_PLANE_TESTS` on the out-of-plane ones."""
+    return np.concatenate([test_functions(mu_in), test_functions(mu_out)])
+
+
+def frequency_ratio(mu: complex) -> float:
+    """``arg(mu) / 2 pi`` of a multiplier on the unit circle (in ``[0, 1/2]``): the frequency of
+    the new motion at a Neimark-Sacker point over the orbit's frequency."""
+    return float(abs(np.angle(mu)) / (2.0 * np.pi))
 
 
 def confirm(name: str, mu: np.ndarray, imag_tol: float = 1e-6) -> str | None:
@@ -62,7 +86,7 @@ def confirm(name: str, mu: np.ndarray, imag_tol: float = 1e-6) -> str | None:
 def critical_multiplier(kind: str, mu: np.ndarray) -> complex:
     """The multiplier that crosses the unit circle at a bifurcation of this kind."""
     mu = np.asarray(mu, dtype=complex)
-    if kind in ("fold", "branch-point"):
+    if kind in ("fold", "branch-point", "pitchfork"):
         return mu[int(np.argmin(np.abs(mu - 1.0)))]
     if kind == "period-doubling":
         return mu[int(np.argmin(np.abs(mu + 1.0)))]

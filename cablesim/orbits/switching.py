@@ -35,7 +35,6 @@ from typing import Callable
 
 import numpy as np
 
-from . import stability
 from .shooting import Evaluation, FlowStatus
 
 
@@ -152,8 +151,11 @@ def doubled_point(p, period: int, u: np.ndarray, **changes):
     period-``period / 2`` branch seen as a period-``period`` orbit (two laps of unknowns ``u``,
     multipliers squared): the first or last point of the doubled branch; ``changes`` replace
     further fields."""
-    return replace(p, period=period, u=u, special="period-doubling",
-                   multipliers=stability.sort_multipliers(p.multipliers**2), **changes)
+    mu = p.multipliers**2
+    order = np.lexsort((-mu.imag, -np.abs(mu)))  # the order of stability.sort_multipliers
+    planes = None if p.planes is None else tuple(p.planes[k] for k in order)
+    return replace(p, period=period, u=u, special="period-doubling", multipliers=mu[order], planes=planes,
+                   **changes)
 
 
 class MergeWatch:
@@ -214,6 +216,75 @@ class MergeWatch:
             self.pending.append(op)  # delivered with the next regular point
             return False
         self.previous = D
+        stop_now = False
+        for o in self.pending + [op]:
+            stop_now = deliver(o) or stop_now
+        self.pending = []
+        return stop_now
+
+
+# ----------------------------------------------------------------------------------------------
+# Symmetry-breaking pitchforks of planar orbits (cablesim.orbits.symmetry)
+# ----------------------------------------------------------------------------------------------
+def pitchfork_direction(ev: Evaluation, mirror, segments: int, state_scale: np.ndarray,
+                        switch_size: float) -> tuple[np.ndarray, float]:
+    """Direction into the nonplanar branch at a pitchfork of a planar orbit, and the step.
+
+    The critical eigenvector of the out-of-plane block ``Phi_o`` (multiplier +1) is ``w_0 = Q_o
+    e``; carried through the segments, ``w_{k+1} = G_k w_k``, it is a null vector of the shooting
+    Jacobian that lies in the odd subspace. The branch leaves the planar one along it with no
+    change of the parameter (a pitchfork's parabola); ``-eps`` gives the mirror image.
+
+    Returns
+    -------
+    direction : ndarray (segments n,)
+    eps : float
+        Step along ``direction`` of scaled size ``switch_size``.
+    """
+    _, Po, _ = mirror.blocks(ev.monodromy)
+    mu, V = np.linalg.eig(Po)
+    j = int(np.argmin(np.abs(mu - 1.0)))
+    W = [mirror.odd @ np.real(V[:, j])]
+    for k in range(segments - 1):
+        W.append(ev.G[k] @ W[-1])
+    direction = np.concatenate(W)
+    eps = switch_size / np.linalg.norm(direction / np.tile(state_scale, segments))
+    return direction, eps
+
+
+class PlaneWatch:
+    """Watches a nonplanar branch born at a pitchfork for its return to the plane: where its
+    out-of-plane part, once well away, falls back below half the start's (or reverses: the step
+    went through the plane onto the mirror image), the branch ends there (at a pitchfork of a
+    planar orbit). Special points are held back until the next regular point, and dropped with
+    the end (the test functions trip as the branch meets the plane)."""
+
+    def __init__(self, mirror, n: int, state_scale: np.ndarray, switch_size: float):
+        self.mirror = mirror
+        self.n = n
+        self.state_scale = state_scale
+        self.switch_size = switch_size
+        self.far = False
+        self.previous: np.ndarray | None = None
+        self.pending: list = []
+        #: Whether the branch came back to the plane.
+        self.returned = False
+
+    def observe(self, cp, op, deliver: Callable[[object], bool]) -> bool:
+        """Pass the continuation point ``cp`` (as orbit point ``op``) on to ``deliver``, or hold
+        it back, or end the branch; True ends it."""
+        x = np.asarray(cp.u[: self.n], dtype=float)
+        odd = self.mirror.odd.T @ x / (np.abs(self.mirror.odd.T) @ self.state_scale)
+        size = float(np.abs(odd).max())
+        self.far = self.far or size > 2.0 * self.switch_size
+        flipped = self.previous is not None and float(odd @ self.previous) < 0.0
+        if self.far and (flipped or size < 0.5 * self.switch_size):
+            self.returned = True
+            return True
+        if cp.special is not None:
+            self.pending.append(op)
+            return False
+        self.previous = odd
         stop_now = False
         for o in self.pending + [op]:
             stop_now = deliver(o) or stop_now

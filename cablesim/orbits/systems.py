@@ -20,6 +20,7 @@ from ..mechanics.banded import band_rows
 from ..modal import fastest_rate
 from . import cablefield
 from . import mechanical as mech
+from .symmetry import cable_mirror
 from .kernels import copy_work
 
 
@@ -38,6 +39,9 @@ class OdeSystem:
     work : ndarray or tuple of ndarray
         Initial content of the field's scratch space (warm starts); copied before every
         integration so the flow map does not depend on the call history.
+    mirror : Mirror or None
+        The state's mirror symmetry (:mod:`cablesim.orbits.symmetry`), if the system has one:
+        the monodromy of an orbit fixed by it splits into two blocks.
     model : object
         The field's constants (for the cable, a :class:`~cablesim.mechanics.model.CableModel`;
         an empty tuple for a system whose constants are all in ``prm``).
@@ -78,6 +82,7 @@ class OdeSystem:
     names: tuple = ()
     model: object = ()
     mechanical: object = None
+    mirror: object = None
 
     def __post_init__(self):
         object.__setattr__(self, "prm", np.ascontiguousarray(self.prm, dtype=float).copy())
@@ -159,7 +164,8 @@ def cable_system(eom, gamma: float = 1.0) -> OdeSystem:
     -------
     OdeSystem
         State ``(z, v)`` of dimension ``2 n_dof``, with parameters ``"gamma"`` (multiplies FL
-        and the supports' motion) and ``"support"`` (the supports' motion alone).
+        and the supports' motion) and ``"support"`` (the supports' motion alone); a spatial
+        cable symmetric about a plane carries its :class:`~cablesim.orbits.symmetry.Mirror`.
     """
     if eom.moving_supports and not eom.exact:
         raise ValueError("moving supports need the exact analysis")
@@ -213,4 +219,5 @@ def cable_system(eom, gamma: float = 1.0) -> OdeSystem:
         noise=noise,
         names=names,
         mechanical=mechanical,
+        mirror=cable_mirror(eom),
     )

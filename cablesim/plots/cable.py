@@ -9,6 +9,7 @@ import numpy as np
 from ..cable import nodes_with_supports
 from .base import pyplot, save_atomic, title_line
 from .snapshots import label_nodes
+from .spatial import plan_view
 from .style import COLOURS, FIGURE_WIDTH, lowest_modes_text, styled
 
 #: Above this many nodes the loads are drawn as one quiver rather than an arrow per node.
@@ -31,7 +32,12 @@ def plot_cable(result, path: str | Path, title: str) -> Path:
     """
     plt = pyplot()
     cable = result.cable
-    fig, ax = plt.subplots(figsize=(FIGURE_WIDTH, 4.8), layout="constrained")
+    spatial = cable.dim == 3
+    if spatial:  # elevation above the plan view
+        fig, (ax, ax_plan) = plt.subplots(2, 1, figsize=(FIGURE_WIDTH, 7.4), layout="constrained",
+                                          height_ratios=(2.2, 1.0))
+    else:
+        fig, ax = plt.subplots(figsize=(FIGURE_WIDTH, 4.8), layout="constrained")
     loads = SERIES_LOADS
     y = result.y0
     pts = nodes_with_supports(cable, y)[:, :2]  # a spatial cable: its elevation (x, v)
@@ -89,6 +95,9 @@ def plot_cable(result, path: str | Path, title: str) -> Path:
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("horizontal coordinate (m)")
     ax.set_ylabel("vertical coordinate (m), pointing down")
+    if spatial:
+        ax.set_title("elevation", fontsize="small")
+        plan_view(ax_plan, nodes_with_supports(cable, y), result.P.reshape(-1, 3), span, COLOURS["response"])
     fig.legend(loc="outside lower center", ncol=2, frameon=False)
     title_line(fig, f"{title}: static equilibrium under $F_0$",
                f"n = {cable.n_nodes} nodes, L = {cable.L:g} m, H = {cable.H:g} m, EA = {cable.EA:.3g} N; "

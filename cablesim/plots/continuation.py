@@ -26,6 +26,7 @@ BIFURCATION_STYLE = {
     "period-doubling": ("s", "PD", "period doubling (multiplier -1)"),
     "neimark-sacker": ("D", "NS", "Neimark-Sacker (complex pair)"),
     "branch-point": ("o", "BP", "branch point"),
+    "pitchfork": ("P", "PF", "pitchfork (out-of-plane multiplier +1: whirling)"),
     "grazing": ("v", "G", "grazing (a segment's tension reaches zero)"),
 }
 

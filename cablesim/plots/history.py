@@ -20,6 +20,7 @@ from ..dynamics.spectra import amplitude_spectrum, spectral_peaks
 from ..errors import CablesimError
 from .base import bottom_notes, envelope_plot, figure_grid, legend_below, save_atomic, steady_start, title_line, two_tone
 from .insets import add_time_inset
+from .spatial import plot_across
 from .style import COLOURS, SERIES, channel_tex, force_unit, styled, to_resolution
 
 #: Largest number of channels drawn in the waveform and spectrum figures.
@@ -356,8 +357,9 @@ def plot_history(result, prefix, title: str, channels=None, pair=None) -> list[P
         among the stored ones.
     prefix : str or Path
         Path prefix without suffix; the files are ``{prefix}-waveforms.png``,
-        ``{prefix}-phase.png``, ``{prefix}-lissajous.png``, ``{prefix}-tensions.png`` and
-        ``{prefix}-fft.png``.
+        ``{prefix}-phase.png``, ``{prefix}-lissajous.png``, ``{prefix}-tensions.png``,
+        ``{prefix}-fft.png`` and, for a spatial cable, ``{prefix}-across.png`` (the nodes'
+        paths in the (w, v) plane, :func:`cablesim.plots.spatial.plot_across`).
     title : str
         Start of the title of every figure (the case name).
     channels : sequence of str or int, optional
@@ -404,4 +406,5 @@ def plot_history(result, prefix, title: str, channels=None, pair=None) -> list[P
         _plot_tensions(result, title, Path(f"{prefix}-tensions.png"), []),
         _plot_fft(result, chans, title, Path(f"{prefix}-fft.png"), notes),
     ]
-    return paths
+    across = plot_across(result, Path(f"{prefix}-across.png"), title, _describe(result))  # spatial cables
+    return paths + ([across] if across is not None else [])

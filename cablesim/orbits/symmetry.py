@@ -1,0 +1,185 @@
+"""The mirror symmetry of a spatial cable whose equilibrium, loads and support motions lie in one
+plane, and the split of a planar orbit's monodromy into its in-plane and out-of-plane blocks.
+
+Reflection through the plane, ``S = I - 2 n n^T`` at every node (``n`` the plane's unit normal),
+maps motions onto motions: the field is equivariant, ``f(S x) = S f(x)``. In the orthogonal basis
+``Q = [Q_e, Q_o]`` of the state whose first columns span the *even* coordinates (the two in-plane
+components of every node's displacement and velocity) and whose last ``2 n`` the *odd* ones (the
+components along ``n``), ``S = Q diag(I, -I) Q^T``. An orbit that lies in the plane is fixed by
+``S``, so its variational equations commute with ``S`` and the monodromy ``Phi`` is block
+diagonal in that basis::
+
+    Q^T Phi Q = [[Phi_e, 0], [0, Phi_o]]
+
+``Phi_e`` is the planar cable's monodromy (the in-plane multipliers: folds, period doublings and
+Neimark-Sacker points of the planar branch), ``Phi_o`` the monodromy of the out-of-plane
+linearisation about the planar orbit (the string whose tensions the orbit modulates):
+
+- an out-of-plane multiplier through +1 is a symmetry-breaking pitchfork: two nonplanar branches,
+  mirror images ``w -> -w`` of each other, are born (never a fold of the planar branch);
+- through -1 an out-of-plane period doubling;
+- a complex pair through the unit circle an out-of-plane Neimark-Sacker point, with frequency
+  ratio ``arg(mu) / 2 pi``.
+
+:func:`cable_mirror` is the one place that decides whether a cable has the symmetry (the plane
+rule is :func:`cablesim.modal.mirror_plane`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..modal import IN_PLANE, OUT_OF_PLANE, mirror_plane, plane_basis
+from .stability import sort_multipliers
+
+#: Largest scaled out-of-plane state of an orbit that counts as lying in the plane.
+PLANAR_TOL = 1e-9
+
+
+@dataclass(frozen=True)
+class Mirror:
+    """The mirror symmetry of a state space (module docstring).
+
+    Attributes
+    ----------
+    Q : ndarray (N, N)
+        Orthogonal; the first ``N - n_odd`` columns span the even coordinates, the rest the odd.
+    n_odd : int
+        Number of odd coordinates (components along the plane's normal).
+    labels : tuple of str
+        Names of the even and odd blocks: ``("in-plane", "out-of-plane")``.
+    normal : ndarray (3,)
+        The plane's unit normal.
+    frame : ndarray (3, 3)
+        Columns: the in-plane axis along the chord, the in-plane axis across it and the normal
+        (:func:`~cablesim.modal.plane_basis`).
+    """
+
+    Q: np.ndarray
+    n_odd: int
+    labels: tuple = (IN_PLANE, OUT_OF_PLANE)
+    normal: np.ndarray | None = None
+    frame: np.ndarray | None = None
+
+    @property
+    def dim(self) -> int:
+        return int(self.Q.shape[0])
+
+    @property
+    def even(self) -> np.ndarray:
+        """``Q_e``: columns spanning the even (in-plane) coordinates."""
+        return self.Q[:, : self.dim - self.n_odd]
+
+    @property
+    def odd(self) -> np.ndarray:
+        """``Q_o``: columns spanning the odd (out-of-plane) coordinates."""
+        return self.Q[:, self.dim - self.n_odd :]
+
+    def reflect(self, x: np.ndarray) -> np.ndarray:
+        """``S x``: the mirror image of a state (the odd coordinates change sign)."""
+        x = np.asarray(x, dtype=float)
+        return x - 2.0 * self.odd @ (self.odd.T @ x)
+
+    def odd_size(self, x: np.ndarray, scale: np.ndarray) -> float:
+        """Largest scaled odd component of state ``x`` (``scale``: typical size of each state
+        component, or of each odd coordinate)."""
+        scale = np.asarray(scale, dtype=float)
+        s_odd = np.abs(self.odd.T) @ scale if scale.size == self.dim else scale
+        return float(np.abs(self.odd.T @ np.asarray(x, dtype=float) / s_odd).max())
+
+    def is_planar(self, x: np.ndarray, scale: np.ndarray, tol: float = PLANAR_TOL) -> bool:
+        """Whether state ``x`` lies in the plane (scaled odd part at most ``tol``)."""
+        return self.odd_size(x, scale) <= tol
+
+    def blocks(self, monodromy: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+        """``(Phi_e, Phi_o, off)``: the even and odd diagonal blocks of ``Q^T Phi Q`` and the
+        largest entry of its off-diagonal blocks relative to the largest entry of ``Phi``
+        (round-off for an orbit in the plane)."""
+        B = self.Q.T @ monodromy @ self.Q
+        k = self.dim - self.n_odd
+        big = max(float(np.abs(B).max()), 1e-300)
+        off = max(float(np.abs(B[:k, k:]).max(initial=0.0)), float(np.abs(B[k:, :k]).max(initial=0.0))) / big
+        return B[:k, :k], B[k:, k:], off
+
+
+def split_multipliers(mirror: Mirror, monodromy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The in-plane and out-of-plane Floquet multipliers of a planar orbit, each sorted by
+    decreasing modulus (conjugate pairs with positive imaginary part first)."""
+    Pe, Po, _ = mirror.blocks(monodromy)
+    return sort_multipliers(np.linalg.eigvals(Pe)), sort_multipliers(np.linalg.eigvals(Po))
+
+
+def state_mirror(normal: np.ndarray, chord: np.ndarray, n_nodes: int) -> Mirror:
+    """The :class:`Mirror` of the state ``(z, v)`` of ``n_nodes`` nodes with three components
+    each, for the plane with unit normal ``normal`` (in-plane axes from
+    :func:`~cablesim.modal.plane_basis`)."""
+    R = plane_basis(np.asarray(normal, dtype=float), np.asarray(chord, dtype=float))
+    nd = 3 * n_nodes
+    N = 2 * nd
+    even, odd = [], []
+    for half in (0, nd):  # displacements, then velocities
+        for i in range(n_nodes):
+            for a in range(3):
+                col = np.zeros(N)
+                col[half + 3 * i : half + 3 * i + 3] = R[:, a]
+                (odd if a == 2 else even).append(col)
+    Q = np.column_stack(even + odd)
+    return Mirror(Q=Q, n_odd=len(odd), normal=R[:, 2].copy(), frame=R)
+
+
+@dataclass(frozen=True)
+class Whirling:
+    """How a spatial orbit leaves its plane (:func:`whirling_measures`).
+
+    Attributes
+    ----------
+    area : ndarray (n_nodes,)
+        Signed area enclosed by each node's path in its cross-section plane ``(w, v)`` (``w``
+        along the normal, ``v`` the in-plane axis across the chord), m^2: positive when the node
+        goes round counter-clockwise in those axes, zero for a motion in the plane or along a
+        line.
+    tilt : float
+        Angle between the plane of symmetry and the orbit's mean plane of motion, degrees: the
+        principal direction of all nodes' ``(v, w)`` displacements over the orbit, from the
+        ``v`` axis (0 for a planar orbit, 90 for a motion straight across the plane).
+    """
+
+    area: np.ndarray
+    tilt: float
+
+
+def whirling_measures(mirror: Mirror, x: np.ndarray, dt: float) -> Whirling:
+    """Whirling measures of an orbit sampled uniformly in time at ``x`` (samples, 6 n): states
+    ``(z, y')`` over one closed orbit (first and last samples the same state), ``dt`` s apart.
+
+    The area is ``1/2 oint (w v' - v w') dt`` by the trapezoidal rule, which is spectrally
+    accurate for a smooth periodic integrand (a polygon through the samples would be short by
+    about ``(2 pi / N)^2 / 6`` of it)."""
+    n = x.shape[1] // 6
+    R = mirror.frame
+    q = np.asarray(x, dtype=float).reshape(x.shape[0], 2, n, 3) @ R  # (chord, across, normal) per node
+    v, w, dv, dw = q[:, 0, :, 1], q[:, 0, :, 2], q[:, 1, :, 1], q[:, 1, :, 2]
+    integrand = w * dv - v * dw
+    area = 0.5 * dt * np.sum(integrand[:-1], axis=0)
+    dv, dw = v - v.mean(axis=0), w - w.mean(axis=0)
+    cov = np.array([[np.sum(dv * dv), np.sum(dv * dw)], [np.sum(dv * dw), np.sum(dw * dw)]])
+    vals, vecs = np.linalg.eigh(cov)
+    e = vecs[:, -1]
+    tilt = float(np.degrees(np.arctan2(abs(e[1]), abs(e[0])))) if vals[-1] > 0 else 0.0
+    return Whirling(area=area, tilt=tilt)
+
+
+def cable_mirror(eom) -> Mirror | None:
+    """The mirror of a spatial cable's equations of motion, or None (a planar cable, or a
+    spatial one whose equilibrium, sustained and harmonic loads and support motions do not lie
+    in one plane)."""
+    cable = eom.cable
+    if cable.dim != 3:
+        return None
+    points = np.vstack([cable.support_A, np.reshape(eom.y0, (-1, 3)), cable.support_B])
+    normal = mirror_plane(points, np.asarray(cable.chord, dtype=float), (eom.F0, eom.FL, eom.uA, eom.uB))
+    if normal is None:
+        return None
+    return state_mirror(normal, cable.chord, cable.n_nodes)

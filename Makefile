@@ -32,6 +32,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_dynamics.py
 	$(PY) benchmarks/bench_sweep.py
 	$(PY) benchmarks/bench_continuation.py
+	$(PY) benchmarks/bench_charts.py
 	$(PY) benchmarks/bench_accelerate.py
 	$(PY) benchmarks/bench_heavy.py
 	$(PY) benchmarks/bench_approximate.py

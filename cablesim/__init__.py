@@ -12,6 +12,7 @@ Python API (the command line's analyses; see :mod:`cablesim.api`)::
     h = cablesim.history(case, omega=2.4, duration=600.0)   # HistoryRun: .history, .to_hdf5(path)
     fv = cablesim.free_vibration(case, mode=3, peak_velocity=1.0)
     sw = cablesim.sweep(case, jobs=2)              # SweepRun: .result, .to_hdf5(path)
+    bb = cablesim.backbone(case, mode=1, amplitude=5.0)   # BackboneRun: free undamped orbits of mode 1
     cablesim.plot(["sweep.h5"], "sweep.png", stamp="preview: coarse grid")   # redraw stored results
 
 The package, from the bottom layer up (a module imports only from layers below it; checked by
@@ -29,26 +30,28 @@ The package, from the bottom layer up (a module imports only from layers below i
   (``field``), the integrators (``integrators/``), time histories (``simulate``, in chunks bounded
   in steps), steady states (``steady``), spectra, run status (``status``), Ctrl-C and SIGTERM (``interrupts``); it never
   sees a case file;
-- ``orbits/`` -- periodic orbits by shooting, Floquet multipliers, continuation, bifurcations;
+- ``orbits/`` -- periodic orbits by shooting, Floquet multipliers, continuation, bifurcations,
+  bifurcation curves in two parameters and backbone curves;
 - ``case`` -- YAML case files (strict YAML: ``strict_yaml``; numbers in stated ranges:
   ``numbers``) validated into a frozen :class:`~cablesim.case.Case`;
 - ``analyses/`` -- case in, result out: ``setup`` (equations, integrator and step rules, once),
   ``static``, ``dynamic``, ``sweep`` (its points: ``sweep_points``; its refinement: ``refine``;
-  its worker processes: ``pool``), ``continuation``, ``cost`` (estimates before a run); no
-  drawing, no files;
+  its worker processes: ``pool``), ``continuation``, ``charts`` (bifurcation curves, backbones),
+  ``cost`` (estimates before a run); no drawing, no files;
 - ``io/`` -- HDF5 writers and readers (``hdf5``, the only h5py), sweep journal, text summaries,
   output paths checked and locked (``paths``), default result names (``naming``), the record of
   each run (``provenance``), progress and the compile notice (``terminal``), the steps the
   time-history commands share (``finish``);
 - ``plots/`` -- every PNG (the only matplotlib);
 - ``stress/`` -- numerical stability across parameter ranges (``cablesim stress``);
-- ``api`` and ``cli`` -- the Python API and the ``cablesim`` command.
+- ``api`` and ``cli`` -- the Python API and the ``cablesim`` command (``cli_charts``: its
+  design-chart commands, ``cablesim backbone`` and the charts of ``cablesim continue``).
 """
 
 from .version import __version__
 
-_API = ("load_case", "static", "history", "free_vibration", "sweep", "continuation", "plot", "compile_kernels",
-        "StaticRun", "HistoryRun", "SweepRun", "ContinuationRun")
+_API = ("load_case", "static", "history", "free_vibration", "sweep", "continuation", "backbone", "plot",
+        "compile_kernels", "StaticRun", "HistoryRun", "SweepRun", "ContinuationRun", "BackboneRun")
 
 __all__ = ["__version__", *_API]
 

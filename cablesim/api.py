@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Callable
 
 from . import jit
+from .analyses.charts import BackboneResult, run_backbone
 from .analyses.continuation import ContinuationResult, run_continuation
 from .analyses.cost import Cost
 from .analyses.estimates import chosen_integrator
@@ -31,6 +32,7 @@ from .case.numbers import DAMPING_RATIO, DURATION, MODE, OMEGA, OUTPUT_STEP, PEA
 from .dynamics.integrators import Integrator
 from .dynamics.result import HistoryResult
 from .errors import CablesimError
+from .io.charts import write_backbone
 from .io.continuation import write_continuation
 from .io.hdf5 import write_history, write_static
 from .io.journal import SweepFile, fingerprint
@@ -38,6 +40,7 @@ from .io.provenance import invocation
 from .io.sweeps import write_sweep
 from .orbits import OrbitPoint
 from .plots.cable import plot_cable
+from .plots.charts import plot_backbone, plot_stability_chart
 from .plots.continuation import plot_continuation
 from .plots.history import plot_history
 from .plots.redraw import redraw
@@ -281,17 +284,27 @@ class ContinuationRun:
         return plot_continuation(h5_path, path, overlay=overlay)
 
 
+    def chart(self, path: str | Path, h5_path: str | Path) -> Path:
+        """Draw the stability chart (bifurcation curves in omega and gamma, with
+        ``continuation.loci``) of the stored file ``h5_path`` as the PNG ``path``."""
+        return plot_stability_chart(h5_path, path)
+
+
 def continuation(
     case: Case,
     analysis: str | None = None,
     progress: Callable[[OrbitPoint], None] | None = None,
+    loci_progress: Callable | None = None,
 ) -> ContinuationRun:
     """Every periodic response over the case's ``continuation:`` range, stable and unstable.
 
     Periodic orbits are found by shooting on ``(z, y')`` (Newton with the monodromy matrix of
     the variational equations) and followed by pseudo-arclength continuation in the forcing
     frequency (or the load factor ``gamma``); folds, period doublings and Neimark-Sacker points
-    are located, and every period doubling is followed onto its period-2p branch.
+    are located, and every period doubling is followed onto its period-2p branch. With
+    ``continuation.loci`` every fold, period doubling and Neimark-Sacker point is then continued
+    in omega and gamma over ``continuation.gamma`` (``result.loci``, ``result.codim2``: cusps,
+    fold-flip points, strong resonances).
 
     Parameters
     ----------
@@ -301,8 +314,57 @@ def continuation(
         Overrides the case's analysis.
     progress : callable, optional
         Receives each converged orbit (``branch``, ``parameter``, ``period``, ``stable``, ...).
+    loci_progress : callable, optional
+        ``loci_progress(locus, point)`` for every point of every bifurcation curve.
+
+    Raises
+    ------
+    cablesim.analyses.charts.Interrupted
+        Ctrl-C or SIGTERM while the curves were traced; its ``result`` keeps what was done.
     """
-    return ContinuationRun(case, run_continuation(case, analysis, progress))
+    return ContinuationRun(case, run_continuation(case, analysis, progress, loci_progress))
+
+
+@dataclass(frozen=True)
+class BackboneRun:
+    """A backbone curve: ``result`` (:class:`~cablesim.analyses.charts.BackboneResult`: the
+    free undamped orbits from a linear mode, frequency against amplitude per channel, their
+    multipliers and the internal resonances met)."""
+
+    case: Case
+    result: BackboneResult
+
+    def to_hdf5(self, path: str | Path) -> Path:
+        """Write the file ``cablesim backbone`` writes."""
+        return write_backbone(path, self.result)
+
+    def plot(self, path: str | Path, h5_path: str | Path, responses=()) -> Path:
+        """Draw the stored file ``h5_path`` as the PNG ``path`` (over the frequency responses of
+        the continuation files ``responses``)."""
+        return plot_backbone(h5_path, path, responses=responses)
+
+
+def backbone(
+    case: Case,
+    mode: int | None = None,
+    amplitude: float | None = None,
+    analysis: str | None = None,
+    progress: Callable | None = None,
+) -> BackboneRun:
+    """The backbone curve of a linear mode: the unforced, undamped cable's periodic orbits from
+    mode ``mode`` up to the amplitude ``amplitude`` (m, largest ``|z|`` of the channels).
+
+    The orbits' period is unknown and fixed by a phase condition; an artificial damping
+    parameter, which Newton's method keeps at zero, makes the conservative family a regular
+    curve for the pseudo-arclength continuation. Defaults from the case's ``backbone:`` section
+    (mode 1, 2 % of the chord).
+
+    Raises
+    ------
+    cablesim.analyses.charts.Interrupted
+        Ctrl-C or SIGTERM; its ``result`` keeps the orbits computed until then.
+    """
+    return BackboneRun(case, run_backbone(case, mode, amplitude, analysis, progress))
 def estimates(case: Case, analysis: str | None = None, integrator: str | None = None) -> dict[str, str]:
     """What each command would take on this case, in words and in seconds measured on this
     machine (``cablesim check``; see :mod:`cablesim.analyses.estimates`)."""

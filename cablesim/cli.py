@@ -27,6 +27,7 @@ os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
 
 import typer
 
+from . import cli_charts
 from .errors import CablesimError
 from .io.terminal import (ANALYSIS_OPT, CASE_ARG, FORCE_OPT, INTEGRATOR_OPT, MODES_OPT, SET_OPT, SLACK_OPTION,
                            SNAPSHOTS_OPT, STAMP_OPT, Analysis, CommandGroup, IntegratorName, LazyBar, SlackPolicy, StatusLine,
@@ -501,7 +502,7 @@ def continue_(
         "continuation" + (f"-{analysis.value}" if analysis else "") + ".h5")
     if overlay is not None and not overlay.is_file():
         raise CablesimError(f"--overlay {overlay}: no such sweep file; give the output of cablesim sweep.")
-    _check_outputs(out, case_file, (lambda o: [o.with_suffix(".png")]) if plot else [])
+    _check_outputs(out, case_file, (lambda o: [o.with_suffix(".png"), *cli_charts.chart_pngs(case, o)]) if plot else [])
     _effective(ctx, output=out)
     from . import api
     from .io.report import continuation_summary
@@ -509,15 +510,13 @@ def continue_(
 
     t0 = time.perf_counter()
     with compiling(_note) as notice, StatusLine(quiet=_OUT["quiet"]) as status:
-        run = api.continuation(case, analysis.value if analysis else None, progress=lambda p: status(
-            f"continuing: branch {p.branch} (period {p.period}), {p.parameter:.5g}, orbit {p.index}"))
+        run = cli_charts.interruptible(lambda: api.continuation(case, analysis.value if analysis else None, progress=cli_charts.branch_status(
+            status), loci_progress=cli_charts.loci_status(status)), case, out, "the response and the curves traced")
     _replace(out, "continuation")
     run.to_hdf5(out)
-    _echo(continuation_summary(case, run.result, time.perf_counter() - t0 - notice.seconds()))
-    msg = f"\nWrote {out}"
-    if plot:
-        msg += f" and {plot_continuation(out, out.with_suffix('.png'), overlay=overlay)}"
-    _echo(msg)
+    _echo(continuation_summary(case, run.result, time.perf_counter() - t0 - notice.seconds()) + cli_charts.loci_text(run.result))
+    drawn = f" and {plot_continuation(out, out.with_suffix('.png'), overlay=overlay)}" if plot else ""
+    _echo(f"\nWrote {out}" + drawn + (cli_charts.chart_text(out, run.result) if plot else ""))
 
 
 @app.command()
@@ -525,8 +524,8 @@ def continue_(
 def plot(
     ctx: typer.Context,
     results: list[Path] = typer.Argument(..., metavar="RESULT.h5", show_default=False,
-                                         help="HDF5 result files of cablesim static, history, free-vibration "
-                                         "or sweep (one type at a time)."),
+                                         help="HDF5 result files of any cablesim command, one type at a time (or "
+                                         "continuations with a sweep or a backbone: drawn together)."),
     output: Optional[Path] = typer.Option(None, "-o", "--output", metavar="PNG",
                                           help="PNG file (default: the first file with suffix .png)."),
     figure: Optional[Path] = typer.Option(None, "--figure", metavar="FIGURE.yaml",
@@ -587,6 +586,9 @@ def stress(
     if failed:
         say_error(f"{failed} stress run(s) FAILED (listed above and in {md_path}); each is a bug to fix.")
         raise typer.Exit(1)
+
+
+cli_charts.register(app, user_errors)  # cablesim backbone
 
 
 def main():

@@ -21,6 +21,7 @@ from ..dynamics.steady import SteadyCriterion, steady_response
 from ..modal import COUPLED, IN_PLANE
 from ..orbits import OrbitPoint, Settings, continue_branches
 from ..orbits.stability import frequency_ratio
+from .charts import Interrupted, finish_loci, need_planar
 from .setup import build_equations, frequency_of_interest, make_integrator
 from .static import run_static
 
@@ -130,6 +131,13 @@ class ContinuationResult:
     case_name: str
     case_text: str
     stats: dict = field(default_factory=dict)
+    #: With ``continuation.loci``: the bifurcation curves in (omega, gamma), their
+    #: codimension-two points (:mod:`cablesim.analyses.charts`) and the range of gamma.
+    loci: list = field(default_factory=list)
+    codim2: list = field(default_factory=list)
+    gamma_range: tuple | None = None
+    #: False when an interruption came while the curves were traced (what was done is kept).
+    complete: bool = True
 
     @property
     def n_points(self) -> int:
@@ -240,6 +248,7 @@ def run_continuation(
     case: Case,
     analysis: str | None = None,
     progress: Callable[[OrbitPoint], None] | None = None,
+    loci_progress: Callable | None = None,
 ) -> ContinuationResult:
     """Continue the periodic responses of a case over its ``continuation:`` range.
 
@@ -251,10 +260,19 @@ def run_continuation(
         Overrides the case's analysis.
     progress : callable, optional
         Receives every converged orbit (branch, parameter, period, stability).
+    loci_progress : callable, optional
+        With ``continuation.loci``: ``loci_progress(locus, point)`` for every point of every
+        bifurcation curve.
 
     Returns
     -------
     ContinuationResult
+
+    Raises
+    ------
+    Interrupted
+        Ctrl-C or SIGTERM while the bifurcation curves were traced: ``result`` holds the response
+        and the curves traced so far (``complete`` False).
     """
     spec = case.continuation
     if spec is None:
@@ -263,6 +281,8 @@ def run_continuation(
             "`continuation: {omega: {start: 0.5, stop: 6.0}, channels: [z2, z4]}`.",
             field="continuation",
         )
+    if spec.loci:
+        need_planar(case, "Bifurcation curves (continuation.loci)")
     if not case.forced:
         raise CablesimError("loads.FL is zero and no support moves, so there is no forced response to continue; "
                             "give peak harmonic loads FL or a support amplitude (supports:).", field="loads.FL")
@@ -302,9 +322,18 @@ def run_continuation(
     ]
     bifs += _grazing_points(diagram, spec.parameter, fixed, idx, case.dim)
     stats = dict(diagram.stats)
-    stats["wall"] = time.perf_counter() - t0
-    return ContinuationResult(
+    result = ContinuationResult(
         parameter=spec.parameter, start=rng.start, stop=rng.stop, fixed=fixed, channels=names, branches=branches,
         bifurcations=bifs, analysis=static.analysis, modal_omega=static.modes.omega.copy(), case_name=case.name,
         case_text=case.text, stats=stats,
     )
+    if spec.loci:
+        result.loci, result.codim2, more, interrupted = finish_loci(case, eom, diagram, idx, loci_progress)
+        result.gamma_range = (spec.gamma.start, spec.gamma.stop)
+        stats.update(more)
+        if interrupted:
+            result.complete = False
+            stats["wall"] = time.perf_counter() - t0
+            raise Interrupted(result)
+    stats["wall"] = time.perf_counter() - t0
+    return result

@@ -19,6 +19,7 @@ from .files import (
     stored_overrides,
 )
 from .model import Case
+from .charts import BackboneSpec
 from .sections import (
     FIGURE_KINDS,
     CableSpec,
@@ -29,6 +30,7 @@ from .sections import (
     HistorySpec,
     IntegratorSpec,
     LoadsSpec,
+    LociRange,
     ModalSpec,
     OmegaGrid,
     OutputsSpec,
@@ -37,8 +39,8 @@ from .sections import (
 )
 
 __all__ = [
-    "EXAMPLE_RESOURCE", "FIGURE_KINDS", "OVERRIDES_MARK", "CableSpec", "Case", "ContinuationSpec", "DampingSpec",
-    "FigureSpec", "FreeVibrationSpec", "HistorySpec", "IntegratorSpec", "LoadsSpec", "ModalSpec", "OmegaGrid", "OutputsSpec",
+    "EXAMPLE_RESOURCE", "FIGURE_KINDS", "OVERRIDES_MARK", "BackboneSpec", "CableSpec", "Case", "ContinuationSpec", "DampingSpec",
+    "FigureSpec", "FreeVibrationSpec", "HistorySpec", "IntegratorSpec", "LoadsSpec", "LociRange", "ModalSpec", "OmegaGrid", "OutputsSpec",
     "ParameterRange", "SweepSpec", "apply_overrides", "case_from_dict", "example_text", "format_validation_error",
     "load_case", "parse_case", "read_figure", "stored_overrides",
 ]

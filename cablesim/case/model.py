@@ -13,6 +13,7 @@ from ..cable import Cable
 from ..channels import channel_index
 from ..errors import CablesimError
 from ..names import ANALYSES, SLACK_POLICIES
+from .charts import BackboneSpec
 from .sections import (
     CableSpec,
     ContinuationSpec,
@@ -52,6 +53,7 @@ class Case(StrictModel):
     free_vibration: FreeVibrationSpec = FreeVibrationSpec()
     sweep: SweepSpec | None = None
     continuation: ContinuationSpec | None = None
+    backbone: BackboneSpec = BackboneSpec()
     outputs: OutputsSpec = OutputsSpec()
     figure: FigureSpec | None = None
     _text: str = PrivateAttr(default="")
@@ -131,7 +133,9 @@ class Case(StrictModel):
                                  "spatial: true, or remove it")
         if self.supports is not None and self.supports.moving and self.analysis != "exact":
             raise ValueError("supports: moving supports need the exact analysis; set analysis: exact")
-        for section in ("history", "free_vibration", "sweep", "outputs", "continuation", "figure"):
+        if self.backbone.mode > nd:
+            raise ValueError(f"backbone.mode is {self.backbone.mode}; this cable has {dim}n = {nd} modes")
+        for section in ("history", "free_vibration", "sweep", "outputs", "continuation", "backbone", "figure"):
             spec = getattr(self, section)
             for name in (getattr(spec, "channels", None) or ()) if spec is not None else ():
                 try:

@@ -485,12 +485,21 @@ class ParameterRange(StrictModel):
         return self
 
 
+class LociRange(ParameterRange):
+    """The range of gamma over which bifurcation curves are continued (``continuation.gamma``
+    with ``loci: true``), and the gamma of the frequency response whose bifurcations start them."""
+
+    at: float | None = Field(default=None, gt=0, description="gamma of the response curve (default: stop)")
+    levels: tuple[float, ...] = Field(default=(), description=(
+        "values of gamma at which each curve's crossings are located (special: level), e.g. [0.5, 2]"))
+
+
 class ContinuationSpec(StrictModel):
     """Periodic responses by shooting and pseudo-arclength continuation (``continuation:``)."""
 
     parameter: Literal[CONTINUATION_PARAMETERS] = Field(default="omega", description="omega | gamma")
     omega: ParameterRange | float = Field(description="range (parameter omega) or value, rad/s")
-    gamma: ParameterRange | float = Field(default=1.0, description="range (parameter gamma) or value; scales FL")
+    gamma: LociRange | float = Field(default=1.0, description="range (parameter gamma, or loci) or value; scales FL")
     period: int = Field(default=1, ge=1, le=16, description="period of the first branch, forcing periods")
     switch_branches: bool = Field(default=True, description="follow every period doubling onto its 2p branch")
     channels: tuple[str, ...] | None = Field(default=None, description="DOF reported, e.g. [z2, z4]")
@@ -499,10 +508,28 @@ class ContinuationSpec(StrictModel):
     segments: int = Field(default=1, ge=1, le=64, description="shooting segments per orbit (multiple shooting)")
     max_period: int = Field(default=8, ge=1, le=64, description="no branch switching beyond this period")
     max_points: int = Field(default=2000, ge=2, le=100_000, description="most points per branch")
+    loci: bool = Field(default=False, description=(
+        "continue every fold, period doubling and Neimark-Sacker point found in omega and gamma "
+        "(gamma: {start, stop, at}): the stability chart"))
 
     @model_validator(mode="after")
     def _ranges(self):
         ranged = {k: isinstance(getattr(self, k), ParameterRange) for k in ("omega", "gamma")}
+        if self.loci:
+            if self.parameter != "omega" or not (ranged["omega"] and ranged["gamma"]):
+                raise ValueError(
+                    "continuation.loci needs the response in omega (parameter: omega, the default) with "
+                    "continuation.omega a range {start: .., stop: ..} and continuation.gamma the range of "
+                    "the curves {start: .., stop: .., at: ..} (at: the gamma of the response, default stop)")
+            g = self.gamma
+            if g.at is not None and not min(g.start, g.stop) <= g.at <= max(g.start, g.stop):
+                raise ValueError(f"continuation.gamma.at ({g.at:g}) must lie between gamma.start ({g.start:g}) and "
+                                 f"gamma.stop ({g.stop:g}), the range the curves are continued over")
+            bad = [x for x in g.levels if not min(g.start, g.stop) <= x <= max(g.start, g.stop)]
+            if bad:
+                raise ValueError(f"continuation.gamma.levels: {', '.join(f'{x:g}' for x in bad)} outside the range "
+                                 f"gamma.start ({g.start:g}) to gamma.stop ({g.stop:g}); give levels inside it")
+            return self
         other = "gamma" if self.parameter == "omega" else "omega"
         if not ranged[self.parameter]:
             raise ValueError(
@@ -510,7 +537,11 @@ class ContinuationSpec(StrictModel):
                 f"range {{start: .., stop: ..}}"
             )
         if ranged[other]:
-            raise ValueError(f"continuation.{other} must be a single value when the parameter is {self.parameter}")
+            hint = " (or add loci: true to continue the bifurcations over that gamma range)" if other == "gamma" else ""
+            raise ValueError(f"continuation.{other} must be a single value when the parameter is {self.parameter}"
+                             + hint)
+        if isinstance(self.gamma, LociRange) and (self.gamma.at is not None or self.gamma.levels):
+            raise ValueError("continuation.gamma.at and continuation.gamma.levels are used only with loci: true")
         if not isinstance(getattr(self, other), ParameterRange) and not getattr(self, other) > 0:
             raise ValueError(f"continuation.{other} must be positive")
         return self
@@ -522,7 +553,11 @@ class ContinuationSpec(StrictModel):
 
     @property
     def fixed(self) -> float:
-        """The value of the other parameter (omega in rad/s, or gamma)."""
+        """The value of the other parameter (omega in rad/s, or gamma; with loci the gamma of the
+        response curve)."""
+        if self.loci:
+            g = self.gamma
+            return float(g.at if g.at is not None else g.stop)
         return float(getattr(self, "gamma" if self.parameter == "omega" else "omega"))
 
 

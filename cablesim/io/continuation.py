@@ -18,6 +18,8 @@ Layout (with the root attributes of every cablesim file, see :mod:`cablesim.io.h
   branch too) and, for a spatial cable, ``whirl_area`` (points x nodes, m^2: the signed area of
   each node's path in its ``(w, v)`` plane) and ``tilt`` (deg: the orbit's mean plane of motion
   from the cable's plane);
+- with ``continuation.loci``: ``/continuation/loci/<name>/...`` and ``/continuation/codim2/...``,
+  the bifurcation curves (:mod:`cablesim.io.charts`);
 - ``/modal/omega``: the linear modal frequencies, rad/s.
 """
 
@@ -29,6 +31,7 @@ import h5py
 import numpy as np
 
 from ..errors import CablesimError
+from .charts import read_loci, write_loci
 from .hdf5 import atomic_h5, attr_text, put, stamp
 
 #: Bifurcation kinds, in the order the files store their names.
@@ -87,6 +90,8 @@ def write_continuation(path: str | Path, res) -> Path:
             "block of the critical multiplier: in-plane, out-of-plane or coupled")
         put(fg, "frequency_ratio", np.array([b.frequency_ratio for b in bifs], dtype=float), "1",
             "|arg(mu)| / 2 pi of the critical multiplier (0: fold, pitchfork; 1/2: period doubling)")
+        if getattr(res, "gamma_range", None) is not None:
+            write_loci(g, res)  # bifurcation curves (cablesim.io.charts)
         m = f.create_group("modal")
         put(m, "omega", res.modal_omega, "rad/s", "linear modal frequencies about the equilibrium")
     return Path(path)
@@ -100,7 +105,8 @@ def read_continuation(path: str | Path) -> dict:
     dict
         ``parameter``, ``start``, ``stop``, ``fixed``, ``channels``, ``case_name``, ``analysis``,
         ``modal`` (rad/s), ``branches`` (list of dicts with the datasets and ``name``, ``period``,
-        ``parent``, ``end``, in file order) and ``bifurcations`` (dict of arrays).
+        ``parent``, ``end``, in file order), ``bifurcations`` (dict of arrays) and ``loci``
+        (:func:`~cablesim.io.charts.read_loci`, None without bifurcation curves).
     """
     path = Path(path)
     try:
@@ -135,4 +141,5 @@ def read_continuation(path: str | Path) -> dict:
         if "plane" in bif:
             bif["plane"] = [attr_text(k) for k in bif["plane"]]
         out["bifurcations"] = bif
+        out["loci"] = read_loci(g)
     return out

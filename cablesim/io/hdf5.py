@@ -300,10 +300,10 @@ def _read_slack(g: h5py.Group) -> SlackRecord | None:
 # --------------------------------------------------------------------------------------------
 #: Result file families: the ``command`` root attribute -> the kind of data it holds.
 FAMILIES = {"static": "static", "history": "history", "free-vibration": "history", "sweep": "sweep",
-            "continue": "continuation"}
+            "continue": "continuation", "backbone": "backbone"}
 #: How messages name each family.
 FAMILY_TEXT = {"static": "a static file", "history": "a time-history file", "sweep": "a sweep file",
-               "continuation": "a continuation file"}
+               "continuation": "a continuation file", "backbone": "a backbone file"}
 #: Sweep directions and the result groups they use.
 DIRECTION_GROUPS = {"independent": [None], "up": ["up"], "down": ["down"], "both": ["up", "down"]}
 
@@ -348,6 +348,9 @@ def is_complete_result(path) -> bool:
                 return bool(f["history"].attrs.get("completed", False))
             if "sweep" in f:
                 return bool(f["sweep"].attrs.get("complete", False))
+            for group in ("backbone", "continuation/loci"):  # cablesim.io.charts
+                if group in f:
+                    return bool(f[group].attrs.get("complete", False))
             return True
     except (OSError, KeyError, ValueError):
         return False

@@ -58,12 +58,14 @@ def sweep_stem(omega_flag: str | None = None, analysis=None, integrator=None) ->
 
 
 def figures(out: Path, kind: str) -> list[Path]:
-    """The PNGs a result of ``kind`` (``static``, ``history``, ``sweep``, ``continuation``)
-    written at ``out`` draws beside it."""
+    """The PNGs a result of ``kind`` (``static``, ``history``, ``sweep``, ``continuation``,
+    ``backbone``) written at ``out`` draws beside it."""
     out = Path(out)
     if kind == "history":
         prefix = str(out.with_suffix(""))
         return [Path(f"{prefix}-{k}.png") for k in HISTORY_FIGURES]
+    if kind == "continuation":  # and the stability chart of its bifurcation curves
+        return [out.with_suffix(".png"), out.with_name(out.stem + "-chart.png")]
     return [out.with_suffix(".png")]
 
 

@@ -5,7 +5,9 @@
 file (root attribute ``case_yaml``) has a ``figure:`` section, or ``--figure FILE.yaml`` gives
 one, one composite PNG is drawn from all the files (one column per file); otherwise each file
 gets the standard plots of its command. A continuation file given with a sweep file is drawn
-with the sweep's points on top, as ``cablesim continue --overlay`` draws it.
+with the sweep's points on top, as ``cablesim continue --overlay`` draws it; a continuation file
+with bifurcation curves also gets its stability chart (``<name>-chart.png``); a backbone file
+given with continuation files is drawn over their frequency responses.
 """
 
 from __future__ import annotations
@@ -15,9 +17,11 @@ from pathlib import Path
 from ..case import parse_case, read_figure
 from ..channels import normalise_channel
 from ..errors import CablesimError
+from ..io.charts import has_loci
 from ..io.hdf5 import FAMILY_TEXT, ResultInfo, inspect_result, read_history, read_static_drawing
 from .base import stamp_figures
 from .cable import plot_cable
+from .charts import plot_backbone, plot_stability_chart
 from .composite import draw_figure
 from .continuation import plot_continuation
 from .history import plot_history
@@ -72,6 +76,8 @@ def _redraw(paths: list[Path], output, figure, snapshots: int | None) -> list[Pa
     families = {i.family for i in infos}
     if families == {"continuation", "sweep"} and figure is None:
         return [_continuation_with_sweep(infos, output)]
+    if families == {"backbone", "continuation"} and figure is None:
+        return [_backbone_over_responses(infos, output)]
     if len(families) > 1:
         listing = "; ".join(f"{i.path} is {FAMILY_TEXT[i.family]}" for i in infos)
         raise CablesimError(
@@ -116,6 +122,16 @@ def _continuation_with_sweep(infos, output) -> Path:
     return plot_continuation(conts[0].path, png, overlay=sweeps[0].path)
 
 
+def _backbone_over_responses(infos, output) -> Path:
+    """One backbone file drawn over the frequency responses of continuation files."""
+    bbs = [i for i in infos if i.family == "backbone"]
+    if len(bbs) != 1:
+        raise CablesimError(f"A backbone is drawn over continuation files one at a time; got {len(bbs)} backbone "
+                            "files. Plot each backbone with the continuation files of its cable.")
+    png = Path(output) if output is not None else bbs[0].path.with_suffix(".png")
+    return plot_backbone(bbs[0].path, png, responses=[i.path for i in infos if i.family == "continuation"])
+
+
 def _standard(info: ResultInfo, output: Path | None) -> list[Path]:
     """The plots the command that wrote the file draws."""
     case = parse_case(info.case_text, source=f"(the case stored in {info.path})", default_name=info.path.stem)
@@ -124,7 +140,13 @@ def _standard(info: ResultInfo, output: Path | None) -> list[Path]:
         png = output if output is not None else info.path.with_suffix(".png")
         return [plot_cable(result, png, case.name)]
     if info.family == "continuation":
-        return [plot_continuation(info.path, output if output is not None else info.path.with_suffix(".png"))]
+        png = output if output is not None else info.path.with_suffix(".png")
+        out = [plot_continuation(info.path, png)]
+        if has_loci(info.path):  # and its stability chart beside it
+            out.append(plot_stability_chart(info.path, Path(png).with_name(Path(png).stem + "-chart.png")))
+        return out
+    if info.family == "backbone":
+        return [plot_backbone(info.path, output if output is not None else info.path.with_suffix(".png"))]
     if info.family == "sweep":
         return [plot_sweep(info.path, output if output is not None else info.path.with_suffix(".png"))]
     hist = read_history(info.path)

@@ -1,0 +1,359 @@
+"""Design charts of a case: bifurcation curves in (omega, gamma) and backbone curves.
+
+- :func:`case_loci`: every fold, period doubling and Neimark-Sacker point of a case's frequency
+  response, continued in the forcing frequency omega and the load factor gamma over
+  ``continuation.gamma`` (:func:`cablesim.orbits.curves.trace_loci`), with the
+  codimension-two points found on the curves; :func:`~cablesim.analyses.continuation.run_continuation`
+  calls it when ``continuation.loci`` is set.
+- :func:`run_backbone`: the backbone of a linear mode, the unforced, undamped cable's periodic
+  orbits from the mode to a given amplitude (:func:`cablesim.orbits.backbone.trace_backbone`).
+
+Case in, result out: plain arrays in the case's channels, ready to be written and drawn. An
+interruption (Ctrl-C, SIGTERM) raises :class:`Interrupted`, which carries everything computed so
+far, so that the caller can keep it.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from ..case import Case
+from ..channels import channel_index
+from ..errors import CablesimError, ConvergenceError
+from ..orbits import cable_scales, cable_system
+from ..orbits.backbone import BackbonePoint, linear_modes, trace_backbone
+from ..orbits.conservative import conservative_cable_system
+from ..orbits.continuation import Settings
+from ..orbits.curves import Locus, LociInterrupted, trace_loci
+from .setup import build_equations
+from .static import run_static
+
+#: Short names of the kinds of curves (HDF5 group names ``<short><k>-p<period>``).
+SHORT = {"fold": "fold", "period-doubling": "pd", "neimark-sacker": "ns"}
+#: Fraction of the chord that is the default largest amplitude of a backbone.
+DEFAULT_BACKBONE_AMPLITUDE = 0.02
+#: Scaled Newton correction at which a backbone orbit counts as converged, per analysis. The
+#: approximate analysis's flow map carries round-off of about 1e-13 of the chord (absolute
+#: coordinates, inner solves), which the nearly singular direction of the conservative family
+#: (the artificial damping) amplifies into corrections of 1e-9 that do not shrink: its start
+#: never converged at 1e-9 on modes 2 to 4 of the paper example. Newton converges
+#: quadratically, so a correction of 1e-7 leaves an error at the round-off level.
+BACKBONE_NEWTON_TOL = {"exact": 1e-9, "approximate": 1e-7}
+
+
+class Interrupted(KeyboardInterrupt):
+    """Ctrl-C or SIGTERM during a chart: ``result`` holds everything computed until then."""
+
+    def __init__(self, result):
+        super().__init__("interrupted")
+        self.result = result
+
+
+@dataclass(frozen=True)
+class LocusResult:
+    """A bifurcation curve in (omega, gamma).
+
+    Attributes
+    ----------
+    name : str
+        ``"<kind><k>-p<period>"`` (``fold0-p1``, ``pd1-p1``, ...).
+    kind : str
+        ``fold``, ``period-doubling`` or ``neimark-sacker``.
+    period : int
+        Period of the bifurcating orbits, in forcing periods.
+    omega, gamma : ndarray (points,)
+        Forcing frequency (rad/s) and load factor along the curve.
+    kappa : ndarray (points,) or None
+        Neimark-Sacker curves: ``cos`` of the angle of the critical multipliers.
+    amplitude, halfrange : ndarray (points, channels)
+        Largest ``|z|`` and half the range over the bifurcating orbit, m.
+    multipliers : ndarray complex (points, 2 n_dof)
+    state : ndarray (points, 2 n_dof)
+        ``(z, y')`` at forcing phase 0, m and m/s.
+    trusted : ndarray of bool (points,)
+    special : list of str
+        Per point: ``""``, a codimension-two point, ``turning point``, ``level``, ``bound``.
+    ends : (str, str)
+        Why the curve ends at its first and last point.
+    origin : (float, float)
+        (omega, gamma) of the bifurcation it was started from.
+    """
+
+    name: str
+    kind: str
+    period: int
+    omega: np.ndarray
+    gamma: np.ndarray
+    kappa: np.ndarray | None
+    amplitude: np.ndarray
+    halfrange: np.ndarray
+    multipliers: np.ndarray
+    state: np.ndarray
+    trusted: np.ndarray
+    special: list
+    ends: tuple
+    origin: tuple
+
+
+@dataclass(frozen=True)
+class Codim2Result:
+    """A codimension-two point on a curve: ``kind`` (``cusp``, ``fold-flip``, ``1:1 resonance``,
+    ``1:2 resonance``, ``1:3 resonance``, ``1:4 resonance``, ``fold-neimark-sacker``,
+    ``flip-neimark-sacker``, ``generalized period doubling``), where (``omega`` rad/s,
+    ``gamma``), on which ``locus`` (index), the orbit's ``amplitude`` per channel (m) and
+    whether it was ``located`` (the secant converged)."""
+
+    kind: str
+    omega: float
+    gamma: float
+    locus: int
+    amplitude: np.ndarray
+    located: bool
+
+
+def need_planar(case: Case, what: str) -> None:
+    """Bifurcation curves and backbones cover planar cables: a spatial case is refused, naming why."""
+    if case.dim == 3:
+        raise CablesimError(
+            f"{what} are computed for planar cables only for now; this case is spatial (spatial: true, cable.W, "
+            "an out-of-plane support or three-component loads). Give the planar case (two components per node) "
+            "for the in-plane curves.", field="spatial")
+
+
+def _locus_result(loc: Locus, idx: np.ndarray) -> LocusResult:
+    pts = loc.points
+    nch = idx.size
+    return LocusResult(
+        name=f"{SHORT[loc.kind]}{loc.index}-p{loc.period}", kind=loc.kind, period=int(loc.period),
+        omega=loc.values("p1").astype(float), gamma=loc.values("p2").astype(float),
+        kappa=loc.values("kappa").astype(float) if loc.kind == "neimark-sacker" else None,
+        amplitude=np.array([p.amplitude[idx] for p in pts]).reshape(len(pts), nch),
+        halfrange=np.array([p.halfrange[idx] for p in pts]).reshape(len(pts), nch),
+        multipliers=np.array([p.multipliers for p in pts]), state=np.array([p.state for p in pts]),
+        trusted=np.array([p.trusted for p in pts], dtype=bool), special=[p.special or "" for p in pts],
+        ends=tuple(loc.ends), origin=tuple(float(x) for x in loc.origin))
+
+
+def _codim2(loci: list, idx: np.ndarray) -> list:
+    out = []
+    for k, loc in enumerate(loci):
+        for p in loc.codim2 + [p for p in loc.points if p.special == "generalized period doubling"]:
+            out.append(Codim2Result(kind=p.special, omega=float(p.p1), gamma=float(p.p2), locus=k,
+                                    amplitude=np.asarray(p.amplitude)[idx], located=bool(p.located)))
+    return out
+
+
+def case_loci(case: Case, eom, diagram, idx: np.ndarray, progress: Callable | None = None):
+    """The bifurcation curves of a case's frequency response (module docstring).
+
+    Parameters
+    ----------
+    case : Case
+        ``continuation.loci`` set; ``continuation.gamma`` the range of the curves (its
+        ``levels``: the values of gamma whose crossings are located on every curve).
+    eom : EquationsOfMotion
+        Of the case (its ``FL`` is what gamma multiplies).
+    diagram : ResponseDiagram
+        The frequency response at ``gamma = continuation.fixed``.
+    idx : ndarray of int
+        DOF indices of the channels reported.
+    progress : callable, optional
+        ``progress(locus, point)`` for every point of every curve.
+
+    Returns
+    -------
+    (list of LocusResult, list of Codim2Result, dict)
+        The curves, their codimension-two points and the cost counters.
+
+    Raises
+    ------
+    LociInterrupted
+        On Ctrl-C or SIGTERM, with the curves traced until then (the last one partial).
+    """
+    spec = case.continuation
+    g, w = spec.gamma, spec.omega
+    g0 = spec.fixed
+    system = cable_system(eom, gamma=g0)
+    scale, w_scale = cable_scales(eom, "omega", w.start, w.stop, max(g.start, g.stop))
+    g_scale = max(abs(g.start), abs(g.stop))
+    loci = trace_loci(system, diagram, g0, (w.start, w.stop), (g.start, g.stop), state_scale=scale,
+                      scales=(w_scale, g_scale), levels=g.levels, settings=Settings(max_points=spec.max_points),
+                      callback=progress)
+    stats = {"loci_evaluations": sum(L.evaluations for L in loci), "loci_points": sum(len(L.points) for L in loci),
+             "loci_seconds": sum(L.seconds for L in loci)}
+    return [_locus_result(L, idx) for L in loci], _codim2(loci, idx), stats
+
+
+def finish_loci(case: Case, eom, diagram, idx: np.ndarray, progress=None):
+    """:func:`case_loci`, keeping what was traced when interrupted: ``(loci, codim2, stats,
+    interrupted)``."""
+    try:
+        return (*case_loci(case, eom, diagram, idx, progress), False)
+    except LociInterrupted as exc:
+        return [_locus_result(L, idx) for L in exc.loci], _codim2(exc.loci, idx), {}, True
+
+
+# ----------------------------------------------------------------------------------------------
+# Backbones
+# ----------------------------------------------------------------------------------------------
+@dataclass
+class BackboneResult:
+    """A backbone curve of the case.
+
+    Attributes
+    ----------
+    mode : int
+        Linear mode it starts from (1-based).
+    linear_omega : float
+        Its linear frequency, rad/s.
+    modal_omega : ndarray
+        All linear frequencies of the undamped cable, rad/s.
+    channels : list of str
+    amplitude_max : float
+        The largest amplitude asked for, m.
+    omega : ndarray (points,)
+        Frequency of the free periodic orbit, rad/s.
+    amplitude, halfrange : ndarray (points, channels)
+        Largest ``|z|`` and half the range over the orbit, m.
+    multipliers : ndarray complex (points, 2 n_dof)
+    ratios : ndarray (points, modes - 1)
+        Frequency of each other mode about the orbit over the orbit's frequency.
+    stable, trusted : ndarray of bool (points,)
+    state : ndarray (points, 2 n_dof)
+        ``(z, y')`` at ``t = 0`` (a turning point of the mode's largest displacement).
+    delta : ndarray (points,)
+        The artificial damping, 1/s (zero up to round-off: a check).
+    resonances : list of dict
+        Internal resonances met: ``kind``, ``omega``, ``amplitude`` (channels), ``mode``
+        (the other mode), ``located``.
+    end : str
+        Why the backbone ended.
+    complete : bool
+        False when interrupted.
+    """
+
+    mode: int
+    linear_omega: float
+    modal_omega: np.ndarray
+    channels: list
+    amplitude_max: float
+    omega: np.ndarray
+    amplitude: np.ndarray
+    halfrange: np.ndarray
+    multipliers: np.ndarray
+    ratios: np.ndarray
+    stable: np.ndarray
+    trusted: np.ndarray
+    state: np.ndarray
+    delta: np.ndarray
+    resonances: list
+    end: str
+    analysis: str
+    case_name: str
+    case_text: str
+    complete: bool = True
+    stats: dict = field(default_factory=dict)
+
+    @property
+    def other_modes(self) -> list[int]:
+        """The modes of :attr:`ratios`, 1-based."""
+        return [k + 1 for k in range(self.modal_omega.size) if k != self.mode - 1]
+
+
+def backbone_channels(case: Case) -> tuple[list[str], np.ndarray]:
+    """Channel names and DOF indices of a backbone: ``backbone.channels``, else the
+    continuation's or the history's, else every DOF."""
+    n_dof = 2 * case.cable.n_nodes
+    spec = case.continuation
+    names = (case.backbone.channels or (spec.channels if spec is not None else None) or case.history.channels
+             or [f"z{i + 1}" for i in range(n_dof)])
+    idx = np.array([channel_index(c, n_dof) for c in names], dtype=int)
+    return [f"z{i + 1}" for i in idx], idx
+
+
+def _backbone_result(points: list, bb_meta: dict, names, idx, end: str, complete: bool) -> BackboneResult:
+    n = len(points)
+    nch = idx.size
+    res = [dict(kind=p.special, omega=float(p.omega), amplitude=p.amplitude[idx], located=bool(p.located),
+                mode=int(p.special.rsplit(" ", 1)[-1])) for p in points if p.special]
+    return BackboneResult(
+        omega=np.array([p.omega for p in points], dtype=float),
+        amplitude=np.array([p.amplitude[idx] for p in points]).reshape(n, nch),
+        halfrange=np.array([p.halfrange[idx] for p in points]).reshape(n, nch),
+        multipliers=np.array([p.multipliers for p in points]).reshape(n, -1),
+        ratios=np.array([p.ratios for p in points]).reshape(n, -1),
+        stable=np.array([p.stable for p in points], dtype=bool),
+        trusted=np.array([p.trusted for p in points], dtype=bool),
+        state=np.array([p.state for p in points]).reshape(n, -1), delta=np.array([p.delta for p in points]),
+        resonances=res, end=end, complete=complete, channels=names, **bb_meta)
+
+
+def run_backbone(case: Case, mode: int | None = None, amplitude: float | None = None,
+                 analysis: str | None = None, progress: Callable[[BackbonePoint], None] | None = None
+                 ) -> BackboneResult:
+    """The backbone of a linear mode of the case (module docstring).
+
+    Parameters
+    ----------
+    case : Case
+    mode : int, optional
+        Linear mode (1-based; default ``backbone.mode``).
+    amplitude : float, optional
+        Follow the family until the largest ``|z|`` of the channels reaches this, m (default
+        ``backbone.amplitude``, else 2 % of the chord).
+    analysis : str, optional
+        Overrides the case's analysis.
+    progress : callable, optional
+        Receives every orbit of the family.
+
+    Raises
+    ------
+    CablesimError
+        A mode the cable does not have.
+    Interrupted
+        On Ctrl-C or SIGTERM, with the orbits computed until then (``result.complete`` False).
+    """
+    need_planar(case, "Backbone curves")
+    spec = case.backbone
+    k = int(mode if mode is not None else spec.mode)
+    n_dof = 2 * case.cable.n_nodes
+    if not 1 <= k <= n_dof:
+        raise CablesimError(f"--mode {k}: this cable has {n_dof} modes; give a mode from 1 to {n_dof}.",
+                            field="backbone.mode")
+    static = run_static(case, analysis, all_models=False)
+    eom = build_equations(case, static, omega=float(static.modes.omega[0]), load_scale=1.0)
+    a_max = float(amplitude if amplitude is not None else
+                  spec.amplitude if spec.amplitude is not None else DEFAULT_BACKBONE_AMPLITUDE * eom.cable.chord_length)
+    names, idx = backbone_channels(case)
+    system = conservative_cable_system(eom)
+    freqs, _ = linear_modes(system, "delta")
+    points: list = []
+    meta = dict(mode=k, linear_omega=float(freqs[k - 1]), modal_omega=freqs, amplitude_max=a_max,
+                analysis=static.analysis, case_name=case.name, case_text=case.text)
+
+    def collect(p):
+        points.append(p)
+        if progress is not None:
+            progress(p)
+
+    t0 = time.perf_counter()
+    try:
+        settings = Settings(max_points=spec.max_points, newton_tol=BACKBONE_NEWTON_TOL[static.analysis])
+        bb = trace_backbone(system, k, a_max, channels=np.searchsorted(system.displacements, idx),
+                            settings=settings, max_ratio=spec.max_ratio, callback=collect)
+    except KeyboardInterrupt:
+        raise Interrupted(_backbone_result(points, meta, names, idx, "interrupted", False)) from None
+    if not bb.points:
+        raise ConvergenceError(
+            f"The backbone of mode {k} could not start ({bb.end}): Newton's method did not converge on the "
+            f"linear mode's orbit at {0.01 * a_max:.3g} m (1 % of the amplitude asked for). Try another "
+            f"--amplitude, or the other analysis (--analysis).", field="backbone.amplitude")
+    end = f"reached {a_max:g} m (the largest |z| of {', '.join(names)})" if bb.end.startswith("reached the amp") else bb.end
+    out = _backbone_result(bb.points, meta, names, idx, end, True)
+    out.stats = {"evaluations": bb.evaluations, "segments": bb.segments, "points": len(bb.points),
+                 "seconds": bb.seconds, "wall": time.perf_counter() - t0}
+    return out

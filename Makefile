@@ -38,6 +38,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_approximate.py
 	$(PY) benchmarks/bench_tolerances.py
 	$(PY) benchmarks/bench_spatial.py
+	$(PY) benchmarks/bench_heavy_orbits.py
 	$(if $(AGAINST),$(PY) benchmarks/bench_revisions.py --against $(AGAINST))
 
 # numba's cache of the compiled kernels lives in cablesim/__pycache__/kernels-<hash of the compiled

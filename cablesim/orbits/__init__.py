@@ -9,6 +9,12 @@
 - :mod:`~cablesim.orbits.branches`: branches of periodic orbits with amplitudes, stability and
   branch switching at period doublings (:mod:`~cablesim.orbits.switching`); results in
   :mod:`~cablesim.orbits.diagram`; :func:`continue_branches` for the cable;
+- :mod:`~cablesim.orbits.matrixfree`: shooting that uses the monodromy only through its action
+  on vectors (directional variational equations, :mod:`~cablesim.orbits.directional`; the
+  implicit Radau IIA flow for stiff cables, :mod:`~cablesim.orbits.radau`), Newton-GMRES
+  (:mod:`~cablesim.orbits.krylov`) and the leading Floquet multipliers
+  (:mod:`~cablesim.orbits.floquet`); :mod:`~cablesim.orbits.mfproblem` makes it a continuation
+  problem (``matrix_free`` of :func:`continue_branches`, by default above 40 states);
 - :mod:`~cablesim.orbits.systems`, :mod:`~cablesim.orbits.cablefield`: the vector fields;
   :mod:`~cablesim.orbits.starting`: starting states.
 

@@ -33,6 +33,8 @@ import numpy as np
 from . import kernels as ok
 from . import stability
 from .continuation import Settings, continuation
+from .matrixfree import MatrixFreeShooting, orbit_leading, solve_orbit_mf
+from .mfproblem import MatrixFreeOrbitProblem, use_matrix_free
 from .diagram import Bifurcation, BranchEnd, OrbitBranch, OrbitPoint, ResponseDiagram
 from .shooting import Evaluation, FlowStatus, Shooting, solve_orbit
 from .starting import integrate_to_steady, linear_response, linear_response_state
@@ -131,10 +133,14 @@ def _orbit_point(system: OdeSystem, shooting: Shooting, cp, branch: int, index: 
     mu, planes, whirl = ev.multipliers, None, None
     if mirror is not None:
         mu, planes = labelled_multipliers(mirror, ev.monodromy)
-    elif system.mirror is not None:  # a nonplanar orbit of a symmetric system
+    elif system.mirror is not None and hasattr(shooting, "trajectory"):  # a nonplanar orbit of a symmetric system
         t, x = shooting.trajectory(cp.u, cp.lam, samples_per_period=WHIRL_SAMPLES)
         whirl = whirling_measures(system.mirror, x, float(t[1] - t[0]))
-    trusted = bool(cp.residual <= 10.0 * residual_tol and ev.liouville <= liouville_tol and np.all(np.isfinite(mu)))
+    # Liouville's formula needs the whole spectrum; the leading multipliers' eigenpair residuals
+    # are the check of a matrix-free orbit
+    check = ev.liouville <= liouville_tol if ev.monodromy is not None or ev.leading is None \
+        else ev.leading.residual <= liouville_tol
+    trusted = bool(cp.residual <= 10.0 * residual_tol and check and np.all(np.isfinite(mu)))
     return OrbitPoint(
         branch=branch, index=index, parameter=float(cp.lam), omega=ev.omega, period=shooting.period,
         state=cp.u[: shooting.n].copy(), u=cp.u.copy(), amplitude=np.maximum(np.abs(xmax), np.abs(xmin)),
@@ -168,8 +174,9 @@ class _Tracer:
 
     def __init__(self, system: OdeSystem, parameter: str, settings: Settings, direction: float,
                  state_scale: np.ndarray, lam_scale: float, callback, integration: dict,
-                 liouville_tol: float, switch_size: float):
+                 liouville_tol: float, switch_size: float, matrix_free: bool = False):
         self.system = system
+        self.matrix_free = matrix_free
         self.n = system.dim
         self.parameter = parameter
         self.settings = settings
@@ -189,7 +196,8 @@ class _Tracer:
         """The shooting of period-``period`` orbits on ``segments`` segments."""
         key = (period, segments)
         if key not in self.shootings:
-            self.shootings[key] = Shooting(self.system, period=period, segments=segments, parameter=self.parameter,
+            kind = MatrixFreeShooting if self.matrix_free else Shooting
+            self.shootings[key] = kind(self.system, period=period, segments=segments, parameter=self.parameter,
                                            **self.integration)
         return self.shootings[key]
 
@@ -197,11 +205,12 @@ class _Tracer:
         """Solve the orbit near ``u0`` at ``start`` (from a steady state of the time integration
         if Newton's method fails from ``u0``) and continue its branch."""
         sh = self.shooting(period, segments)
-        sol = solve_orbit(sh, u0, start, scale=self.state_scale)
+        solve = solve_orbit_mf if self.matrix_free else solve_orbit
+        sol = solve(sh, u0, start, scale=self.state_scale)
         if not sol.converged:
             x = integrate_to_steady(sh, np.asarray(u0, dtype=float)[: self.n], start, periods=100)
             if x is not None:
-                sol = solve_orbit(sh, x, start, scale=self.state_scale)
+                sol = solve(sh, x, start, scale=self.state_scale)
         if not sol.converged:
             failure = sol.flow_status if sol.flow_status != FlowStatus.OK else None
             self.diagram.branches.append(OrbitBranch(index=0, period=period, parameter=self.parameter,
@@ -223,9 +232,13 @@ class _Tracer:
         br.segments = sh.segments
         self.diagram.branches.append(br)
         mirror = self.system.mirror
-        br.planar = mirror is not None and mirror.is_planar(u_start[: self.n], self.state_scale)
+        # the matrix-free shooting forms no monodromy to split by planes
+        br.planar = not self.matrix_free and mirror is not None and mirror.is_planar(u_start[: self.n],
+                                                                                     self.state_scale)
         if br.planar:
             problem = PlanarOrbitProblem(sh, self.state_scale, self.lam_scale, mirror)
+        elif self.matrix_free:
+            problem, mirror = MatrixFreeOrbitProblem(sh, self.state_scale, self.lam_scale), None
         else:
             problem, mirror = OrbitProblem(sh, self.state_scale, self.lam_scale), None
         watch = None
@@ -273,6 +286,8 @@ class _Tracer:
         ev = self.shooting(br.period, m1).evaluate(p.u, p.parameter)
         if ev.status != ok.OK:
             return None
+        if self.matrix_free:
+            orbit_leading(self.shootings[(br.period, m1)], ev, self.state_scale)
         dirn, eps = doubling_direction(ev, m1, self.state_scale, self.switch_size)
         sh2 = self.shooting(2 * br.period, 2 * m1)
         base = np.concatenate([p.u, p.u])
@@ -382,6 +397,8 @@ class _Tracer:
             "segments": sum(sh.calls for sh in self.shootings.values()),
             "steps": sum(sh.steps_taken for sh in self.shootings.values()),
             "points": sum(len(b.points) for b in self.diagram.branches),
+            "newton_steps": sum(getattr(sh, "newton_steps", 0) for sh in self.shootings.values()),
+            "krylov_iterations": sum(getattr(sh, "krylov_iterations", 0) for sh in self.shootings.values()),
             "seconds": seconds,
         }
 
@@ -405,6 +422,7 @@ def trace_branches(
     step_rate: float | None = None,
     liouville_tol: float = 1e-3,
     switch_size: float = 0.02,
+    matrix_free: bool | None = None,
 ) -> ResponseDiagram:
     """Continue the period-``period`` branch through ``u0`` from ``start`` to ``stop`` and the
     branches born at its period doublings (module docstring).
@@ -445,6 +463,11 @@ def trace_branches(
     switch_size : float
         Scaled size of the perturbation that starts a period-doubled branch (reduced where the
         guess would be out of reach of Newton's method, :mod:`cablesim.orbits.switching`).
+    matrix_free : bool, optional
+        Shoot matrix-free (:mod:`cablesim.orbits.matrixfree`: Newton-GMRES, the leading
+        multipliers only, their eigenpair residuals as the check instead of Liouville's
+        formula); default: for systems in mechanical form above
+        :data:`~cablesim.orbits.mfproblem.MATRIX_FREE_DOF` states.
 
     Returns
     -------
@@ -463,8 +486,9 @@ def trace_branches(
         state_scale = np.full(n, max(amp, 1e-12))
     state_scale = np.asarray(state_scale, dtype=float)
     integration = dict(scheme=scheme, steps_per_period=steps_per_period, step_rate=step_rate)
+    mf = use_matrix_free(n, matrix_free) and (matrix_free or system.mechanical is not None)
     tracer = _Tracer(system, parameter, st, np.sign(stop - start) or 1.0, state_scale, lam_scale, callback,
-                     integration, liouville_tol, switch_size)
+                     integration, liouville_tol, switch_size, mf)
     tracer.first_branch(u0, start, period, segments)
     tracer.collect_bifurcations(switch_branches, max_period)
     tracer.diagram.stats = tracer.stats(time.perf_counter() - t_start)
@@ -513,6 +537,7 @@ def continue_branches(
     steps_per_period: int | None = None,
     step_rate: float | None = None,
     liouville_tol: float = 1e-3,
+    matrix_free: bool | None = None,
 ) -> ResponseDiagram:
     """Periodic responses of the cable over a range of forcing frequency or load factor.
 
@@ -536,7 +561,7 @@ def continue_branches(
     initial_state : ndarray, optional
         Guess of ``(z, y')`` (or ``(z, y', y'')``) at forcing phase 0 at ``start`` (default:
         the linear response).
-    segments, max_period, settings, scheme, steps_per_period, step_rate, liouville_tol
+    segments, max_period, settings, scheme, steps_per_period, step_rate, liouville_tol, matrix_free
         See :func:`trace_branches`.
 
     Returns
@@ -561,5 +586,5 @@ def continue_branches(
         system, u0, parameter, start, stop, period=period, segments=segments, state_scale=scale,
         lam_scale=lam_scale, switch_branches=switch_branches, max_period=max_period, callback=callback,
         settings=settings, scheme=scheme, steps_per_period=steps_per_period, step_rate=step_rate,
-        liouville_tol=liouville_tol,
+        liouville_tol=liouville_tol, matrix_free=matrix_free,
     )

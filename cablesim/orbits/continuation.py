@@ -22,6 +22,12 @@ Optional: ``test_names`` (tuple of str) and ``test_functions(ev) -> ndarray``
     point). Tests named in the optional ``fold_tests`` duplicate the turning point (for example
     ``det(J_u)``): they are ignored in an interval where the tangent's parameter component also
     changes sign.
+Optional: ``bordered(ev, u_scale, lam_scale, r_scale)``
+    For problems that form no Jacobian (``ev.J_u`` None): an object whose ``solve(normal, rhs)``
+    returns the solution ``dv`` of the scaled bordered system ``[J_u J_lam; normal] dv = rhs``
+    (or None) and whose ``tangent(ref)`` returns the unit null vector of ``[J_u J_lam]`` with a
+    positive projection on ``ref`` (or None), for instance by a Krylov method on the Jacobian's
+    action on vectors.
 Optional: ``step_ratio(ev_a, ev_b) -> float``
     A problem-specific measure of the change between consecutive points (for instance of the
     quantities the test functions depend on); a step with a ratio above 1 is rejected and
@@ -200,17 +206,35 @@ class _Scaled:
             return None
         return ev
 
-    def blocks(self, ev):
-        """Scaled residual and Jacobian ``[J_u J_lam]``."""
-        R = ev.r / self.rs
+    def linear(self, ev):
+        """The scaled bordered systems at ``ev``: the dense ``[J_u J_lam]``, or the problem's own
+        (``bordered``) when it forms no Jacobian."""
+        if getattr(ev, "J_u", None) is None and hasattr(self.p, "bordered"):
+            return self.p.bordered(ev, self.us, self.ls, self.rs)
         Ju = ev.J_u * (self.us[None, :] / self.rs[:, None])
         Jl = ev.J_lam * (self.ls / self.rs)
-        return R, np.hstack([Ju, Jl[:, None]])
+        return _DenseBordered(np.hstack([Ju, Jl[:, None]]))
 
     def tests(self, ev):
         if not self.names:
             return np.zeros(0)
         return np.asarray(self.p.test_functions(ev), dtype=float)
+
+
+class _DenseBordered:
+    """The bordered systems of a formed ``[J_u J_lam]`` (scaled), solved by LU."""
+
+    def __init__(self, Jfull: np.ndarray):
+        self.J = Jfull
+
+    def solve(self, normal: np.ndarray, rhs: np.ndarray) -> np.ndarray | None:
+        try:
+            return np.linalg.solve(np.vstack([self.J, normal[None, :]]), rhs)
+        except np.linalg.LinAlgError:
+            return None
+
+    def tangent(self, ref: np.ndarray) -> np.ndarray | None:
+        return _tangent(self.J, ref)
 
 
 def _tangent(Jfull: np.ndarray, ref: np.ndarray) -> np.ndarray | None:
@@ -231,19 +255,17 @@ def _tangent(Jfull: np.ndarray, ref: np.ndarray) -> np.ndarray | None:
 
 def _correct(sp: _Scaled, v_pred, normal, offset, st: Settings, radius: float):
     """Newton on ``r = 0`` and ``normal . v = offset``; returns ``(v, ev, iterations, residual,
-    [J_u J_lam])`` in scaled variables, or None."""
+    bordered systems at ev)`` in scaled variables, or None."""
     v = v_pred.copy()
     prev = np.inf
     for it in range(1, st.max_newton + 1):
         ev = sp.evaluate(v)
         if ev is None:
             return None
-        R, Jf = sp.blocks(ev)
-        A = np.vstack([Jf, normal[None, :]])
-        rhs = -np.concatenate([R, [normal @ v - offset]])
-        try:
-            dv = np.linalg.solve(A, rhs)
-        except np.linalg.LinAlgError:
+        R = ev.r / sp.rs
+        Jf = sp.linear(ev)
+        dv = Jf.solve(normal, -np.concatenate([R, [normal @ v - offset]]))
+        if dv is None:
             return None
         step = float(np.abs(dv).max())
         res = float(np.abs(R).max())
@@ -261,7 +283,7 @@ def _correct(sp: _Scaled, v_pred, normal, offset, st: Settings, radius: float):
 
 
 def _point(sp, v, ev, its, res, Jf, ref, special=None, arclength=0.0):
-    t = _tangent(Jf, ref)
+    t = Jf.tangent(ref)
     if t is None:
         return None
     u, lam = sp.unscale(v)

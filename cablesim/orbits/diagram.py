@@ -223,7 +223,13 @@ class OrbitBranch:
 
     @property
     def multipliers(self) -> np.ndarray:
-        return np.array([p.multipliers for p in self.points])
+        """(points, k): a matrix-free branch keeps the leading multipliers only, as many as each
+        point needs; the rows are padded with NaN to the longest."""
+        k = max((p.multipliers.size for p in self.points), default=0)
+        out = np.full((len(self.points), k), np.nan, dtype=complex)
+        for i, p in enumerate(self.points):
+            out[i, : p.multipliers.size] = p.multipliers
+        return out
 
 
 @dataclass

@@ -294,6 +294,12 @@ def _advance_state(x, K, b, h, xprev, dprev):
     return True
 
 
+#: The step's sampling and state update, shared with the kernels that carry a few directions
+#: instead of the whole Jacobian (:mod:`cablesim.orbits.directional`, :mod:`cablesim.orbits.radau`).
+sample_step = _sample_step
+advance_state = _advance_state
+
+
 @njit
 def _advance_jacobian(Yf, KYf, b, h):
     """``Y += h sum_st b[st] KY[st]`` on the flat views."""

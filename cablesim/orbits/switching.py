@@ -88,7 +88,12 @@ def doubling_direction(ev: Evaluation, segments: int, state_scale: np.ndarray,
     eps : float
         Step along ``direction`` of scaled size ``switch_size``.
     """
-    mu, V = np.linalg.eig(ev.monodromy)
+    if ev.monodromy is None:  # matrix-free: the leading eigenvectors, in coordinates x / state_scale
+        if segments != 1:
+            raise ValueError("a matrix-free period doubling is switched at from single shooting only")
+        mu, V = ev.leading.multipliers, ev.leading.vectors * np.asarray(state_scale, dtype=float)[:, None]
+    else:
+        mu, V = np.linalg.eig(ev.monodromy)
     j = int(np.argmin(np.abs(mu + 1.0)))
     W = [np.real(V[:, j])]
     for k in range(segments - 1):

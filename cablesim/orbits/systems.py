@@ -12,11 +12,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from dataclasses import field as dc_field
+from typing import NamedTuple
 
 import numpy as np
 
+from ..mechanics.banded import band_rows
 from ..modal import fastest_rate
 from . import cablefield
+from . import mechanical as mech
 from .symmetry import cable_mirror
 from .kernels import copy_work
 
@@ -60,6 +63,10 @@ class OdeSystem:
         better than this).
     names : tuple of str
         Component names, for messages.
+    mechanical : Mechanical or None
+        The same system in mechanical form, for the matrix-free shooting
+        (:mod:`cablesim.orbits.matrixfree`); None if it has none (any vector field can still be
+        shot matrix-free, its Jacobian formed at every stage).
     """
 
     field: object
@@ -74,6 +81,7 @@ class OdeSystem:
     noise: object = 0.0
     names: tuple = ()
     model: object = ()
+    mechanical: object = None
     mirror: object = None
 
     def __post_init__(self):
@@ -87,6 +95,58 @@ class OdeSystem:
         prm = self.prm.copy()
         prm[index] = value
         return replace(self, prm=prm)
+
+
+class Mechanical(NamedTuple):
+    """A second-order system ``M z'' + C z' + P(z) = F`` on ``x = (z, v)`` through the compiled
+    functions of :mod:`cablesim.orbits.mechanical` (its contract), for the matrix-free kernels.
+
+    Attributes
+    ----------
+    balance, stiffness_times, stiffness_band, load_derivative : numba functions
+        The contract's four functions.
+    model : object
+        Their constants: ``mass`` (diagonal of M) and ``C`` (banded) are read by the kernels.
+    geo_shape : tuple of int
+        Shape of the stiffness state ``geo`` that ``balance`` fills.
+    stiffness_rows : int
+        Rows of ``K``'s band storage, ``2 h + 1``.
+    eigenvalues : ndarray complex
+        Eigenvalues of the system linearised at ``x = 0``, 1/s (step rules of the implicit
+        scheme).
+    """
+
+    balance: object
+    stiffness_times: object
+    stiffness_band: object
+    load_derivative: object
+    model: object
+    geo_shape: tuple
+    stiffness_rows: int
+    eigenvalues: np.ndarray
+
+
+def rayleigh_eigenvalues(w: np.ndarray, a0: float, a1: float) -> np.ndarray:
+    """Eigenvalues of ``q'' + (a0 + a1 w^2) q' + w^2 q = 0`` for every modal frequency ``w``
+    (two per mode: a complex pair, or two real roots when overdamped), 1/s."""
+    w = np.asarray(w, dtype=float)
+    b = a0 + a1 * w**2
+    disc = (0.25 * b**2 - w**2).astype(complex)
+    root = np.sqrt(disc)
+    return np.concatenate([-0.5 * b + root, -0.5 * b - root])
+
+
+def cable_mechanical(eom, model) -> Mechanical:
+    """The cable's :class:`Mechanical` form (exact analysis), with the constants of ``model``
+    (its corrected ``F0``) and the banded damping."""
+    if not eom.exact:
+        raise ValueError("the mechanical form exists for the exact analysis only")
+    c = eom.cable
+    mmodel = model._replace(C=np.ascontiguousarray(eom.C_band, dtype=float),
+                            Cr=np.zeros((eom.n_dof, 0)))
+    return Mechanical(mech.cable_balance, mech.cable_stiffness_times, mech.cable_stiffness_band,
+                      mech.cable_load_derivative, mmodel, mech.geometry_shape(c.n_nodes, c.dim), band_rows(c.dim),
+                      rayleigh_eigenvalues(eom.frequencies, eom.a0, eom.a1))
 
 
 def cable_system(eom, gamma: float = 1.0) -> OdeSystem:
@@ -143,6 +203,8 @@ def cable_system(eom, gamma: float = 1.0) -> OdeSystem:
     code = fld(0.0, float(eom.omega), np.zeros(nd2), at_rest, prm, copy_work(work), dx, J, dp, -1)
     if code == 0:
         model = model._replace(F0=model.F0 - eom.mass * dx[nd:])
+    # the mechanical form holds the supports still (their motion enters the field only)
+    mechanical = cable_mechanical(eom, model) if eom.exact and not eom.moving_supports else None
     return OdeSystem(
         field=fld,
         dim=nd2,
@@ -156,5 +218,6 @@ def cable_system(eom, gamma: float = 1.0) -> OdeSystem:
         divergence=-float(np.trace(eom.C / eom.mass[:, None])),
         noise=noise,
         names=names,
+        mechanical=mechanical,
         mirror=cable_mirror(eom),
     )

@@ -1,0 +1,111 @@
+"""Periodic orbits of heavy cables: the dense against the matrix-free shooting.
+
+The cable: the heavy span of ``configs/heavy-span.yaml`` (300 m span, ACSR conductor, 0.5 %
+Rayleigh damping in modes 1 and 2, the marker ball at midspan) with ``n`` interior nodes, the
+harmonic load of 200 N at a fifth of the span; exact analysis.
+
+Two measurements, in one process, numba's compilation excluded by a warm-up:
+
+- ``--crossover``: for small ``n``, the CPU time of one orbit by Newton's method from the linear
+  response at 1.5 rad/s with its Floquet multipliers, dense (:class:`Shooting`, the whole
+  monodromy) and matrix-free (:class:`MatrixFreeShooting`, same rk8 scheme, Newton-GMRES and
+  the leading multipliers), medians of ``--repeats`` runs alternating the two; this sets
+  :data:`cablesim.orbits.mfproblem.MATRIX_FREE_DOF`;
+- the continuation (default): the frequency response of the period-1 branch from ``--start``
+  to ``--stop`` rad/s (the first two linear resonances are 2.35 and 2.93 rad/s at 20 nodes) by
+  the matrix-free shooting (``--scheme``, default ``auto``: Radau IIA for these stiff cables),
+  for each ``--n``: CPU and wall time, points, orbits evaluated, Newton steps and Krylov
+  iterations per Newton step.
+
+Usage::
+
+    .venv/bin/python benchmarks/bench_heavy_orbits.py                 # n = 20, 50
+    .venv/bin/python benchmarks/bench_heavy_orbits.py --crossover
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+from pathlib import Path
+
+from cablesim.analyses.setup import build_equations
+from cablesim.analyses.static import run_static
+from cablesim.case import parse_case
+from cablesim.orbits import Shooting, cable_system, continue_branches, linear_response_state, solve_orbit
+from cablesim.orbits.branches import cable_scales
+from cablesim.orbits.matrixfree import MatrixFreeShooting, orbit_leading, solve_orbit_mf
+
+CASE = Path(__file__).resolve().parents[1] / "configs" / "heavy-span.yaml"
+
+
+def equations(n: int, omega: float):
+    text = CASE.read_text().replace("nodes: 100", f"nodes: {n}")
+    text = text.replace("node: 50,", f"node: {max(1, n // 2)},").replace("node: 20,", f"node: {max(1, n // 5)},")
+    case = parse_case(text)
+    return build_equations(case, run_static(case), omega=omega)
+
+
+def one_orbit(eom, omega: float, dense: bool) -> float:
+    """CPU seconds of one orbit with its multipliers."""
+    sysm = cable_system(eom)
+    scale, _ = cable_scales(eom, "omega", 1.0, 3.0)
+    u0 = linear_response_state(eom, omega)
+    t = time.process_time()
+    if dense:
+        sol = solve_orbit(Shooting(sysm), u0, omega, scale=scale)
+    else:
+        sh = MatrixFreeShooting(sysm, scheme="rk8")
+        sol = solve_orbit_mf(sh, u0, omega, scale=scale)
+        orbit_leading(sh, sol.evaluation, scale)
+    if not sol.converged:
+        raise RuntimeError(f"no orbit at {omega} rad/s ({'dense' if dense else 'matrix-free'})")
+    return time.process_time() - t
+
+
+def crossover(nodes: list, repeats: int) -> None:
+    print("nodes  states  dense_cpu_s  matrixfree_cpu_s  ratio")
+    for n in nodes:
+        eom = equations(n, 1.5)
+        one_orbit(eom, 1.5, True), one_orbit(eom, 1.5, False)  # warm-up
+        d, m = [], []
+        for _ in range(repeats):
+            d.append(one_orbit(eom, 1.5, True))
+            m.append(one_orbit(eom, 1.5, False))
+        dm, mm = statistics.median(d), statistics.median(m)
+        print(f"{n:5d}  {4 * n:6d}  {dm:11.3f}  {mm:16.3f}  {dm / mm:5.2f}")
+
+
+def response(n: int, start: float, stop: float, scheme: str) -> None:
+    eom = equations(n, start)
+    t, w = time.process_time(), time.perf_counter()
+    d = continue_branches(eom, "omega", start, stop, switch_branches=False, scheme=scheme, matrix_free=True)
+    cpu, wall = time.process_time() - t, time.perf_counter() - w
+    s = d.stats
+    per = s["krylov_iterations"] / max(s["newton_steps"], 1)
+    ends = ",".join(b.end.name for b in d.branches)
+    print(f"{n:5d}  {cpu:8.1f}  {wall:8.1f}  {s['points']:6d}  {s['evaluations']:6d}  {s['newton_steps']:6d}  "
+          f"{per:6.1f}  {ends}")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--n", type=int, action="append", help="interior nodes (repeatable; default 20, 50)")
+    ap.add_argument("--start", type=float, default=1.5)
+    ap.add_argument("--stop", type=float, default=3.2)
+    ap.add_argument("--scheme", default="auto")
+    ap.add_argument("--crossover", action="store_true")
+    ap.add_argument("--repeats", type=int, default=3)
+    a = ap.parse_args()
+    if a.crossover:
+        crossover(a.n or [3, 5, 8, 12], a.repeats)
+        return
+    response(4, a.start, a.start + 0.05, a.scheme)  # warm-up: compilation
+    print("nodes  cpu_s  wall_s  points  orbits  newton  krylov/newton  end")
+    for n in a.n or [20, 50]:
+        response(n, a.start, a.stop, a.scheme)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,302 @@
+"""The leading Floquet multipliers from the monodromy's action on vectors, and tests that fit them.
+
+A damped cable's orbit has as many multipliers as state variables, but only a few can leave
+the unit circle: the damping pushes the others far inside (a 50-node heavy span at 2.3 rad/s
+has 200, of which about 40 exceed 0.5 in modulus and the axial ones are below 1e-30).
+:func:`leading_multipliers` computes those of modulus above a *bound* (default
+:data:`DEFAULT_BOUND`) from the action ``v -> M v`` alone, by block Krylov iteration with
+Rayleigh-Ritz extraction (a block Davidson method without preconditioner): the basis is grown by
+the residuals ``M y - mu y`` of the Ritz pairs not yet converged, so that a start near the
+wanted invariant subspace (the previous orbit's, along a branch) converges in a few products per
+multiplier. The number kept is adaptive: enough that one Ritz value *below* the bound is
+converged too, and the largest such is reported as the largest discarded modulus
+(:attr:`Leading.discarded`). Each kept pair carries its residual
+``|M y - mu y| / |y|`` (in the scaled coordinates of the state): the accuracy check that
+replaces Liouville's formula, which needs the whole spectrum.
+
+Bifurcation test functions that fit a truncated spectrum (:func:`truncated_tests`): every
+multiplier left out is inside the disc of radius ``bound < 1``, so
+
+- period doubling ``prod(1 + mu)`` and fold ``prod(1 - mu)`` over the kept multipliers change
+  sign exactly where the full products do (each left-out factor is positive);
+- Neimark-Sacker ``prod(1 - mu_i mu_j)`` over the kept pairs that are not both real: a pair on
+  the unit circle makes it vanish, a multiplier entering or leaving the kept set adds positive
+  factors only. (Pairs of real multipliers with ``mu_i mu_j = 1``, neutral saddles, which the
+  full product also flags, are not bifurcations and are left out.)
+
+:class:`Deflation` turns the kept invariant subspace ``M V = V S`` into the preconditioner of
+the shooting's Newton systems (:mod:`cablesim.orbits.matrixfree`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+
+from .stability import sort_multipliers
+
+#: Default bound: multipliers of larger modulus are computed. A multiplier must travel from
+#: the bound to the unit circle to cause a bifurcation; the continuation's step control keeps
+#: the kept moduli from moving more than half their distance to the circle per step, and one
+#: below the bound is tracked as the discarded modulus, so none can cross unseen.
+DEFAULT_BOUND = 0.5
+#: Residual (scaled) of a kept Ritz pair for it to count as converged, by default.
+DEFAULT_TOL = 1e-9
+#: Residual of the largest discarded Ritz value (it only has to be known to be below the bound).
+DISCARDED_TOL = 1e-3
+#: Up to this state dimension the whole monodromy is formed from ``n`` products (cheaper than
+#: iterating for so few).
+DENSE_LIMIT = 24
+
+
+@dataclass
+class Leading:
+    """The leading Floquet multipliers of an orbit.
+
+    Attributes
+    ----------
+    multipliers : ndarray complex (k,)
+        Those of modulus above ``bound``, by decreasing modulus (all ``n`` when ``complete``).
+    residuals : ndarray (k,)
+        ``|M y - mu y| / |y|`` of each, in scaled coordinates.
+    vectors : ndarray complex (n, k)
+        Their eigenvectors (unit, scaled coordinates).
+    basis, schur : ndarray (n, q), (q, q)
+        Orthonormal real basis of the kept invariant subspace and one Ritz value below it,
+        ``M basis = basis schur`` (real Schur form): warm start and preconditioner.
+    discarded : float
+        Largest modulus left out (0 when ``complete``).
+    bound : float
+    products : int
+        Actions of the monodromy spent.
+    complete : bool
+        The whole spectrum was computed.
+    """
+
+    multipliers: np.ndarray
+    residuals: np.ndarray
+    vectors: np.ndarray
+    basis: np.ndarray
+    schur: np.ndarray
+    discarded: float
+    bound: float
+    products: int
+    complete: bool
+
+    @property
+    def residual(self) -> float:
+        """Largest residual of a kept pair."""
+        return float(self.residuals.max()) if self.residuals.size else 0.0
+
+
+def _orth(X: np.ndarray, B: np.ndarray | None = None, drop: float = 1e-10) -> np.ndarray:
+    """Orthonormal basis of the columns of ``X`` orthogonal to the orthonormal ``B`` (two passes
+    of classical Gram-Schmidt), dropping directions below ``drop`` of their size."""
+    X = np.array(X, dtype=float, copy=True)
+    if X.size == 0:
+        return X.reshape(X.shape[0], 0)
+    size = np.linalg.norm(X, axis=0)
+    for _ in range(2):
+        if B is not None and B.shape[1]:
+            X -= B @ (B.T @ X)
+    Q, R = np.linalg.qr(X)
+    keep = np.abs(np.diag(R)) > drop * max(float(size.max()), 1e-300)
+    Q = Q[:, keep]
+    if B is not None and B.shape[1] and Q.shape[1]:
+        Q -= B @ (B.T @ Q)
+        Q, _ = np.linalg.qr(Q)
+    return Q
+
+
+def _dense(apply, n: int, bound: float) -> Leading:
+    M = apply(np.eye(n))
+    mu, Y = np.linalg.eig(M)
+    order = np.lexsort((-mu.imag, -np.abs(mu)))
+    mu, Y = mu[order], Y[:, order]
+    res = np.linalg.norm(M @ Y - Y * mu, axis=0)
+    T, Z = sla.schur(M, output="real")
+    return Leading(mu, res, Y, Z, T, 0.0, bound, n, True)
+
+
+def _ritz(B, MB):
+    """Ritz values (by decreasing modulus), vectors and residual norms of ``span(B)``."""
+    H = B.T @ MB
+    theta, Y = np.linalg.eig(H)
+    order = np.lexsort((-theta.imag, -np.abs(theta)))
+    theta, Y = theta[order], Y[:, order]
+    X = B @ Y
+    R = MB @ Y - X * theta
+    return H, theta, X, R, np.linalg.norm(R, axis=0) / np.linalg.norm(X, axis=0)
+
+
+def leading_multipliers(apply, n: int, bound: float = DEFAULT_BOUND, tol: float = DEFAULT_TOL,
+                        start: np.ndarray | None = None, block: int = 8, max_basis: int = 160,
+                        max_products: int | None = None, seed: int = 0) -> Leading:
+    """Floquet multipliers above ``bound`` in modulus (module docstring).
+
+    Parameters
+    ----------
+    apply : callable
+        ``apply(X) -> M X`` for a block ``X`` (n, b) in scaled coordinates.
+    n : int
+        State dimension.
+    bound : float
+        Modulus above which multipliers are kept (below 1).
+    tol : float
+        Largest residual of a kept pair.
+    start : ndarray (n, q), optional
+        Start basis (for instance the previous orbit's :attr:`Leading.basis`), completed with
+        random vectors up to ``block`` columns.
+    block : int
+        Least size of the first basis.
+    max_basis : int
+        Basis size at which the search restarts from the wanted Schur vectors.
+    max_products : int, optional
+        Most products (default ``20 n``, at least 200); on reaching it the result is returned as
+        it is (residuals tell).
+    seed : int
+        Seed of the random start vectors (results are reproducible).
+    """
+    if not 0.0 < bound < 1.0:
+        raise ValueError("bound must be between 0 and 1")
+    if n <= DENSE_LIMIT:
+        return _dense(apply, n, bound)
+    rng = np.random.default_rng(seed)
+    max_products = max(200, 20 * n) if max_products is None else int(max_products)
+    B = _orth(start) if start is not None and np.size(start) else np.zeros((n, 0))
+    if B.shape[1] < block:
+        B = np.hstack([B, _orth(rng.standard_normal((n, block - B.shape[1])), B)])
+    MB = apply(B)
+    products = B.shape[1]
+    while True:
+        H, theta, X, R, res = _ritz(B, MB)
+        m = theta.size
+        nk = int(np.sum(np.abs(theta) > bound))
+        ok_kept = bool(np.all(res[:nk] <= tol))
+        below = nk < m and res[nk] <= DISCARDED_TOL and abs(theta[nk]) + res[nk] < bound
+        if (ok_kept and below) or products >= max_products or m >= n:
+            break
+        want = [j for j in range(min(nk + 1, m)) if res[j] > (tol if j < nk else DISCARDED_TOL)]
+        if nk + 1 >= m:  # the space holds no Ritz value below the bound yet: widen it
+            want = list(range(m))
+        cols = []
+        for j in want:
+            if j > 0 and np.conj(theta[j]) == theta[j - 1] and theta[j].imag != 0.0:
+                continue  # the conjugate of the previous pair spans the same real space
+            cols.append(R[:, j].real)
+            if theta[j].imag != 0.0:
+                cols.append(R[:, j].imag)
+        Xn = np.array(cols).T if cols else np.zeros((n, 0))
+        if m + Xn.shape[1] > max_basis:
+            B, MB = _restart(B, MB, H, nk)
+        Xn = _orth(Xn, B)
+        if Xn.shape[1] == 0:
+            Xn = _orth(rng.standard_normal((n, block)), B)
+        Xn = Xn[:, : max(0, min(Xn.shape[1], n - B.shape[1], max_products - products))]
+        if Xn.shape[1] == 0:
+            break
+        MX = apply(Xn)
+        products += Xn.shape[1]
+        B, MB = np.hstack([B, Xn]), np.hstack([MB, MX])
+    return _result(B, MB, H, theta, X, res, nk, bound, products, complete=B.shape[1] >= n)
+
+
+def _leading_schur(H: np.ndarray, cut: float):
+    """``(Z, T)``: an orthonormal basis ``Z`` of the invariant subspace of ``H`` for its
+    eigenvalues of modulus above ``cut``, and ``T = Z^T H Z``. The ordered real Schur form, or,
+    where LAPACK's reordering moves an eigenvalue across the cut (moduli that close to it), the
+    real span of those eigenvectors."""
+    try:
+        T, Z, sdim = sla.schur(H, output="real", sort=lambda x, y: np.hypot(x, y) > cut)
+        sdim = max(int(sdim), 1)
+        return Z[:, :sdim], T[:sdim, :sdim]
+    except np.linalg.LinAlgError:
+        theta, Y = np.linalg.eig(H)
+        keep = np.abs(theta) > cut
+        if not np.any(keep):
+            keep[int(np.argmax(np.abs(theta)))] = True
+        Z = _orth(np.hstack([Y[:, keep].real, Y[:, keep].imag]))
+        return Z, Z.T @ H @ Z
+
+
+def _restart(B, MB, H, nk):
+    """Keep the real Schur vectors of the wanted Ritz values and a few below them."""
+    m = H.shape[0]
+    keep = min(m, nk + max(4, nk // 4))
+    mods = np.sort(np.abs(np.linalg.eigvals(H)))[::-1]
+    cut = 0.5 * (mods[keep - 1] + mods[keep]) if keep < m else -1.0
+    Z, _ = _leading_schur(H, cut)
+    return B @ Z, MB @ Z
+
+
+def _result(B, MB, H, theta, X, res, nk, bound, products, complete) -> Leading:
+    m = theta.size
+    q = min(m, nk + 1)
+    if complete:
+        q = m
+    cut = 0.5 * (abs(theta[q - 1]) + abs(theta[q])) if q < m else -1.0
+    Z, schur = _leading_schur(H, cut)
+    basis = B @ Z
+    k = m if complete else nk
+    vec = X[:, :k] / np.linalg.norm(X[:, :k], axis=0)
+    discarded = 0.0 if complete or nk >= m else float(abs(theta[nk]))
+    return Leading(theta[:k].copy(), res[:k].copy(), vec, basis, schur, discarded, bound, products, complete)
+
+
+# ----------------------------------------------------------------------------------------------
+# Tests and step control on a truncated spectrum
+# ----------------------------------------------------------------------------------------------
+def truncated_tests(mu: np.ndarray) -> np.ndarray:
+    """``[prod(1 + mu), prod'(1 - mu_i mu_j), prod(1 - mu)]`` over the kept multipliers
+    (``prod'``: pairs not both real), in the order of :data:`cablesim.orbits.stability.TEST_NAMES`
+    (module docstring)."""
+    mu = np.asarray(mu, dtype=complex)
+    pd = np.prod(1.0 + mu).real
+    i, j = np.triu_indices(mu.size, k=1)
+    real = np.abs(mu.imag) <= 1e-12 * np.maximum(np.abs(mu), 1e-300)
+    mixed = ~(real[i] & real[j])
+    ns = np.prod(1.0 - mu[i[mixed]] * mu[j[mixed]]).real
+    bp = np.prod(1.0 - mu).real
+    return np.array([pd, ns, bp])
+
+
+def truncated_step_ratio(mu_a: np.ndarray, mu_b: np.ndarray, floor: float = 0.005, near: float = 0.3) -> float:
+    """:func:`cablesim.orbits.stability.step_ratio` for kept sets that may differ in size: the
+    sorted moduli are compared over the shorter set."""
+    mu_a = np.asarray(mu_a, dtype=complex)
+    mu_b = np.asarray(mu_b, dtype=complex)
+    k = min(mu_a.size, mu_b.size)
+    if k == 0:
+        return 0.0
+    ma = np.sort(np.abs(mu_a))[::-1][:k]
+    mb = np.sort(np.abs(mu_b))[::-1][:k]
+    crit = float(np.abs(ma - 1.0).min())
+    ratio = float(np.abs(mb - ma).max()) / max(0.5 * crit, floor)
+    dist = np.minimum(np.abs(mu_a + 1.0), np.abs(mu_a - 1.0))
+    for j in np.flatnonzero(dist < near):
+        moved = float(np.abs(mu_b - mu_a[j]).min())
+        ratio = max(ratio, moved / max(0.5 * float(dist[j]), floor))
+    return ratio
+
+
+class Deflation:
+    """Preconditioner of ``M - I`` from an invariant subspace ``M V = V S`` (scaled coordinates):
+    ``P = V S V^T - I`` (the monodromy taken as zero outside the subspace, where its multipliers
+    are small), ``P^-1 x = V ((S - I)^-1 + I) V^T x - x``. Exact on the subspace; on its
+    complement the preconditioned operator is ``I - M``, whose spectrum lies within the discarded
+    modulus of 1."""
+
+    def __init__(self, basis: np.ndarray, schur: np.ndarray):
+        self.V = np.asarray(basis, dtype=float)
+        q = self.V.shape[1]
+        self.W = np.linalg.solve(np.asarray(schur, dtype=float) - np.eye(q), np.eye(q)) + np.eye(q)
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        return self.V @ (self.W @ (self.V.T @ x)) - x
+
+
+def leading_from(ev_leading: Leading | None) -> np.ndarray:
+    """Multipliers of a :class:`Leading` sorted as :func:`~cablesim.orbits.stability.sort_multipliers`."""
+    return sort_multipliers(ev_leading.multipliers) if ev_leading is not None else np.zeros(0, complex)

@@ -1,0 +1,95 @@
+"""The periodicity condition of a :class:`~cablesim.orbits.matrixfree.MatrixFreeShooting` as a
+continuation problem (:mod:`cablesim.orbits.continuation`), and the choice between the dense and
+the matrix-free shooting.
+
+The problem forms no Jacobian: its bordered systems are solved by GMRES on the shooting's
+Jacobian action (:class:`~cablesim.orbits.matrixfree.Bordered`), preconditioned by the leading
+invariant subspace of the monodromy at the latest point where the multipliers were computed
+(a nearby orbit along the branch). At every converged point the leading multipliers are computed
+(:func:`~cablesim.orbits.matrixfree.orbit_leading`, warm-started from the previous point's
+subspace) and the bifurcation tests and the step control work on them
+(:func:`~cablesim.orbits.floquet.truncated_tests`,
+:func:`~cablesim.orbits.floquet.truncated_step_ratio`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import kernels as ok
+from . import stability
+from .floquet import DEFAULT_BOUND, Deflation, Leading, leading_from, truncated_step_ratio, truncated_tests
+from .matrixfree import Bordered, MatrixFreeShooting, MFEvaluation, orbit_leading
+
+__all__ = ["MATRIX_FREE_DOF", "MatrixFreeOrbitProblem", "use_matrix_free"]
+
+#: State dimension above which the continuation shoots matrix-free by default. Measured on the
+#: heavy span (``benchmarks/bench_heavy_orbits.py --crossover``: one orbit by Newton's method
+#: with its multipliers, rk8 both ways, medians of 3): the matrix-free shooting costs 2.3, 1.4,
+#: 1.3 times the dense at 12, 20, 32 states and 0.75 times at 48.
+MATRIX_FREE_DOF = 40
+
+
+def use_matrix_free(dim: int, matrix_free: bool | None) -> bool:
+    """Whether to shoot matrix-free: as asked, else from :data:`MATRIX_FREE_DOF`."""
+    return bool(matrix_free) if matrix_free is not None else dim > MATRIX_FREE_DOF
+
+
+class MatrixFreeOrbitProblem:
+    """:class:`~cablesim.orbits.branches.OrbitProblem` of a matrix-free shooting (module
+    docstring).
+
+    Parameters
+    ----------
+    shooting : MatrixFreeShooting
+    state_scale : ndarray (n,)
+        Typical size of each state component (also the coordinates of the multipliers'
+        eigenvectors).
+    lam_scale : float
+    bound : float
+        Multipliers of larger modulus are computed (:mod:`cablesim.orbits.floquet`).
+    """
+
+    test_names = stability.TEST_NAMES
+    fold_tests = stability.FOLD_TESTS
+
+    def __init__(self, shooting: MatrixFreeShooting, state_scale: np.ndarray, lam_scale: float,
+                 bound: float = DEFAULT_BOUND):
+        self.shooting = shooting
+        self.last_failure = None
+        self.state_scale = np.asarray(state_scale, dtype=float)
+        self.u_scale = np.tile(self.state_scale, shooting.segments)
+        self.lam_scale = float(lam_scale)
+        self.bound = float(bound)
+        #: The leading multipliers last computed (warm start and preconditioner).
+        self.latest: Leading | None = None
+
+    def evaluate(self, u, lam):
+        ev = self.shooting.evaluate(u, lam)
+        if ev.status != ok.OK:
+            self.last_failure = ev.status
+            return None
+        return ev
+
+    def leading(self, ev: MFEvaluation) -> Leading:
+        """The leading multipliers of ``ev`` (computed once, from the latest subspace)."""
+        if ev.leading is None:
+            start = self.latest.basis if self.latest is not None else None
+            self.latest = orbit_leading(self.shooting, ev, self.state_scale, bound=self.bound, start=start)
+        return ev.leading
+
+    def bordered(self, ev: MFEvaluation, us, ls, rs) -> Bordered:
+        lead = ev.leading if ev.leading is not None else self.latest
+        pre = None
+        if lead is not None and self.shooting.segments == 1:
+            pre = Deflation(lead.basis, lead.schur)
+        return Bordered(self.shooting, ev, us, ls, rs, precondition=pre)
+
+    def test_functions(self, ev: MFEvaluation) -> np.ndarray:
+        return truncated_tests(self.leading(ev).multipliers)
+
+    def confirm(self, name: str, ev: MFEvaluation) -> str | None:
+        return stability.confirm(name, leading_from(self.leading(ev)))
+
+    def step_ratio(self, ev_a: MFEvaluation, ev_b: MFEvaluation) -> float:
+        return truncated_step_ratio(self.leading(ev_a).multipliers, self.leading(ev_b).multipliers)

@@ -34,6 +34,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_accelerate.py
 	$(PY) benchmarks/bench_heavy.py
 	$(PY) benchmarks/bench_approximate.py
+	$(PY) benchmarks/bench_adaptive.py
 
 # numba's cache of the compiled kernels lives in cablesim/__pycache__/kernels-<hash of the compiled
 # sources> (cablesim/jit.py): an edited kernel starts a fresh cache by itself; `make clean` only

@@ -23,6 +23,7 @@ from .analyses.static import StaticResult, run_static
 from .analyses.sweep import SweepResult, estimate_sweep, run_sweep
 from .case import Case, case_from_dict
 from .case import load_case as _read_case_file
+from .case.files import check_step_flags, step_flag_overrides
 from .dynamics.integrators import Integrator
 from .dynamics.result import HistoryResult
 from .errors import CablesimError
@@ -39,7 +40,8 @@ from .plots.redraw import redraw
 from .plots.sweep import plot_sweep
 
 
-def load_case(source: str | Path | dict | None = None, overrides: list[str] | None = None) -> Case:
+def load_case(source: str | Path | dict | None = None, overrides: list[str] | None = None, *,
+              dt: float | None = None, rtol: float | None = None, integrator: str | None = None) -> Case:
     """A validated case: from a YAML file, a mapping, or (None) the paper's example.
 
     Parameters
@@ -49,15 +51,21 @@ def load_case(source: str | Path | dict | None = None, overrides: list[str] | No
         example (``cablesim example`` prints it).
     overrides : list of str, optional
         ``KEY=VALUE`` settings over the file, as ``--set`` on the command line.
+    dt, rtol : float, optional
+        A fixed time step, s, or the tolerance of error-controlled steps, set in the
+        ``integrator:`` section (clearing the other kind), as ``--dt`` and ``--rtol``.
+    integrator : str, optional
+        The scheme those apply to (``integrator.name``), as ``--integrator``.
 
     Raises
     ------
     CablesimError
         Naming the field at fault and what to do.
     """
-    if isinstance(source, dict):
-        return case_from_dict(source, overrides)
-    return _read_case_file(source, overrides)[0]
+    overrides = [*(overrides or ()), *step_flag_overrides(dt, rtol, integrator)]
+    case = case_from_dict(source, overrides) if isinstance(source, dict) else _read_case_file(source, overrides)[0]
+    check_step_flags(case, dt)
+    return case
 
 
 @dataclass(frozen=True)

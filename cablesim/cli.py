@@ -23,8 +23,8 @@ from typing import Optional
 import typer
 
 from .errors import CablesimError
-from .io.terminal import (ANALYSIS_OPT, CASE_ARG, FORCE_OPT, INTEGRATOR_OPT, MODES_OPT, SET_OPT, SLACK_OPTION,
-                           SNAPSHOTS_OPT, STAMP_OPT, Analysis, CommandGroup, IntegratorName, LazyBar, SlackPolicy, StatusLine,
+from .io.terminal import (ANALYSIS_OPT, CASE_ARG, DT_OPT, FORCE_OPT, INTEGRATOR_OPT, MODES_OPT, RTOL_OPT, SET_OPT,
+                           SLACK_OPTION, SNAPSHOTS_OPT, STAMP_OPT, Analysis, CommandGroup, IntegratorName, LazyBar, SlackPolicy, StatusLine,
                            compiling, say_error, say_warnings)
 from .version import __version__
 
@@ -300,6 +300,7 @@ def history(
     output_step: Optional[float] = typer.Option(None, "--output-step", help="Interval between saved instants, s (default: history.output_step, else 40 per period of w)."),
     analysis: Optional[Analysis] = ANALYSIS_OPT,
     integrator: Optional[IntegratorName] = INTEGRATOR_OPT,
+    dt: Optional[float] = DT_OPT, rtol: Optional[float] = RTOL_OPT,
     channels: Optional[str] = typer.Option(None, "--channels", help="DOF to plot, e.g. z2,z4 (default: history.channels, else all)."),
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file (default: runs/<name>/history-w<omega>.h5); the plots go beside it."),
     slack: Optional[SlackPolicy] = SLACK_OPTION,
@@ -316,7 +317,7 @@ def history(
     check_flag(OMEGA, omega, "--omega", "history.omega")
     check_flag(DURATION, duration, "--duration", "history.duration")
     check_flag(OUTPUT_STEP, output_step, "--output-step", "history.output_step")
-    case = api.load_case(case_file, _with_slack(overrides, slack))
+    case = api.load_case(case_file, _with_slack(overrides, slack), dt=dt, rtol=rtol, integrator=integrator and integrator.value)
     dur = duration if duration is not None else case.history.duration
     w = omega if omega is not None else case.history.omega
     if w is None:
@@ -353,6 +354,7 @@ def free_vibration(
     output_step: Optional[float] = typer.Option(None, "--output-step", help="Interval between saved instants, s (default: free_vibration.output_step, else 40 per period)."),
     analysis: Optional[Analysis] = ANALYSIS_OPT,
     integrator: Optional[IntegratorName] = INTEGRATOR_OPT,
+    dt: Optional[float] = DT_OPT, rtol: Optional[float] = RTOL_OPT,
     channels: Optional[str] = typer.Option(None, "--channels", help="DOF to plot, e.g. z2,z4 (default: free_vibration.channels, else all)."),
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file (default: runs/<name>/free-vibration-mode<K>-v<V>.h5); the plots go beside it."),
     slack: Optional[SlackPolicy] = SLACK_OPTION,
@@ -370,7 +372,7 @@ def free_vibration(
     check_flag(DAMPING_RATIO, damping_ratio, "--damping-ratio", "free_vibration.damping_ratio")
     check_flag(DURATION, duration, "--duration", "free_vibration.duration")
     check_flag(OUTPUT_STEP, output_step, "--output-step", "free_vibration.output_step")
-    case = api.load_case(case_file, _with_slack(overrides, slack))
+    case = api.load_case(case_file, _with_slack(overrides, slack), dt=dt, rtol=rtol, integrator=integrator and integrator.value)
     fv = case.free_vibration
     dur = duration if duration is not None else fv.duration
     k = mode if mode is not None else fv.mode
@@ -410,6 +412,7 @@ def sweep(
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file (default: runs/<name>/sweep.h5); the plot goes beside it."),
     analysis: Optional[Analysis] = ANALYSIS_OPT,
     integrator: Optional[IntegratorName] = INTEGRATOR_OPT,
+    dt: Optional[float] = DT_OPT, rtol: Optional[float] = RTOL_OPT,
     slack: Optional[SlackPolicy] = SLACK_OPTION,
     backend: Backend = typer.Option(Backend.loky, "--backend", help="Run points locally (loky) or on a Dask cluster."),
     scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Dask scheduler address, with --backend dask (e.g. tcp://host:8786)."),
@@ -429,7 +432,8 @@ def sweep(
             f"--scheduler {scheduler} is used only with --backend dask (the default backend, loky, runs "
             "the points on this machine): add --backend dask, or drop --scheduler."
         )
-    case = api.load_case(case_file, _with_slack([*(overrides or ()), *sweep_flag_overrides(omega, duration, channels)], slack))
+    case = api.load_case(case_file, _with_slack([*(overrides or ()), *sweep_flag_overrides(omega, duration, channels)], slack),
+                         dt=dt, rtol=rtol, integrator=integrator and integrator.value)
     out = output if output is not None else Path("runs") / case.name / "sweep.h5"
     _check_outputs(out, case_file, lambda o: [o.with_name(o.name + ".journal"), o.with_name(o.name + ".lock"),
                                               *([o.with_suffix(".png")] if plot else [])])

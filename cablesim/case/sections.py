@@ -17,6 +17,8 @@ from .numbers import (
     OMEGA,
     OUTPUT_STEP,
     PEAK_VELOCITY,
+    RTOL,
+    TIME_STEP,
     in_range,
     integer,
     plain_number,
@@ -307,9 +309,12 @@ class IntegratorSpec(StrictModel):
     """
 
     name: Literal[INTEGRATORS] | None = None
-    dt: real(1e-9, 1e3, "s") | None = Field(default=None, description="fixed step, s (rk4, newmark, generalized-alpha)")
-    rtol: real(1e-14, 0.5) | None = Field(default=None, description="relative tolerance (dopri5)")
-    atol: real(1e-16, 1e3, "m") | None = Field(default=None, description="absolute displacement tolerance, m (dopri5)")
+    dt: TIME_STEP | None = Field(default=None, description="fixed step, s (rk4; newmark and generalized-alpha "
+                                 "instead of error control)")
+    rtol: RTOL | None = Field(default=None, description="relative tolerance (dopri5; newmark and generalized-alpha: "
+                              "error-controlled steps)")
+    atol: real(1e-16, 1e3, "m") | None = Field(default=None, description="absolute displacement tolerance, m (dopri5, "
+                                               "newmark, generalized-alpha)")
     rho_inf: real(0.0, 1.0) | None = Field(default=None, description="spectral radius (generalized-alpha)")
 
     def settings(self) -> dict:
@@ -318,6 +323,10 @@ class IntegratorSpec(StrictModel):
 
     @model_validator(mode="after")
     def _fits(self):
+        if self.dt is not None and (self.rtol is not None or self.atol is not None) and self.name is not None \
+                and "dt" in INTEGRATOR_SETTINGS[self.name] and "rtol" in INTEGRATOR_SETTINGS[self.name]:
+            raise ValueError(f"integrator.dt (a fixed step) and integrator.rtol/atol (error-controlled steps) exclude "
+                             f"each other for {self.name}: give one of them")
         if self.name is not None:
             keys = INTEGRATOR_SETTINGS[self.name]
             bad = [k for k in self.settings() if k not in keys]

@@ -13,6 +13,7 @@ $(STAMP): pyproject.toml
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e '.[test]'
+	$(CLI) compile
 	@touch $(STAMP)
 
 install: $(STAMP)
@@ -35,6 +36,9 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_heavy.py
 	$(PY) benchmarks/bench_approximate.py
 	$(PY) benchmarks/bench_adaptive.py
+	$(PY) benchmarks/bench_tolerances.py
+	$(PY) benchmarks/bench_spatial.py
+	$(if $(AGAINST),$(PY) benchmarks/bench_revisions.py --against $(AGAINST))
 
 # numba's cache of the compiled kernels lives in cablesim/__pycache__/kernels-<hash of the compiled
 # sources> (cablesim/jit.py): an edited kernel starts a fresh cache by itself; `make clean` only

@@ -37,8 +37,8 @@ ROOT = Path(__file__).resolve().parents[1]
 SCENES = ["paper-example", "paper-example-both"] + [f"paper/{f}" for f in ("fig3a", "fig4", "fig5a", "fig6", "fig7a",
                                                                            "fig8a")]
 #: Scenes that are a case file with settings changed: (case file, overrides).
-VARIANTS = {"paper-example": ("paper-example", ["sweep.omega.num=551"]),
-            "paper-example-both": ("paper-example", ["sweep.omega.num=111", "sweep.direction=both"])}
+VARIANTS = {"paper-example": ("paper-example", ["sweep.omega.num=551", "sweep.refine=false"]),
+            "paper-example-both": ("paper-example", ["sweep.omega.num=111", "sweep.direction=both", "sweep.refine=false"])}
 
 
 def run(scene: str, accelerate: bool, tmp: Path, overrides: list[str]):
@@ -140,8 +140,8 @@ def main(argv=None):
         tmp = Path(tmp)
         for scene in scenes:
             # compile the scene's kernels (exact or approximate, its integrator) before timing
-            run(scene, True, tmp, ["sweep.omega.num=2", "sweep.duration=30", "sweep.window=10"])
-            extra = ["sweep.omega.num=56"] if args.quick else []
+            run(scene, True, tmp, ["sweep.omega.num=2", "sweep.duration=30", "sweep.window=10", "sweep.refine=false"])
+            extra = ["sweep.omega.num=56", "sweep.refine=false"] if args.quick else []
             plain, w_plain = run(scene, False, tmp, extra)
             fast, w_fast = run(scene, True, tmp, extra)
             c = compare(fast, plain)

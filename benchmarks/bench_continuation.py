@@ -38,7 +38,7 @@ def continuation_cost(repeats: int):
 
 
 def sweep_cost(points: int, tmp: Path):
-    case = api.load_case(CASE, overrides=[f"sweep.omega.num={points}"])
+    case = api.load_case(CASE, overrides=[f"sweep.omega.num={points}", "sweep.refine=false"])
     w0 = time.perf_counter()
     res = api.sweep(case, jobs=os.cpu_count() or 1, output=tmp / "sweep.h5").result
     wall = time.perf_counter() - w0

@@ -21,6 +21,7 @@ from cablesim.case import example_text, parse_case
 CASE = example_text().split("\nsweep:")[0] + """
 sweep:
   omega: {start: 0.5, stop: 6.0, num: %d}
+  refine: false
   duration: 3000.0
   window: 200.0
   channels: [z2, z4]

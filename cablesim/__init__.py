@@ -18,24 +18,28 @@ The package, from the bottom layer up (a module imports only from layers below i
 ``tests/test_architecture.py``):
 
 - ``names``, ``errors``, ``version``, ``channels`` -- the vocabulary; ``jit`` -- the decorator of
-  every compiled kernel, whose on-disk cache is keyed on a hash of the compiled sources;
+  every compiled kernel, whose on-disk cache is keyed on a hash of the compiled sources, and the
+  watch on what numba compiles; ``roots`` -- Brent's bracketed root (as scipy computes it);
 - ``cable`` -- the model's data: geometry, axial rigidity, masses, the degree-of-freedom order;
 - ``mechanics/`` -- the cable's physics written once for any number of components per node: the
   segment law, its assembly, the closure problem on the complementary energy, the approximate
   analysis' flexibility, the compiled model's named constants;
 - ``statics``, ``modal`` -- the three static equilibria, modes and Rayleigh damping;
 - ``dynamics/`` -- the equations of motion (``equations``) and their compiled vector field
-  (``field``), the integrators (``integrators/``), time histories (``simulate``, in chunks bounded in steps), steady states
-  (``steady``), spectra, run status (``status``), Ctrl-C and SIGTERM (``interrupts``); it never
+  (``field``), the integrators (``integrators/``), time histories (``simulate``, in chunks bounded
+  in steps), steady states (``steady``), spectra, run status (``status``), Ctrl-C and SIGTERM (``interrupts``); it never
   sees a case file;
 - ``orbits/`` -- periodic orbits by shooting, Floquet multipliers, continuation, bifurcations;
 - ``case`` -- YAML case files (strict YAML: ``strict_yaml``; numbers in stated ranges:
   ``numbers``) validated into a frozen :class:`~cablesim.case.Case`;
 - ``analyses/`` -- case in, result out: ``setup`` (equations, integrator and step rules, once),
-  ``static``, ``dynamic``, ``sweep``, ``continuation``, ``cost`` (estimates before a run); no
+  ``static``, ``dynamic``, ``sweep`` (its points: ``sweep_points``; its refinement: ``refine``;
+  its worker processes: ``pool``), ``continuation``, ``cost`` (estimates before a run); no
   drawing, no files;
 - ``io/`` -- HDF5 writers and readers (``hdf5``, the only h5py), sweep journal, text summaries,
-  output paths checked and locked (``paths``), the record of each run (``provenance``), progress;
+  output paths checked and locked (``paths``), default result names (``naming``), the record of
+  each run (``provenance``), progress and the compile notice (``terminal``), the steps the
+  time-history commands share (``finish``);
 - ``plots/`` -- every PNG (the only matplotlib);
 - ``stress/`` -- numerical stability across parameter ranges (``cablesim stress``);
 - ``api`` and ``cli`` -- the Python API and the ``cablesim`` command.
@@ -43,10 +47,15 @@ The package, from the bottom layer up (a module imports only from layers below i
 
 from .version import __version__
 
-_API = ("load_case", "static", "history", "free_vibration", "sweep", "continuation", "plot",
+_API = ("load_case", "static", "history", "free_vibration", "sweep", "continuation", "plot", "compile_kernels",
         "StaticRun", "HistoryRun", "SweepRun", "ContinuationRun")
 
 __all__ = ["__version__", *_API]
+
+
+def __dir__() -> list[str]:
+    # The API's names too, though they load only on first use.
+    return sorted({*globals(), *__all__})
 
 
 def __getattr__(name: str):

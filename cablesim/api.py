@@ -16,13 +16,18 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
+from . import jit
 from .analyses.continuation import ContinuationResult, run_continuation
 from .analyses.cost import Cost
+from .analyses.estimates import chosen_integrator
+from .analyses.estimates import estimates as _estimates
+from .analyses.pool import check_jobs
 from .analyses.dynamic import HistoryPlan, plan_free_vibration, plan_history
 from .analyses.static import StaticResult, run_static
 from .analyses.sweep import SweepResult, estimate_sweep, run_sweep
-from .case import Case, case_from_dict
+from .case import Case, case_from_dict, example_text, parse_case
 from .case import load_case as _read_case_file
+from .case.numbers import DAMPING_RATIO, DURATION, MODE, OMEGA, OUTPUT_STEP, PEAK_VELOCITY, check_flag
 from .case.files import check_step_flags, step_flag_overrides
 from .dynamics.integrators import Integrator
 from .dynamics.result import HistoryResult
@@ -183,7 +188,14 @@ def plan_history_run(case: Case, omega: float | None = None, duration: float | N
                      output_step: float | None = None, analysis: str | None = None,
                      integrator: str | None = None) -> Planned:
     """:func:`history` checked and set up, not integrated (see :class:`Planned`)."""
+    _check_numbers(omega=(OMEGA, omega), duration=(DURATION, duration), output_step=(OUTPUT_STEP, output_step))
     return Planned(case, "history", plan_history(case, omega, duration, output_step, analysis, integrator))
+
+
+def _check_numbers(**values) -> None:
+    """The arguments' ranges, as the command line checks its flags: ``name=(type, value)``."""
+    for name, (kind, value) in values.items():
+        check_flag(kind, value, name)
 
 
 def free_vibration(
@@ -208,6 +220,9 @@ def plan_free_vibration_run(case: Case, mode: int | None = None, peak_velocity: 
                             output_step: float | None = None, analysis: str | None = None,
                             integrator: str | None = None) -> Planned:
     """:func:`free_vibration` checked and set up, not integrated (see :class:`Planned`)."""
+    _check_numbers(mode=(MODE, mode), peak_velocity=(PEAK_VELOCITY, peak_velocity),
+                   damping_ratio=(DAMPING_RATIO, damping_ratio), duration=(DURATION, duration),
+                   output_step=(OUTPUT_STEP, output_step))
     plan = plan_free_vibration(case, mode, peak_velocity, damping_ratio, duration, output_step, analysis, integrator)
     return Planned(case, "free-vibration", plan)
 
@@ -245,6 +260,7 @@ def sweep(
     progress : callable, optional
         Called as ``progress(done, total)``.
     """
+    check_jobs(jobs)
     recorder = None
     if output is not None:
         recorder = SweepFile(Path(output), fingerprint(case.text, analysis, integrator), resume=resume,
@@ -296,24 +312,23 @@ def continuation(
     """
     return ContinuationRun(case, run_continuation(case, analysis, progress))
 def estimates(case: Case, analysis: str | None = None, integrator: str | None = None) -> dict[str, str]:
-    """What each command would take on this case, in words (``cablesim check``): the cost of
-    ``history``, ``free-vibration`` and ``sweep`` with the case's settings, or why the command
-    needs more (``"needs --omega ..."``) or refuses the case."""
-    out = {"static": f"statics and modes of {case.cable.n_nodes} nodes (a fraction of a second)"}
-    tries = {
-        "history": lambda: plan_history_run(case, analysis=analysis, integrator=integrator).cost(),
-        "free-vibration": lambda: plan_free_vibration_run(case, analysis=analysis, integrator=integrator).cost(),
-        "sweep": lambda: sweep_cost(case, analysis, integrator),
+    """What each command would take on this case, in words and in seconds measured on this
+    machine (``cablesim check``; see :mod:`cablesim.analyses.estimates`)."""
+    return _estimates(case, analysis, integrator)
+
+
+def effective_case_text(case: Case, analysis: str | None = None, integrator: str | None = None) -> str:
+    """The case as it will run, every default filled in, as YAML: what ``cablesim check``
+    prints. Sections whose settings cablesim chooses per run are comments saying what it chooses."""
+    chosen = chosen_integrator(case, analysis, integrator) if not case.integrator.model_dump(exclude_none=True) else None
+    modes = case.modal.modes
+    notes = {
+        "integrator: {}": f"# integrator: none given: {chosen or 'cablesim chooses per command and frequency'}",
+        "modal: {}": "# modal: none given: " + (f"the lowest {modes} modes" if modes else
+                                                 "every mode (the lowest 100 above 300 nodes)"),
+        "outputs: {}": "# outputs: none given: every DOF, and the configurational/elastic split up to 100 nodes",
     }
-    for command, make in tries.items():
-        try:
-            cost = make()
-        except CablesimError as exc:
-            out[command] = f"cannot run with the case's settings alone: {exc}"
-            continue
-        why = cost.impossible() or cost.excess()
-        out[command] = cost.text().split(": ", 1)[1] + (f"; needs --force: {why}" if why else "")
-    return out
+    return "\n".join(notes.get(line, line) for line in case.effective_yaml().rstrip("\n").splitlines()) + "\n"
 
 
 def plot(results, output: str | Path | None = None, figure: str | Path | None = None,
@@ -343,3 +358,77 @@ def plot(results, output: str | Path | None = None, figure: str | Path | None = 
         The PNGs written.
     """
     return redraw(results, output, figure=figure, stamp=stamp, snapshots=snapshots)
+
+
+#: The tiny runs :func:`compile_kernels` makes: every analysis, integrator and kind of run, so that
+#: each compiled kernel is compiled (or loaded) once.
+_SMALL = ["sweep.omega=[2.0, 5.0]", "sweep.duration=40.0", "sweep.window=10.0", "sweep.refine=false",
+          "continuation={omega: {start: 2.40, stop: 2.42}, channels: [z2]}"]
+_SLACKENING = ["loads.FL=[-0.3e6, 1.1e6, -0.9e6, 6.0e6]"]  # a segment goes slack within seconds
+_HEAVY = ["cable.nodes=60", "history.duration=1.0"]
+
+
+def _warm_up_runs() -> list[tuple[str, Callable[[], object]]]:
+    base = load_case(None, _SMALL)
+    heavy = parse_case(example_text("heavy-span"), source="(the shipped heavy-span case)", default_name="heavy-span",
+                       overrides=_HEAVY)
+    runs: list[tuple[str, Callable[[], object]]] = [
+        ("statics", lambda: [static(base, a, all_models=True) for a in ("exact", "approximate")]),
+    ]
+    for analysis in ("exact", "approximate"):
+        for integ in ("dopri5", "rk4", "newmark", "generalized-alpha"):
+            runs.append((f"history: {analysis} analysis, {integ}",
+                         lambda a=analysis, i=integ: history(base, omega=2.4, duration=3.0, analysis=a, integrator=i)))
+        runs.append((f"free vibration: {analysis} analysis",
+                     lambda a=analysis: free_vibration(base, mode=3, peak_velocity=1.0, duration=1.0, analysis=a)))
+    slack = load_case(None, [*_SMALL, *_SLACKENING])
+    for integ in ("dopri5", "rk4", "newmark", "generalized-alpha"):
+        runs.append((f"history through slack segments: {integ}",
+                     lambda i=integ: history(slack, omega=2.45, duration=6.0, integrator=i)))
+    fixed = [*_SMALL, "integrator={name: generalized-alpha, dt: 0.01}"]  # the implicit fixed-step loop
+    for analysis in ("exact", "approximate"):
+        runs.append((f"history: {analysis} analysis, generalized-alpha at a fixed step",
+                     lambda a=analysis: history(load_case(None, fixed), omega=2.4, duration=1.0, analysis=a)))
+    runs.append(("history through slack segments: generalized-alpha at a fixed step",
+                 lambda: history(load_case(None, [*fixed, *_SLACKENING]), omega=2.45, duration=6.0)))
+    z0 = load_case(None, [*_SMALL, "free_vibration={z0: [0.01, 0.01, 0.0, 0.0], duration: 0.5}"])
+    runs += [
+        ("free vibration from a displacement", lambda: free_vibration(z0)),
+        ("heavy cable: exact analysis", lambda: history(heavy)),
+        ("heavy cable: approximate analysis", lambda: history(heavy, duration=0.2, analysis="approximate")),
+        ("sweep: shooting and Floquet multipliers", lambda: sweep(base, jobs=1)),
+        ("sweep: integration alone, up and down", lambda: sweep(load_case(None, [
+            *_SMALL, "sweep.accelerate=false", "sweep.direction=both"]), jobs=1)),
+        ("continuation: exact analysis", lambda: continuation(base)),
+        ("continuation: approximate analysis", lambda: continuation(base, "approximate")),
+    ]
+    return runs
+
+
+def compile_kernels(progress: Callable[[int, int, str], None] | None = None) -> float:
+    """Compile every compiled kernel now (or load it from numba's on-disk cache), so that no
+    later run spends time compiling: what ``cablesim compile`` and ``make install`` do.
+
+    Runs tiny cases through the public analyses (every analysis, integrator, slack handling,
+    free vibration, a heavy cable, sweeps and continuation); numba compiles each kernel the
+    first time it runs and caches it for every later process on this machine.
+
+    Parameters
+    ----------
+    progress : callable, optional
+        Called as ``progress(done, total, what)`` before each run.
+
+    Returns
+    -------
+    float
+        Seconds spent compiling (0 when every kernel was in the cache).
+    """
+    before = jit.compile_seconds()
+    runs = _warm_up_runs()
+    for k, (what, run) in enumerate(runs):
+        if progress is not None:
+            progress(k, len(runs), what)
+        run()
+    if progress is not None:
+        progress(len(runs), len(runs), "done")
+    return jit.compile_seconds() - before

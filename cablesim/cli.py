@@ -13,12 +13,17 @@ that ``cablesim --help`` starts at once.
 from __future__ import annotations
 
 import functools
+import os
 import shlex
 import sys
 import warnings
 from enum import Enum
 from pathlib import Path
 from typing import Optional
+
+# cablesim uses no pydantic plugins: skip pydantic's search for them (a thirtieth of a second of
+# every command's start-up).
+os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
 
 import typer
 
@@ -135,15 +140,6 @@ def _effective(ctx, **values) -> None:
 # ----------------------------------------------------------------------------------------------
 # Shared steps (the shared options are in cablesim.io.terminal)
 # ----------------------------------------------------------------------------------------------
-def _check_jobs(jobs: int) -> None:
-    import os
-
-    most = max(64, 4 * (os.cpu_count() or 1))
-    if jobs == 0 or jobs < -1 or jobs > most:
-        raise CablesimError(f"--jobs must be a number of processes from 1 to {most} (four per core), or -1 for "
-                            f"all cores; got {jobs}.")
-
-
 def _check_outputs(out: Path, case_file, companions=()) -> Path:
     """Refuse, before anything runs, an output that cannot or must not be written."""
     from .io.paths import check_output
@@ -151,66 +147,11 @@ def _check_outputs(out: Path, case_file, companions=()) -> Path:
     return check_output(out, inputs=[case_file] if case_file else [], companions=companions)
 
 
-def _guard(cost, force: bool, fix: str, out: Path | None = None) -> None:
-    """Refuse a run above the cost limits (unless --force) or beyond this machine; say a long
-    run's estimate before it starts; refuse a disk without room for the results."""
-    from .io.paths import check_room
+def _replace(out: Path, kind: str | None, note: bool = True) -> None:
+    """Say so before a complete result is replaced; remove the figures the old one drew."""
+    from .io.finish import replace_result
 
-    err = cost.refusal(force, fix)
-    if err is not None:
-        raise err
-    if out is not None:
-        check_room(out, cost.disk)
-    long = cost.steps > 1e7 or cost.memory > 1e8
-    _note(f"estimate: {cost.text()}", verbose_only=not long)
-
-
-def _simulate(planned, duration: float):
-    """Integrate a planned history with a progress bar; ``(run, wall seconds)``."""
-    import time
-
-
-    bar = LazyBar(1000, "simulating", quiet=_OUT["quiet"], show_eta=True)
-    t0 = time.perf_counter()
-    with bar:
-        run = planned.run(progress=lambda t: bar.set(int(1000 * t / duration)))
-    return run, time.perf_counter() - t0
-
-
-def _history_pngs(out: Path) -> list[Path]:
-    prefix = str(out.with_suffix(""))
-    return [Path(f"{prefix}-{kind}.png") for kind in ("waveforms", "phase", "lissajous", "tensions", "fft")]
-
-
-def _finish_history(run, out: Path, plot: bool, channels, wall: float, full: bool = False):
-    """Write the history (beside a complete result if this run is not complete), plot, report."""
-    from dataclasses import replace
-
-    from .channels import channel_index
-    from .dynamics import interrupts
-    from .dynamics.status import Status
-    from .io.hdf5 import is_complete_result
-    from .io.paths import beside
-    from .io.report import history_summary
-
-    case, hist = run.case, run.history
-    if case.outputs.channels:  # a scene keeps only the channels it draws
-        keep = list(dict.fromkeys(channel_index(c, hist.n_dof) + 1 for c in case.outputs.channels))  # node20.v = z40
-        run = replace(run, history=hist.keep(keep))
-        hist = run.history
-    target = out
-    if not hist.completed and is_complete_result(out):
-        target = beside(out)  # never replace a complete result with an incomplete one
-    run.to_hdf5(target)
-    pngs = run.plot(target.with_suffix(""), channels=channels) if plot and hist.t.size > 1 else []
-    _echo(history_summary(case, hist, run.integrator, wall, full=full))
-    _echo(f"\nWrote {target}" + (" and " + ", ".join(str(p) for p in pngs) if pngs else ""))
-    if not hist.completed:
-        kept = f" The complete result {out} was kept; this run's results are in {target}." if target != out else ""
-        say_error(f"the run did not complete: {hist.message}. Results up to that instant were written.{kept}")
-        if hist.status is Status.INTERRUPTED:
-            raise typer.Exit(interrupts.exit_status())
-        raise typer.Exit(3)
+    replace_result(out, kind, _note if note else None)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -218,11 +159,29 @@ def _finish_history(run, out: Path, plot: bool, channels, wall: float, full: boo
 # ----------------------------------------------------------------------------------------------
 @app.command()
 @user_errors
-def example():
-    """Print the paper's example as a commented case file to start from."""
-    from .case import example_text
+def example(
+    name: str = typer.Option("paper-example", "--name", help="The shipped case to print (--list names them)."),
+    list_: bool = typer.Option(False, "--list", help="List the shipped cases instead."),
+):
+    """Print a commented case file to start from: the paper's example, with every section
+    (cablesim example > my-case.yaml), or another shipped case (--list, --name)."""
+    from .case.files import example_cases, example_text
 
-    typer.echo(example_text(), nl=False)
+    cases = example_cases()
+    text = "".join(f"{n:16s} {what}\n" for n, what in cases.items()) if list_ else example_text(name)
+    typer.echo(text, nl=False)
+
+
+@app.command("compile")
+@user_errors
+def compile_():
+    """Compile the numerical kernels now, once for this machine (numba caches them), so that no
+    later run waits for them; `make install` does it. Kernels already cached only load."""
+    from . import api, jit
+
+    _note(f"compiling the numerical kernels into {jit.cache_dir()} (a few minutes the first time) ...")
+    seconds = api.compile_kernels(lambda k, n, what: _note(f"  [{k + 1}/{n}] {what}") if k < n else None)
+    _echo(f"compiled {jit.kernels_compiled()} kernels in {seconds:.0f} s" if seconds else "every kernel was already compiled")
 
 
 @app.command()
@@ -233,21 +192,25 @@ def check(
     analysis: Optional[Analysis] = ANALYSIS_OPT,
     integrator: Optional[IntegratorName] = INTEGRATOR_OPT,
 ):
-    """Check a case file without running anything: solve its statics, print the case as it will
-    run (every default filled in, --set applied) and the cost estimate of each command."""
+    """Check a case file without writing anything: solve its statics, print the case as it will
+    run (every default filled in, --set applied) and what each command would take (seconds
+    measured on this machine by short runs of the same settings)."""
+    from .case import load_case
+
+    case = load_case(case_file, overrides)[0]
     from . import api
 
-    case = api.load_case(case_file, overrides)
-    run = api.static(case, analysis.value if analysis else None)
-    say_warnings(run.result.warnings)
-    where = case_file or "the embedded paper example"
-    typer.echo(f"# {where} is valid. The case as it runs (defaults filled in"
-               + (", --set applied" if overrides else "") + "):")
-    typer.echo(case.effective_yaml().rstrip("\n"))
-    typer.echo("# What each command would take (estimates; a sweep: every point to its cap):")
-    for command, text in api.estimates(case, analysis.value if analysis else None,
-                                       integrator.value if integrator else None).items():
-        typer.echo(f"#   {command}: {text}")
+    an, integ = (analysis.value if analysis else None), (integrator.value if integrator else None)
+    with compiling(_note):
+        run = api.static(case, an)
+        say_warnings(run.result.warnings)
+        where = case_file or "the embedded paper example"
+        typer.echo(f"# {where} is valid. The case as it runs (defaults filled in"
+                   + (", --set applied" if overrides else "") + "):")
+        typer.echo(api.effective_case_text(case, an, integ).rstrip("\n"))
+        typer.echo("# What each command would take (a sweep: every point to its cap):")
+        for command, text in api.estimates(case, an, integ).items():
+            typer.echo(f"#   {command}: {text}")
 
 
 @app.command()
@@ -265,21 +228,24 @@ def static(
     modes: Optional[int] = MODES_OPT,
 ):
     """Static equilibrium under F0 (inextensible, approximate and exact), modes and damping."""
-    # Only the static machinery (not cablesim.api's dynamics and orbits): a second of start-up.
-    from .analyses.static import run_static
     from .case import load_case
-    from .io.hdf5 import write_static
-    from .io.report import static_summary
 
     _begin(ctx)
     case = load_case(case_file, [*(overrides or ()), *([f"modal.modes={modes}"] if modes else [])])[0]
-    out = output if output is not None else Path("runs") / case.name / "static.h5"
+    stem = "static" + (f"-{analysis.value}" if analysis else "")
+    out = output if output is not None else Path("runs") / case.name / f"{stem}.h5"
     _check_outputs(out, case_file, (lambda o: [o.with_suffix(".png")]) if plot else [])
     _effective(ctx, output=out)
-    with compiling(_note, "closure.minimise-*.nbi"):
+    # Only the static machinery, and only now that the input is known to be good.
+    from .analyses.static import run_static
+    from .io.hdf5 import write_static
+    from .io.report import static_summary
+
+    with compiling(_note):
         result = run_static(case, analysis.value if analysis else None, all_models=all_models)
     say_warnings(result.warnings)
     _echo(static_summary(case, result, full=full))
+    _replace(out, "static")
     write_static(out, result, case.text, matrices=matrices)
     msg = f"\nWrote {out}"
     if plot:
@@ -309,7 +275,7 @@ def history(
     full: bool = typer.Option(False, "--full", help="Print every channel (default: over 40 channels show the first and last)."),
 ):
     """Forced response F(t) = F0 + FL sin(w t) at one frequency, from the equilibrium at rest."""
-    from . import api
+    from .case.files import load_with_steps
     from .case.numbers import DURATION, OMEGA, OUTPUT_STEP, check_flag
     from .channels import parse_channels
 
@@ -317,7 +283,7 @@ def history(
     check_flag(OMEGA, omega, "--omega", "history.omega")
     check_flag(DURATION, duration, "--duration", "history.duration")
     check_flag(OUTPUT_STEP, output_step, "--output-step", "history.output_step")
-    case = api.load_case(case_file, _with_slack(overrides, slack), dt=dt, rtol=rtol, integrator=integrator and integrator.value)
+    case = load_with_steps(case_file, _with_slack(overrides, slack), dt, rtol, integrator and integrator.value)
     dur = duration if duration is not None else case.history.duration
     w = omega if omega is not None else case.history.omega
     if w is None:
@@ -327,18 +293,24 @@ def history(
             "frequencies to choose from.",
             field="history.omega",
         )
-    out = output if output is not None else Path("runs") / case.name / f"history-w{w:g}-d{dur:g}.h5"
+    from .io.naming import figures, history_stem
+
+    stem = history_stem(w, dur, analysis.value if analysis else None, integrator.value if integrator else None)
+    out = output if output is not None else Path("runs") / case.name / f"{stem}.h5"
     chans = parse_channels(channels, case.history.channels, 2 * case.cable.n_nodes, kept=case.outputs.channels)
-    _check_outputs(out, case_file, _history_pngs if plot else [])
-    with compiling(_note):
+    _check_outputs(out, case_file, (lambda o: figures(o, "history")[:5]) if plot else [])
+    from . import api
+    from .io.finish import finish_history, guard, simulate
+
+    with compiling(_note) as notice:
         planned = api.plan_history_run(case, omega, dur, output_step, analysis.value if analysis else None,
                                        integrator.value if integrator else None)
         say_warnings(planned.plan.static.warnings)
-        _guard(planned.cost(), force, "Shorten --duration, raise --output-step or integrator.dt", out)
+        guard(planned.cost(), force, "Shorten --duration, raise --output-step or integrator.dt", out, _note)
         _effective(ctx, output=out, omega=w, duration=dur, output_step=planned.plan.output_step,
                    integrator={"name": planned.plan.integrator.name, **planned.plan.integrator.settings()})
-        run, wall = _simulate(planned, dur)
-    _finish_history(run, out, plot, chans, wall, full)
+        run, wall = simulate(planned, dur, notice, quiet=_OUT["quiet"])
+    finish_history(run, out, plot, chans, wall, full, note=_note, echo=_echo)
 
 
 @app.command("free-vibration")
@@ -350,7 +322,7 @@ def free_vibration(
     mode: Optional[int] = typer.Option(None, "--mode", help="Linear mode K giving the initial velocities, 1 to 2n (default: free_vibration.mode)."),
     peak_velocity: Optional[float] = typer.Option(None, "--peak-velocity", help="Largest initial velocity V, m/s (default: free_vibration.peak_velocity)."),
     damping_ratio: Optional[float] = typer.Option(None, "--damping-ratio", help="Override damping.ratio, 0 to below 1 (same two modes; default: free_vibration.damping_ratio, else damping:)."),
-    duration: Optional[float] = typer.Option(None, "--duration", help="Simulated time, s (default: free_vibration.duration, else 20)."),
+    duration: Optional[float] = typer.Option(None, "--duration", help="Simulated time, s (default: free_vibration.duration, else until the motion has decayed to 0.01 %, from the damping)."),
     output_step: Optional[float] = typer.Option(None, "--output-step", help="Interval between saved instants, s (default: free_vibration.output_step, else 40 per period)."),
     analysis: Optional[Analysis] = ANALYSIS_OPT,
     integrator: Optional[IntegratorName] = INTEGRATOR_OPT,
@@ -362,7 +334,7 @@ def free_vibration(
     force: bool = FORCE_OPT,
 ):
     """Damped free vibration about the equilibrium, started with velocities along a linear mode."""
-    from . import api
+    from .case.files import load_with_steps
     from .case.numbers import DAMPING_RATIO, DURATION, MODE, OUTPUT_STEP, PEAK_VELOCITY, check_flag
     from .channels import parse_channels
 
@@ -372,25 +344,32 @@ def free_vibration(
     check_flag(DAMPING_RATIO, damping_ratio, "--damping-ratio", "free_vibration.damping_ratio")
     check_flag(DURATION, duration, "--duration", "free_vibration.duration")
     check_flag(OUTPUT_STEP, output_step, "--output-step", "free_vibration.output_step")
-    case = api.load_case(case_file, _with_slack(overrides, slack), dt=dt, rtol=rtol, integrator=integrator and integrator.value)
+    case = load_with_steps(case_file, _with_slack(overrides, slack), dt, rtol, integrator and integrator.value)
     fv = case.free_vibration
     dur = duration if duration is not None else fv.duration
     k = mode if mode is not None else fv.mode
     v = peak_velocity if peak_velocity is not None else fv.peak_velocity
-    stem = "free-vibration" + (f"-mode{k}" if k is not None else "") + (f"-v{v:g}" if v is not None and k else "")
+    from .io.naming import figures, free_vibration_stem
+
+    stem = free_vibration_stem(k, v, damping_ratio, analysis.value if analysis else None,
+                               integrator.value if integrator else None)
     out = output if output is not None else Path("runs") / case.name / f"{stem}.h5"
     chans = parse_channels(channels, fv.channels, 2 * case.cable.n_nodes, kept=case.outputs.channels)
-    _check_outputs(out, case_file, _history_pngs if plot else [])
-    with compiling(_note):
+    _check_outputs(out, case_file, (lambda o: figures(o, "history")[:5]) if plot else [])
+    from . import api
+    from .io.finish import finish_history, guard, simulate
+
+    with compiling(_note) as notice:
         planned = api.plan_free_vibration_run(case, mode, peak_velocity, damping_ratio, dur, output_step,
                                               analysis.value if analysis else None,
                                               integrator.value if integrator else None)
         say_warnings(planned.plan.static.warnings)
-        _guard(planned.cost(), force, "Shorten --duration, raise --output-step or integrator.dt", out)
-        _effective(ctx, output=out, mode=k, peak_velocity=v, duration=dur, output_step=planned.plan.output_step,
+        guard(planned.cost(), force, "Shorten --duration, raise --output-step or integrator.dt", out, _note)
+        _effective(ctx, output=out, mode=k, peak_velocity=v, duration=planned.plan.duration,
+                   output_step=planned.plan.output_step,
                    integrator={"name": planned.plan.integrator.name, **planned.plan.integrator.settings()})
-        run, wall = _simulate(planned, dur)
-    _finish_history(run, out, plot, chans, wall)
+        run, wall = simulate(planned, planned.plan.duration, notice, quiet=_OUT["quiet"])
+    finish_history(run, out, plot, chans, wall, False, note=_note, echo=_echo)
 
 
 class Backend(str, Enum):
@@ -406,6 +385,7 @@ def sweep(
     overrides: Optional[list[str]] = SET_OPT,
     omega: Optional[str] = typer.Option(None, "--omega", metavar="W1,W2,...|START:STOP:NUM", help="Forcing frequencies, rad/s: a list, or a grid of NUM points (default: sweep.omega in the case file)."),
     duration: Optional[float] = typer.Option(None, "--duration", help="Cap on simulated seconds per point, s (default: sweep.duration, else 3000)."),
+    window: Optional[float] = typer.Option(None, "--window", help="Final seconds of a point used for its amplitude when it is not steady, s (default: sweep.window, else 200)."),
     channels: Optional[str] = typer.Option(None, "--channels", help="DOF recorded and plotted, e.g. z2,z4 (default: sweep.channels, else all)."),
     jobs: int = typer.Option(-1, "--jobs", "-j", help="Parallel worker processes (-1: all cores)."),
     resume: bool = typer.Option(False, "--resume", help="Finish an interrupted sweep (same command, same -o)."),
@@ -421,34 +401,46 @@ def sweep(
 ):
     """Frequency-domain response: steady amplitude of each channel against forcing frequency.
     Exit status 3 if any point stopped early (the summary names which and why)."""
-    from . import api
-    from .case.files import sweep_flag_overrides
-    from .io.journal import fingerprint, nothing_to_resume
+    from .analyses.pool import check_jobs
+    from .case.files import load_with_steps, sweep_flag_error, sweep_flag_overrides
+    from .io.naming import sweep_stem
 
     _begin(ctx)
-    _check_jobs(jobs)
+    check_jobs(jobs)
     if scheduler is not None and backend != Backend.dask:
         raise CablesimError(
             f"--scheduler {scheduler} is used only with --backend dask (the default backend, loky, runs "
             "the points on this machine): add --backend dask, or drop --scheduler."
         )
-    case = api.load_case(case_file, _with_slack([*(overrides or ()), *sweep_flag_overrides(omega, duration, channels)], slack),
-                         dt=dt, rtol=rtol, integrator=integrator and integrator.value)
-    out = output if output is not None else Path("runs") / case.name / "sweep.h5"
+    try:
+        case = load_with_steps(case_file, _with_slack([*(overrides or ()), *sweep_flag_overrides(omega, duration, channels,
+                                                                                               window)], slack),
+                               dt, rtol, integrator and integrator.value)
+    except CablesimError as exc:
+        raise sweep_flag_error(exc, duration, window) from None
+    stem = sweep_stem(omega, analysis.value if analysis else None, integrator.value if integrator else None)
+    out = output if output is not None else Path("runs") / case.name / f"{stem}.h5"
     _check_outputs(out, case_file, lambda o: [o.with_name(o.name + ".journal"), o.with_name(o.name + ".lock"),
                                               *([o.with_suffix(".png")] if plot else [])])
+    from . import api
+    from .io.finish import guard
+    from .io.journal import fingerprint, nothing_to_resume
+
     an, integ = (analysis.value if analysis else None), (integrator.value if integrator else None)
     if resume and nothing_to_resume(out, fingerprint(case.text, an, integ)):
         _echo(f"Nothing to do: {out} already holds this sweep, complete.")
         return
-    with compiling(_note):
-        _guard(api.sweep_cost(case, an, integ), force, "Use fewer points (sweep.omega), a shorter sweep.duration "
-               "or a larger integrator.dt", out)
+    if not resume:
+        _replace(out, None)  # the note now; the old figure goes once this sweep is complete
+    with compiling(_note) as notice:
+        guard(api.sweep_cost(case, an, integ), force, "Use fewer points (sweep.omega), a shorter sweep.duration "
+              "or a larger integrator.dt", out, _note)
         _effective(ctx, output=out)
-        _run_sweep(ctx, case, out, jobs, resume, an, integ, None if backend == Backend.loky else "dask", scheduler, plot)
+        _run_sweep(ctx, case, out, jobs, resume, an, integ, None if backend == Backend.loky else "dask", scheduler, plot,
+                   notice)
 
 
-def _run_sweep(ctx, case, out: Path, jobs, resume, analysis, integrator, backend, scheduler, plot: bool):
+def _run_sweep(ctx, case, out: Path, jobs, resume, analysis, integrator, backend, scheduler, plot: bool, notice):
     import time
 
     from . import api
@@ -460,7 +452,7 @@ def _run_sweep(ctx, case, out: Path, jobs, resume, analysis, integrator, backend
 
     bar = LazyBar(1, "sweeping", quiet=_OUT["quiet"], show_pos=True, show_eta=True)
     snapshot = snapshot_path(out)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), notice.seconds()
     try:
         with bar:
             run = api.sweep(case, jobs, analysis, integrator, output=out, resume=resume, backend=backend,
@@ -473,7 +465,9 @@ def _run_sweep(ctx, case, out: Path, jobs, resume, analysis, integrator, backend
         raise typer.Exit(interrupts.exit_status())
     res = run.result
     say_warnings(res.warnings)
-    _echo(sweep_summary(case, res, time.perf_counter() - t0))
+    _echo(sweep_summary(case, res, time.perf_counter() - t0 - (notice.seconds() - c0), full=_OUT["verbose"]))
+    if res.complete:
+        _replace(out, "sweep", note=False)  # the old figure goes with the result it drew
     msg = f"\nWrote {out}"
     if plot:
         msg += f" and {plot_sweep(out)}"
@@ -501,23 +495,27 @@ def continue_(
     appear, vanish or jump."""
     import time
 
-    from . import api
-    from .io.report import continuation_summary
-    from .plots.continuation import plot_continuation
+    from .case import load_case
 
     _begin(ctx)
-    case = api.load_case(case_file, overrides)
-    out = output if output is not None else Path("runs") / case.name / "continuation.h5"
+    case = load_case(case_file, overrides)[0]
+    out = output if output is not None else Path("runs") / case.name / (
+        "continuation" + (f"-{analysis.value}" if analysis else "") + ".h5")
     if overlay is not None and not overlay.is_file():
         raise CablesimError(f"--overlay {overlay}: no such sweep file; give the output of cablesim sweep.")
     _check_outputs(out, case_file, (lambda o: [o.with_suffix(".png")]) if plot else [])
     _effective(ctx, output=out)
+    from . import api
+    from .io.report import continuation_summary
+    from .plots.continuation import plot_continuation
+
     t0 = time.perf_counter()
-    with compiling(_note), StatusLine(quiet=_OUT["quiet"]) as status:
+    with compiling(_note) as notice, StatusLine(quiet=_OUT["quiet"]) as status:
         run = api.continuation(case, analysis.value if analysis else None, progress=lambda p: status(
             f"continuing: branch {p.branch} (period {p.period}), {p.parameter:.5g}, orbit {p.index}"))
+    _replace(out, "continuation")
     run.to_hdf5(out)
-    _echo(continuation_summary(case, run.result, time.perf_counter() - t0))
+    _echo(continuation_summary(case, run.result, time.perf_counter() - t0 - notice.seconds()))
     msg = f"\nWrote {out}"
     if plot:
         msg += f" and {plot_continuation(out, out.with_suffix('.png'), overlay=overlay)}"
@@ -566,7 +564,9 @@ def stress(
     from .io.paths import check_output
     from .stress import FAILED, build_cases, format_summary, format_table, run_stress, write_report
 
-    _check_jobs(jobs)
+    from .analyses.pool import check_jobs
+
+    check_jobs(jobs)
     check_output(md, flag="--md", suffixes=(".md",))
     check_output(png, flag="--png", suffixes=(".png",))
     total = len(build_cases(reduced))

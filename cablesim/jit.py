@@ -10,6 +10,11 @@ changing any of them starts a fresh cache, and nothing stale can be loaded.
 The compiled sources are the modules of :data:`COMPILED_PACKAGES` and every other module that
 imports this one (``tests/test_jit_cache.py`` checks that what they import is among them).
 
+Compiling, as opposed to loading from the cache, is watched (numba's ``numba:compile`` event
+fires only on a cache miss): :func:`compile_seconds` and :func:`kernels_compiled` say how much
+of this process went into it, and :func:`on_compile` lets the command line say so while it
+happens, so that no first use compiles silently or counts as simulation.
+
 Light on purpose: numba is imported on the first decoration, not when this module is imported.
 """
 
@@ -21,6 +26,8 @@ import inspect
 import os
 import re
 import tempfile
+import threading
+import time
 from pathlib import Path
 
 #: The package's root folder.
@@ -115,9 +122,100 @@ def _compile(func, signature, options):
     import numba
     from numba.core import config
 
+    _install_watch()
     previous = config.CACHE_DIR
     config.CACHE_DIR = str(cache_dir())
     try:
         return numba.njit(*signature, **options)(func)
     finally:
         config.CACHE_DIR = previous
+
+
+# ----------------------------------------------------------------------------------------------
+# Compilation, watched
+# ----------------------------------------------------------------------------------------------
+class _Watch:
+    """What numba compiled in this process: top-level compiles (a kernel with the kernels it
+    calls), their seconds, and the hooks told when one starts."""
+
+    def __init__(self):
+        self.depth = 0
+        self.started = 0.0
+        self.seconds = 0.0
+        self.kernels = 0
+        self.current = ""
+        self.hooks: list = []
+        self.installed = False
+        self.lock = threading.Lock()
+
+
+_WATCH = _Watch()
+
+
+def _kernel_name(event) -> str:
+    func = getattr(event.data.get("dispatcher"), "py_func", None) if isinstance(event.data, dict) else None
+    if func is None:
+        return "a kernel"
+    return f"{func.__module__.rsplit('.', 1)[-1]}.{func.__name__}"
+
+
+def _install_watch() -> None:
+    """Listen to numba's compile events (once; numba is being imported anyway)."""
+    if _WATCH.installed:
+        return
+    from numba.core import event
+
+    class Listener(event.Listener):
+        def on_start(self, ev):
+            with _WATCH.lock:
+                _WATCH.kernels += 1
+                _WATCH.current = _kernel_name(ev)
+                top = _WATCH.depth == 0
+                if top:
+                    _WATCH.started = time.perf_counter()
+                _WATCH.depth += 1
+            for hook in list(_WATCH.hooks):
+                hook(_WATCH.current)
+
+        def on_end(self, ev):
+            with _WATCH.lock:
+                _WATCH.depth = max(0, _WATCH.depth - 1)
+                if _WATCH.depth == 0:
+                    _WATCH.seconds += time.perf_counter() - _WATCH.started
+
+    event.register("numba:compile", Listener())
+    _WATCH.installed = True
+
+
+def compile_seconds() -> float:
+    """Wall seconds this process has spent compiling kernels (not loading them from the
+    cache), including a compilation under way."""
+    with _WATCH.lock:
+        running = time.perf_counter() - _WATCH.started if _WATCH.depth else 0.0
+        return _WATCH.seconds + running
+
+
+def kernels_compiled() -> int:
+    """Kernels (and specialisations) this process has compiled rather than loaded from the cache."""
+    return _WATCH.kernels
+
+
+def compiling_now() -> str | None:
+    """The kernel being compiled at this moment (None if none)."""
+    return _WATCH.current if _WATCH.depth else None
+
+
+class on_compile:
+    """Context manager: ``hook(kernel_name)`` is called whenever a kernel starts compiling."""
+
+    def __init__(self, hook):
+        self.hook = hook
+
+    def __enter__(self):
+        _WATCH.hooks.append(self.hook)
+        return self
+
+    def __exit__(self, *exc):
+        if self.hook in _WATCH.hooks:
+            _WATCH.hooks.remove(self.hook)
+        return False

@@ -11,7 +11,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import eig_banded, eigh, solve_banded
 
 from .errors import CablesimError
 
@@ -87,12 +86,16 @@ def modal_analysis(K: np.ndarray, mass_diagonal: np.ndarray, n_modes: int | None
         If ``K`` is not positive definite (the equilibrium is unstable or a segment is slack).
     """
     N = mass_diagonal.size
-    Ks, Md = 0.5 * (K + K.T), np.diag(mass_diagonal)
     m = N if n_modes is None else max(1, min(int(n_modes), N))
-    lam, phi = eigh(Ks, Md, subset_by_index=[0, m - 1])
+    # M is diagonal: M^-1/2 K M^-1/2 is symmetric with the same eigenvalues, and its eigenvectors
+    # scaled by M^-1/2 are mass-normalised (numpy's eigh: no scipy import on the static path).
+    r = 1.0 / np.sqrt(mass_diagonal)
+    A = 0.5 * (K + K.T) * r[:, None] * r[None, :]
+    lam_all, V = np.linalg.eigh(A)
+    lam, phi = lam_all[:m], r[:, None] * V[:, :m]
     if lam[0] <= 0.0:
         raise _not_positive(lam[0])
-    top = None if m == N else float(np.sqrt(eigh(Ks, Md, eigvals_only=True, subset_by_index=[N - 1, N - 1])[0]))
+    top = None if m == N else float(np.sqrt(lam_all[-1]))
     # Fix the sign of each shape: its largest component is positive, for reproducible output.
     return Modes(omega=np.sqrt(lam), shapes=_fix_signs(phi), omega_max=top)
 
@@ -116,7 +119,8 @@ ALL_SHAPES_DOF = 600
 
 def modal_analysis_banded(K_band: np.ndarray, mass_diagonal: np.ndarray, n_modes: int | None = None,
                           n_shapes: int | None = None) -> Modes:
-    """:func:`modal_analysis` for a banded stiffness (``scipy.linalg.eig_banded``), O(n^2) or less.
+    """:func:`modal_analysis` for a banded stiffness: dense up to ALL_SHAPES_DOF, beyond it
+    ``scipy.linalg.eig_banded``, O(n^2) or less.
 
     Parameters
     ----------
@@ -146,18 +150,27 @@ def modal_analysis_banded(K_band: np.ndarray, mass_diagonal: np.ndarray, n_modes
     if n_shapes is None:
         n_shapes = m if N <= ALL_SHAPES_DOF else 0
     n_shapes = min(n_shapes, m)
-    select = {} if m == N else {"select": "i", "select_range": (0, m - 1)}
-    if N <= ALL_SHAPES_DOF and n_shapes > 0:
-        lam, x = eig_banded(A, lower=True, **select)
-        x = x[:, :n_shapes]
+    top = None
+    if N <= ALL_SHAPES_DOF:  # small enough for a dense solve: numpy's, so no scipy on the static path
+        dense = np.zeros((N, N))
+        for d in range(A.shape[0]):
+            idx = np.arange(N - d)
+            dense[idx + d, idx] = dense[idx, idx + d] = A[d, : N - d]
+        lam_all, x = np.linalg.eigh(dense)
+        lam, x = lam_all[:m], x[:, :n_shapes]
+        if m < N:
+            top = float(np.sqrt(lam_all[-1]))
     else:
+        from scipy.linalg import eig_banded  # heavy cables only: scipy.linalg is slow to import
+
+        select = {} if m == N else {"select": "i", "select_range": (0, m - 1)}
         lam = eig_banded(A, lower=True, eigvals_only=True, **select)
         x = _inverse_iteration(A, lam[:n_shapes])
+        if m < N:
+            top = float(np.sqrt(eig_banded(A, lower=True, eigvals_only=True, select="i",
+                                           select_range=(N - 1, N - 1))[0]))
     if lam[0] <= 0.0:
         raise _not_positive(lam[0])
-    top = None
-    if m < N:
-        top = float(np.sqrt(eig_banded(A, lower=True, eigvals_only=True, select="i", select_range=(N - 1, N - 1))[0]))
     phi = _fix_signs(r[:, None] * x) if n_shapes else np.zeros((N, 0))
     return Modes(omega=np.sqrt(lam), shapes=phi, omega_max=top)
 
@@ -171,6 +184,8 @@ def _inverse_iteration(A: np.ndarray, lam: np.ndarray, sweeps: int = 3) -> np.nd
     degenerate pairs, whose computed eigenvalues are too coarse a shift for a few sweeps (the
     eigenvalues of a finely divided cable's lowest modes carry errors of ~1e-16 of the highest).
     """
+    from scipy.linalg import solve_banded
+
     b, N = A.shape[0] - 1, A.shape[1]
     full = np.zeros((2 * b + 1, N))
     for d in range(b + 1):

@@ -224,6 +224,8 @@ def test_versions_for_finite_differences_and_transients(forced):
     loose = integ.for_transient(1e-3)
     assert not loose.fixed_step and loose.rtol == 1e-3 and integ.for_transient(1e-9) is integ
     assert fd.for_finite_differences() is fd and fd.for_transient(1e-3) is fd
+    measuring = integ.for_measuring(integ.dt_max / 4)
+    assert measuring.dt_max == integ.dt_max / 4 and integ.for_measuring(1e3) is integ and fd.for_measuring(1e-3) is fd
     with pytest.raises(ValueError, match="dt must be positive"):
         Newmark(dt=0.0)
 

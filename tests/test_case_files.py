@@ -83,7 +83,8 @@ def test_load_case_name_from_file_stem(tmp_path):
     p.write_text(MINIMAL)
     case, text = load_case(p)
     assert case.name == "my-cable.v2"
-    assert text == MINIMAL
+    assert text == MINIMAL + "# cablesim name (the case file's): my-cable.v2\n"
+    assert parse_case(text).name == "my-cable.v2"  # the stored text re-reads under the file's name
 
 
 def test_load_case_stem_is_sanitised(tmp_path):
@@ -117,7 +118,7 @@ def test_null_name_falls_back_to_default_or_is_an_error():
 
 def test_load_case_none_is_the_embedded_paper_example():
     case, text = load_case(None)
-    assert text == example_text()
+    assert text == example_text() + "# cablesim name (the case file's): paper-example\n"  # re-read under its name
     assert case.name == "paper-example"
     assert case == load_case(CONFIG_EXAMPLE)[0]
 
@@ -137,7 +138,7 @@ def test_example_text_is_commented_yaml():
     text = example_text()
     assert text.lstrip().startswith("#")
     assert sum(line.lstrip().startswith("#") for line in text.splitlines()) >= 3
-    assert parse_case(text) == load_case(CONFIG_EXAMPLE)[0]
+    assert parse_case(text, default_name="paper-example", record_name=True) == load_case(CONFIG_EXAMPLE)[0]
 
 
 # ----------------------------------------------------------------------------------------------

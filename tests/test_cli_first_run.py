@@ -4,6 +4,7 @@ compile, sweep flags like history's, --quiet and --verbose."""
 from __future__ import annotations
 
 import sys
+import time
 
 import h5py
 import pytest
@@ -23,13 +24,13 @@ def test_check_prints_the_effective_case_and_each_commands_cost(invoke_cli, writ
     assert body["history"]["duration"] == 600.0 and body["sweep"]["tol"] == 1e-05  # defaults filled in
     assert "is valid" in res.stdout and "--set applied" in res.stdout
     out = flat(res.stdout)
-    assert "# sweep: at most" in out and "11 points" in out
-    assert "# history: cannot run with the case's settings alone: No forcing frequency" in out
+    assert "# sweep: at most" in out and "11 points" in out and "refinement may add up to 62 more" in out
+    assert "# history: about" in out
     assert result_like_files(tmp_path) == []
 
 
 def test_check_estimates_a_history_given_in_the_case(invoke_cli, write_case):
-    case = write_case(EXAMPLE + "history:\n  omega: 2.4\n  duration: 100.0\n")
+    case = write_case(EXAMPLE.replace("  duration: 600.0 ", "  duration: 100.0 ", 1))
     res = invoke_cli("check", case)
     assert res.returncode == 0
     assert "# history: about" in flat(res.stdout) and "saved instants" in res.stdout
@@ -60,31 +61,42 @@ def test_history_help_states_each_default(invoke_cli):
         assert phrase in text, phrase
 
 
-def test_the_compile_notice_appears_only_without_cached_kernels(tmp_path, capsys):
-    from cablesim.io.terminal import compile_notice
+def _fresh_kernel():
+    """A kernel numba has never seen (not cached): calling it compiles it."""
+    from cablesim.jit import njit
 
-    def note(line):
-        print(line, file=sys.stderr)
+    def kernel(x):
+        return 2.0 * x + 1.0
 
-    assert compile_notice(note, tmp_path)
-    assert "compiling the numerical kernels on first use" in capsys.readouterr().err
-    (tmp_path / "field.rate-88.py311.nbi").write_bytes(b"")
-    assert not compile_notice(note, tmp_path)
-    assert capsys.readouterr().err == ""
+    return njit(cache=False)(kernel)
 
 
-def test_the_compile_notice_waits_so_a_quick_refusal_comes_alone(monkeypatch, tmp_path, capsys):
-    from cablesim.io import terminal
+def test_the_compile_notice_names_the_kernel_and_what_it_took():
+    """Compilation was silent: the first history printed "simulated 60 s in 41.8 s"."""
+    from cablesim import jit
+    from cablesim.io.terminal import compiling
 
-    monkeypatch.setattr(terminal, "KERNEL_CACHE", tmp_path)  # a cold cache
     lines = []
-    with terminal.compiling(lines.append, delay=60.0):
-        pass  # refused at once: the notice never comes
-    with terminal.compiling(lines.append, delay=0.0):
-        import time
+    with compiling(lines.append, delay=0.0) as notice:
+        assert _fresh_kernel()(1.0) == 3.0
+        time.sleep(0.2)  # the notice's timer
+    assert notice.kernels() >= 1 and notice.seconds() > 0
+    assert lines[0].startswith("compiling test_cli_first_run.kernel and the kernels it needs (first use on this machine")
+    assert lines[-1].startswith(f"compiled {notice.kernels()} kernels in ") and "not counted in the run's times" in lines[-1]
+    before = jit.kernels_compiled()
+    quiet = []
+    with compiling(quiet.append, delay=0.0):
+        _fresh_kernel  # nothing compiles: nothing is said
+    assert quiet == [] and jit.kernels_compiled() == before
 
-        time.sleep(0.5)
-    assert lines == ["compiling the numerical kernels on first use (about a minute; cached for later runs) ..."]
+
+def test_the_compile_notice_waits_so_a_quick_refusal_comes_alone():
+    from cablesim.io.terminal import compiling
+
+    lines = []
+    with compiling(lines.append, delay=60.0):
+        _fresh_kernel()(1.0)  # a compilation shorter than the delay, then a refusal: no notice
+    assert lines == []
 
 
 def test_sweep_takes_omega_duration_and_channels_like_history(invoke_cli, tmp_path):
@@ -99,7 +111,8 @@ def test_sweep_takes_omega_duration_and_channels_like_history(invoke_cli, tmp_pa
 
 
 def test_sweep_omega_grid_and_bad_spellings(invoke_cli, tmp_path):
-    res = invoke_cli("sweep", "--omega", "3:4:2", "--duration", "300", "--set", "sweep.window=100", "--jobs", "1",
+    res = invoke_cli("sweep", "--omega", "3:4:2", "--duration", "300", "--set", "sweep.window=100",
+                     "--set", "sweep.refine=false", "--jobs", "1",
                      "--no-plot", "-o", "g.h5")
     assert res.returncode == 0, res.stderr
     with h5py.File(tmp_path / "g.h5") as f:

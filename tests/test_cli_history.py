@@ -198,7 +198,8 @@ def _fl_zero(folder, d):
 
 
 BAD = [
-    pytest.param(lambda f, d: ["history", "--duration", 30, "--no-plot", "-o", "bad.h5"], ("omega",), id="no-omega"),
+    pytest.param(lambda f, d: ["history", "--set", "history.omega=null", "--duration", 30, "--no-plot", "-o", "bad.h5"],
+                 ("omega",), id="no-omega"),
     pytest.param(lambda f, d: ["history", "--omega", 2.4, "--duration", -5, "--no-plot", "-o", "bad.h5"], ("duration",), id="negative-duration"),
     pytest.param(lambda f, d: ["free-vibration", "--mode", 9, "--peak-velocity", 1, "--no-plot", "-o", "bad.h5"], ("mode", "4"), id="mode-9"),
     pytest.param(lambda f, d: ["history", _fl_zero(f, d), "--omega", 2.4, "--duration", 30, "--no-plot", "-o", "bad.h5"], ("FL",), id="FL-zero"),

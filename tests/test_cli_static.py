@@ -232,7 +232,7 @@ def test_default_run_layout_and_units(default_run):
 def test_default_run_stores_the_case_yaml(default_run):
     cwd, _ = default_run
     text = h5_attrs(cwd / "runs/paper-example/static.h5")["case_yaml"]
-    assert text == example_text()
+    assert text == example_text() + "# cablesim name (the case file's): paper-example\n"  # re-read under its name
     assert parse_case(text) == load_case(None)[0]
 
 
@@ -264,7 +264,8 @@ def test_explicit_run_with_output_and_approximate(explicit_run):
     assert not (cwd / "runs").exists(), "-o replaces the default runs/<name>/ location"
     assert "(approximate analysis)" in out
     assert "Wrote out/res.h5 and out/res.png" in out
-    assert h5_attrs(h5)["case_yaml"] == CONFIG_EXAMPLE.read_text()
+    stored = h5_attrs(h5)["case_yaml"]  # the file, and the name it took from its file name
+    assert stored.startswith(CONFIG_EXAMPLE.read_text()) and stored.count("\n") == CONFIG_EXAMPLE.read_text().count("\n") + 1
 
 
 def test_explicit_run_approximate_changes_modal(explicit_run, default_run):
@@ -294,7 +295,7 @@ def test_example_command_matches_shipped_config(run_cli):
     assert rc == 0, err
     assert out.lstrip().startswith("#"), "commented YAML"
     assert out == example_text()
-    assert parse_case(out) == load_case(CONFIG_EXAMPLE)[0]
+    assert parse_case(out, default_name="paper-example", record_name=True) == load_case(CONFIG_EXAMPLE)[0]
 
 
 def test_version(run_cli):
@@ -309,7 +310,7 @@ def test_version(run_cli):
 # ----------------------------------------------------------------------------------------------
 def test_name_from_stem_and_output_relative_to_cwd(invoke_cli, tmp_path, paper_case):
     """A case file without `name` in another folder: output goes to ./runs/<stem>/."""
-    del paper_case["name"]
+    paper_case.pop("name", None)
     case_file = tmp_path / "cases" / "my-cable.yaml"
     case_file.parent.mkdir()
     case_file.write_text(yaml.safe_dump(paper_case))
@@ -347,17 +348,19 @@ def test_exponent_strings_and_EA_work_from_the_command_line(invoke_cli, tmp_path
     paper = h5_datasets(default_run[0] / "runs/paper-example/static.h5")  # E and A, not EA
     for k in ("static/exact/y", "static/exact/T", "modal/omega"):
         np.testing.assert_allclose(mine[k], paper[k], rtol=1e-9, err_msg=k)
-    assert h5_attrs(tmp_path / "runs/sci/static.h5")["case_yaml"] == text
+    assert h5_attrs(tmp_path / "runs/sci/static.h5")["case_yaml"] == text + "# cablesim name (the case file's): sci\n"
 
 
 def test_example_output_runs(invoke_cli, tmp_path):
-    """The README workflow: `cablesim example > my-case.yaml; cablesim static my-case.yaml`."""
+    """The README workflow: `cablesim example > my-case.yaml; cablesim static my-case.yaml`. A
+    case copied from the example gets its own folder (it wrote into runs/paper-example/)."""
     rc, out, _, _ = invoke_cli("example")
     assert rc == 0
     (tmp_path / "my-case.yaml").write_text(out)
     rc, _, err, _ = invoke_cli("static", "my-case.yaml", "--no-plot")
     assert rc == 0, err
-    assert (tmp_path / "runs" / "paper-example" / "static.h5").is_file()
+    assert (tmp_path / "runs" / "my-case" / "static.h5").is_file()
+    assert not (tmp_path / "runs" / "paper-example").exists()
 
 
 def test_pretensioned_short_cable_with_exact_analysis(invoke_cli, tmp_path, write_case, paper_case):
@@ -515,7 +518,7 @@ BAD = [
     ("typo-damping", _replace("modes: [1, 2]", "mode: [1, 2]"), [], ["`damping.mode` is not a known key"]),
     ("typo-loads", _replace("  FL: [", "  Fl: ["), [], ["`loads.Fl` is not a known key"]),
     ("bad-analysis", _replace("analysis: exact", "analysis: exakt"), [], ["`analysis`", "'exact' or 'approximate'"]),
-    ("bad-name", _replace("name: paper-example", "name: paper example"), [], ["`name`", "letters, digits"]),
+    ("bad-name", _replace("# name: my-case", "name: paper example"), [], ["`name`", "letters, digits"]),
     ("damping-modes-beyond-2n", _replace("modes: [1, 2]", "modes: [1, 5]"), [], ["damping.modes", "2n = 4"]),
     ("damping-ratio-and-a0", _replace("modes: [1, 2]", "a0: 0.1"), [], ["`damping`", "not both"]),
     ("too-short-approximate", _mutate(_short_approx), [], ["cable.S", "chord", "analysis: exact"]),
@@ -561,7 +564,7 @@ def test_E_times_A_out_of_range(invoke_cli, tmp_path, write_case, paper_case, E,
 
 
 def test_null_name(invoke_cli, tmp_path, write_case):
-    write_case(CONFIG_EXAMPLE.read_text().replace("name: paper-example", "name:"), "nullname.yaml")
+    write_case(CONFIG_EXAMPLE.read_text().replace("# name: my-case", "name:"), "nullname.yaml")
     rc, out, err, exc = invoke_cli("static", "nullname.yaml", "--no-plot")
     if rc == 0:
         assert (tmp_path / "runs" / "nullname" / "static.h5").is_file()

@@ -16,15 +16,21 @@ from cablesim.case import parse_case
 from cablesim.errors import CablesimError
 from helpers_cli import EXAMPLE, assert_refused, example_with
 
+
+def _line(start: str) -> int:
+    """The line number (from 1) of the example's first line starting with ``start``."""
+    return next(i for i, line in enumerate(EXAMPLE.splitlines(), 1) if line.startswith(start))
+
 A0A1 = ("  ratio: 0.01              # Rayleigh damping: this ratio in the two modes below\n"
         "  modes: [1, 2]            # which two modes get it (counted from 1)\n")
 
 REFUSED = {
     # silently wrong numbers
     "duplicate-key": (example_with(("  H: 20.0", "  L: 200.0\n  H: 20.0")),
-                      ["`L` appears twice in `cable`", "lines 9 and 10", "Keep one"]),
+                      ["`L` appears twice in `cable`", f"lines {_line('  L: 300.0')} and {_line('  L: 300.0') + 1}",
+                       "Keep one"]),
     "second-loads-section": (EXAMPLE + "\nloads:\n  F0: [1.0, 2.0, 3.0, 4.0]\n",
-                             ["`loads` appears twice at the top level", "lines 16 and"]),
+                             ["`loads` appears twice at the top level", f"lines {_line('loads:')} and"]),
     "booleans-as-masses": (example_with(("masses: [8000.0, 14000.0]", "masses: [true, yes]")),
                            ["`cable.masses[1]` must be a number, not true/false", "`cable.masses[2]`"]),
     "octal": (example_with(("H: 20.0", "H: 020")), ["`cable.H`", "octal number 16", "plain decimal"]),
@@ -49,7 +55,7 @@ REFUSED = {
     "dt-1e-300": (EXAMPLE + "integrator:\n  name: rk4\n  dt: 1.0e-300\n", ["`integrator.dt` must be from 1e-09 to 1000 s"]),
     "20000-nodes": (example_with(("S: [130.0, 100.0, 110.0]", "S: [" + ", ".join(["0.02"] * 20001) + "]")),
                     ["`cable.S`", "at most 2000 interior nodes"]),
-    "name-too-long": (example_with(("name: paper-example", "name: " + "a" * 300)), ["`name` is 300 characters long"]),
+    "name-too-long": (example_with(("# name: my-case", "name: " + "a" * 300)), ["`name` is 300 characters long"]),
     # misleading
     "all-zero-loads": (example_with(("F0: [300.0e3, 1100.0e3, 450.0e3, 2000.0e3]", "F0: [0.0, 0.0, 0.0, 0.0]")),
                        ["loads.F0 is all zero", "no definite shape", "Give the sustained nodal loads"]),
@@ -87,7 +93,7 @@ def test_ambiguous_numbers_in_set_are_refused(invoke_cli, tmp_path):
 
 
 def test_booleans_still_read_where_a_boolean_belongs():
-    case = parse_case(EXAMPLE + "  floquet: yes\n")
+    case = parse_case(EXAMPLE.replace("\nsweep:", "\nsweep:\n  floquet: yes", 1))
     assert case.sweep.floquet is True
 
 

@@ -155,7 +155,7 @@ def test_continuation_in_gamma_finds_the_softening_folds():
 
 
 @pytest.mark.parametrize("setting, words", [
-    (None, "no `continuation:` section"),
+    ("continuation=null", "no `continuation:` section"),
     ("continuation={omega: 2.0}", "must be a range"),
     ("continuation={omega: {start: 1, stop: 1}}", "start and stop must differ"),
     ("continuation={parameter: gamma, omega: {start: 1, stop: 2}, gamma: {start: 1, stop: 2}}", "must be a single value"),

@@ -22,7 +22,8 @@ import numpy as np
 import pytest
 
 from cablesim import api
-from cablesim.analyses.sweep import new_sweep_result, record_point
+from cablesim.analyses.sweep import new_sweep_result
+from cablesim.analyses.sweep_points import SweepPoint
 from cablesim.dynamics.result import HistoryResult
 from cablesim.dynamics.status import Status
 from cablesim.io.hdf5 import atomic_h5, read_history, write_history, write_static
@@ -262,7 +263,7 @@ def test_hand_built_partial_sweep_round_trip(tmp_path, label):
                 "code": int(Status.SLACK if failed else Status.COMPLETED),
                 "final_state": [0.0] * 12, "wall": 0.5,
             }
-            record_point(res, rec)
+            res.add(SweepPoint.from_json(rec, len(res.channels), res.n_dof))
             want["amplitude"][i] = amp
             want["halfrange"][i] = 0.9 * amp
             want["response_frequency"][i] = np.nan if failed else freq

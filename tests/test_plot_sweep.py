@@ -352,20 +352,21 @@ def test_failed_points_are_never_peaks_nor_part_of_a_curve(tmp_path, figures):
     """A point that stopped early (a segment went slack) keeps its partial amplitude in the file,
     but the summary never quotes it as a peak and the plot never joins it into the curve."""
     from cablesim import api
-    from cablesim.analyses.sweep import new_sweep_result, record_point
+    from cablesim.analyses.sweep import new_sweep_result
+    from cablesim.analyses.sweep_points import SweepPoint
     from cablesim.dynamics.status import Status
     from cablesim.io.sweeps import read_sweep, write_sweep
 
     case = api.load_case(None, ["sweep.omega=[2.0, 2.4, 2.8]", "sweep.channels=[z2]"])
     res = new_sweep_result(case, case.text)
     for i, (amp, failed) in enumerate([(0.5, False), (38.8, True), (0.7, False)]):
-        record_point(res, {
+        res.add(SweepPoint.from_json({
             "curve": 0, "index": i, "omega": float(res.omega[i]), "amplitude": [amp], "halfrange": [amp],
             "response_frequency": [None if failed else float(res.omega[i])], "period": 0 if failed else 1,
             "steady": not failed, "t_end": 29.0 if failed else 600.0, "floquet": None,
             "status": "stopped" if failed else "steady", "code": int(Status.SLACK if failed else Status.COMPLETED),
             "final_state": [0.0] * 12, "wall": 0.1,
-        })
+        }, len(res.channels), res.n_dof))
     path = write_sweep(tmp_path / "failed.h5", res)
     curve = read_sweep(path).curves[0]
     assert list(curve.valid) == [True, False, True] and list(curve.failed) == [False, True, False]

@@ -51,8 +51,8 @@ def files(tmp_path_factory):
             assert res.exit_code == 0, res.stderr
     finally:
         os.chdir(old)
-    return {"static": root / "s.h5", "history": root / "runs/paper-example/history-w2.4-d5.h5",
-            "free-vibration": root / "runs/paper-example/free-vibration-mode3-v1.h5", "sweep": root / "w.h5"}
+    return {"static": root / "s.h5", "history": root / "runs/case/history-w2.4-d5.h5",
+            "free-vibration": root / "runs/case/free-vibration-mode3-v1.h5", "sweep": root / "w.h5"}
 
 
 @pytest.mark.parametrize("kind", ["static", "history", "free-vibration", "sweep"])

@@ -158,11 +158,14 @@ def history_cost(what: str, eom: EquationsOfMotion, integ: Integrator, omega_int
 
 
 def sweep_cost(points: list[tuple[EquationsOfMotion, Integrator, float]], n_points: int, curves: int, cap: float,
-               window: float, channels: int) -> Cost:
-    """Upper bound of a sweep's cost: every point integrated to the cap.
+               window: float, channels: int, refined: int = 0) -> Cost:
+    """Upper bound of a sweep's cost: every point of the grid integrated to the cap.
 
     ``points`` holds ``(eom, integrator, omega)`` at a few frequencies of the grid; the largest
-    step rate among them stands for every point.
+    step rate among them stands for every point. Refinement may add up to ``refined``
+    frequencies; they are named in the detail but left out of the count that the limits judge
+    (a refinement is never the user's mistake, and each point it adds costs what one of the
+    grid does).
     """
     per_s = max(steps_per_second(eom, integ, max(w, float(eom.frequencies[0]))) for eom, integ, w in points)
     w_high = max(w for _, _, w in points)
@@ -172,6 +175,7 @@ def sweep_cost(points: list[tuple[EquationsOfMotion, Integrator, float]], n_poin
     strobes = cap * w_high / (2 * np.pi)
     memory = 8.0 * (total * (4 * channels + 8 + 3 * nd) + 2 * (fine * 3 * nd + strobes * 2 * nd))
     disk = 8.0 * total * (3 * channels + 8) + 80.0 * total
+    more = f"; refinement may add up to {refined * curves} more where neighbouring points disagree" if refined else ""
     return Cost("sweep", total * cap * per_s, total, memory, disk,
-                f"{total} points of up to {cap:.6g} s, {points[0][1].name}, up to {per_s:.3g} steps per simulated second",
-                per_point=cap * per_s)
+                f"{total} points of up to {cap:.6g} s, {points[0][1].name}, up to {per_s:.3g} steps per simulated "
+                f"second{more}", per_point=cap * per_s)

@@ -14,6 +14,7 @@ from ..dynamics.integrators import Integrator
 from ..dynamics.result import HistoryResult
 from ..dynamics.simulate import simulate
 from ..errors import CablesimError
+from ..modal import modal_damping_ratios
 from ..statics import segment_geometry
 from .cost import Cost, history_cost
 from .setup import build_equations, make_integrator, mode_velocity, need_inextensible, output_interval
@@ -78,8 +79,8 @@ def plan_history(
     omega = omega if omega is not None else case.history.omega
     if omega is None or omega <= 0:
         raise CablesimError(
-            "No forcing frequency: give --omega W (rad/s) or history.omega in the case file.",
-            field="history.omega",
+            "No forcing frequency: give omega (rad/s; on the command line --omega W) or history.omega in the "
+            "case file.", field="history.omega",
         )
     if not np.any(case.FL):
         raise CablesimError(
@@ -181,10 +182,36 @@ def plan_free_vibration(
     check_initial_state(s0, "free_vibration.z0 and v0" if mode is None else "free_vibration.peak_velocity")
     if z0 is not None:
         _check_taut_start(static, z0)
+    if duration is None:
+        duration = decay_duration(static.modes.omega, eom.a0, eom.a1, mode)
     step = output_interval(output_step or fv.output_step, w_int, duration)
     integ = make_integrator(case.integrator, eom, w_int, integrator)
     split = split_outputs(case, split)
     return HistoryPlan("free-vibration", static, eom, integ, w_int, duration, step, s0, split)
+
+
+#: A free vibration runs by default until its motion has decayed to this fraction ...
+DECAY_TO = 1e-4
+#: ... and for at least this many periods of its mode (a spectrum needs a few), at most this many.
+DECAY_PERIODS = (4, 2000)
+
+
+def decay_duration(omega: np.ndarray, a0: float, a1: float, mode: int | None) -> float:
+    """The default length of a free vibration: until the linear response of ``mode`` (or of
+    the slowest-decaying mode, for a start given by z0 and v0) has decayed to
+    :data:`DECAY_TO` of its start, within :data:`DECAY_PERIODS` of its periods, s.
+
+    Under Rayleigh damping mode ``k`` decays as ``exp(-sigma t)`` with ``sigma = xi w`` when
+    underdamped and ``w (xi - sqrt(xi^2 - 1))`` (its slow root) when overdamped.
+    """
+    w = np.asarray(omega, dtype=float)
+    xi = modal_damping_ratios(w, a0, a1)
+    sigma = np.where(xi < 1.0, xi * w, w * (xi - np.sqrt(np.maximum(xi * xi - 1.0, 0.0))))
+    k = (mode - 1) if mode is not None and mode <= w.size else int(np.argmin(np.where(sigma > 0, sigma, np.inf)))
+    period = 2.0 * np.pi / w[k]
+    t = np.log(1.0 / DECAY_TO) / sigma[k] if sigma[k] > 0 else np.inf
+    lo, hi = DECAY_PERIODS
+    return float(np.clip(t, lo * period, hi * period))
 
 
 def _check_taut_start(static: StaticResult, z0: np.ndarray) -> None:

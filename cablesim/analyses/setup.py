@@ -13,7 +13,7 @@ from ..case import Case, IntegratorSpec
 from ..dynamics.equations import EquationsOfMotion
 from ..dynamics.integrators import Integrator
 from ..dynamics.integrators.settings import (DEFAULT_ATOL_PER_CHORD, DEFAULT_RTOL, RK4_SAFE_STEP, SCHEMES,
-                                              STEPS_PER_PERIOD, STIFF_RATIO, dividing_step,
+                                              STEPS_PER_PERIOD, STIFF_RATIO, default_atol, dividing_step,
                                               ignored_keys, is_stiff, make, rk4_stable_step)
 from ..errors import CablesimError
 from ..modal import fastest_rate, modal_analysis_banded, rayleigh_coefficients
@@ -174,3 +174,14 @@ def mode_velocity(static: StaticResult, mode: int, peak_velocity: float) -> np.n
     phi = shapes[:, mode - 1]
     k = int(np.argmax(np.abs(phi)))
     return phi * (peak_velocity / phi[k])
+
+
+def integrator_record(integ: Integrator) -> dict:
+    """What a sweep's file and summary state about its integrator: the name and, for the
+    adaptive scheme, the effective tolerances (``integrator_rtol``, ``integrator_atol`` in m,
+    ``integrator_dt_max`` in s), the same at every point. A fixed step is chosen per point (to
+    divide its forcing period), so it is not stated once for the sweep."""
+    out: dict = {"integrator": integ.name}
+    if not integ.fixed_step:
+        out.update({f"integrator_{k}": float(v) for k, v in integ.settings().items()})
+    return out

@@ -6,6 +6,15 @@ so all points run in parallel. On an ``up`` or ``down`` curve each point starts 
 state of the previous one, which reveals jumps and hysteresis; such a curve is a chain, and the
 chains (up, down, each gamma) run in parallel with one another.
 
+After the grid, the sweep refines itself where neighbouring points disagree
+(:mod:`cablesim.analyses.refine`, ``sweep.refine``): each round computes the midpoints of the
+intervals the rules flag, on every curve (a refined point of a chain starts from the end state
+of its neighbour before it in the chain's direction).
+
+The statics are solved once per sweep; the workers receive them with the rest of the sweep's
+:class:`SweepContext` (:mod:`cablesim.analyses.pool`), and each finished point comes back as a
+:class:`~cablesim.analyses.sweep_points.SweepPoint`.
+
 The driver knows nothing of files: every finished point goes to a *recorder* (see
 :class:`SweepRecorder`); :class:`cablesim.io.journal.SweepFile` is the one that journals each
 point and keeps the HDF5 file up to date, so that a killed run loses nothing.
@@ -13,29 +22,24 @@ point and keeps the HDF5 file up to date, so that a killed run loses nothing.
 
 from __future__ import annotations
 
-import contextlib
-import functools
-import multiprocessing
-import os
-import threading
 import time
-from dataclasses import dataclass, field
+import uuid
+from dataclasses import dataclass, field, replace
 from typing import Callable, Iterable, Protocol
 
-import joblib
 import numpy as np
 
-from ..case import Case, parse_case
+from ..case import Case
 from ..channels import channel_index
-from ..dynamics.status import Status
 from ..dynamics.steady import SteadyCriterion, steady_response
-from ..orbits.accelerate import accelerated_steady_response
 from ..errors import CablesimError
+from ..orbits.accelerate import accelerated_steady_response
+from . import pool
 from .cost import Cost, sweep_cost
-from .setup import build_equations, make_integrator
-from .static import run_static
-
-FLOAT_FIELDS = ("amplitude", "halfrange", "response_frequency")
+from .refine import BUDGET, BUDGET_FLOOR, finest_step, refinements
+from .setup import build_equations, integrator_record, make_integrator
+from .static import StaticResult, run_static
+from .sweep_points import BadRecord, CurveTable, SweepPoint
 
 
 @dataclass(frozen=True)
@@ -50,10 +54,15 @@ class Curve:
 class SweepResult:
     """All results of a sweep, complete or not.
 
-    ``settings`` holds the sweep's ``cap``, ``window``, ``tol``, ``max_period`` and
-    ``floquet_check``; ``modal_omega`` the linear modal frequencies, rad/s. Arrays have a leading curve-specific layout: ``data[curve][field]`` with ``(P, C)`` for the
-    per-channel fields and ``(P,)`` for ``period``, ``steady``, ``t_end``, ``floquet``,
-    ``done``.
+    ``omega`` holds the frequencies computed or to compute, rad/s (the grid, then the refined
+    points, ascending once refined); ``points`` every finished point by ``(curve, omega)``;
+    :meth:`table` (or ``data[curve]``) a curve's columns over ``omega``
+    (:class:`~cablesim.analyses.sweep_points.CurveTable`: ``(P, C)`` per-channel columns,
+    ``(P,)`` ``period``, ``steady``, ``t_end``, ``floquet``, ``done``, ...). ``settings`` holds
+    the sweep's ``cap``, ``window``, ``tol``, ``max_period``, ``floquet_check``, ``accelerate``
+    and ``refine`` (halvings allowed), ``grid_points`` and ``finest_step``; ``modal_omega`` the
+    linear modal frequencies, rad/s. Sizes come from the cable: ``n_dof`` (2n) and
+    ``n_segments`` (n + 1).
     """
 
     omega: np.ndarray
@@ -61,19 +70,58 @@ class SweepResult:
     direction: str
     channels: list[str]
     curves: list[Curve]
+    n_dof: int
     analysis: str = "exact"
     modal_omega: np.ndarray = field(default_factory=lambda: np.empty(0))
     case_name: str = "case"
     case_text: str = ""
     settings: dict = field(default_factory=dict)
-    data: dict = field(default_factory=dict)
-    states: dict = field(default_factory=dict)  # (curve, index) -> final state (chains)
+    points: dict = field(default_factory=dict)  # (curve, omega) -> SweepPoint
     warnings: list = field(default_factory=list)  # e.g. journal records that were skipped
+    _tables: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def n_segments(self) -> int:
+        """Segments of the cable (n + 1)."""
+        return self.n_dof // 2 + 1
+
+    def add(self, p: SweepPoint) -> None:
+        """Enter a finished point."""
+        self.points[(p.curve, p.omega)] = p
+        self._tables.clear()
+
+    def extend(self, new_omega: np.ndarray) -> None:
+        """Add frequencies to compute (refinement): ``omega`` becomes the sorted union."""
+        self.omega = np.unique(np.concatenate([self.omega, np.asarray(new_omega, dtype=float)]))
+        self._tables.clear()
+
+    def has(self, curve: int, omega: float) -> bool:
+        """Whether the point is finished."""
+        return (curve, float(omega)) in self.points
+
+    def table(self, curve: int) -> CurveTable:
+        """The columns of one curve over :attr:`omega`."""
+        if curve not in self._tables:
+            mine = {w: p for (c, w), p in self.points.items() if c == curve}
+            self._tables[curve] = CurveTable.from_points(self.omega, mine, len(self.channels), self.n_dof)
+        return self._tables[curve]
+
+    @property
+    def data(self) -> dict[int, CurveTable]:
+        """Every curve's columns, by curve index (``data[0]["amplitude"]``, ``data[0].amplitude``)."""
+        return {c: self.table(c) for c in range(len(self.curves))}
+
+    def state(self, curve: int, omega: float):
+        """The end state of a finished point that can start the next one of a chain (None if
+        it is not finished or stopped early: only a point that ran to its end, at forcing phase
+        0, can)."""
+        p = self.points.get((curve, float(omega)))
+        return None if p is None or p.failed else p.final_state
 
     @property
     def n_done(self) -> int:
         """Completed points over all curves."""
-        return int(sum(d["done"].sum() for d in self.data.values()))
+        return int(sum(t.done.sum() for t in self.data.values()))
 
     @property
     def n_total(self) -> int:
@@ -83,17 +131,22 @@ class SweepResult:
     @property
     def n_failed(self) -> int:
         """Points that stopped early (a slack segment, a blow-up): their values are partial."""
-        return int(sum((d["failed"] & d["done"]).sum() for d in self.data.values()))
+        return int(sum((t.failed & t.done).sum() for t in self.data.values()))
+
+    @property
+    def n_refined(self) -> int:
+        """Frequencies added by refinement."""
+        return self.omega.size - int(self.settings.get("grid_points", self.omega.size))
 
     def failures(self) -> list[str]:
         """``"w = 5.05 rad/s (up): stopped at t = 12.3 s: segment 2 went slack ..."`` per failed point."""
         out = []
         for c, curve in enumerate(self.curves):
-            d = self.data[c]
+            d = self.table(c)
             g = "" if self.gamma is None else f", gamma = {self.gamma[curve.gamma_index]:g}"
             label = "" if curve.direction == "independent" and not g else f" ({curve.direction}{g})"
-            for i in np.flatnonzero(d["failed"] & d["done"]):
-                out.append(f"w = {self.omega[i]:.6g} rad/s{label}: {d['status'][i]}")
+            for i in np.flatnonzero(d.failed & d.done):
+                out.append(f"w = {self.omega[i]:.6g} rad/s{label}: {d.status[i]}")
         return out
 
     @property
@@ -115,6 +168,8 @@ def plan(case: Case) -> tuple[np.ndarray, np.ndarray | None, list[Curve]]:
     """Frequencies, gammas and curves of the case's sweep."""
     sw = case.sweep
     omega = sw.frequencies()
+    if sw.refine_levels:
+        omega = np.unique(omega)  # refinement works on the ascending grid
     gamma = None if sw.gamma is None else np.array(sw.gamma, dtype=float)
     dirs = {"independent": ["independent"], "up": ["up"], "down": ["down"], "both": ["up", "down"]}[sw.direction]
     curves = [Curve(g, d) for g in range(1 if gamma is None else gamma.size) for d in dirs]
@@ -125,198 +180,150 @@ def plan(case: Case) -> tuple[np.ndarray, np.ndarray | None, list[Curve]]:
 # One point (runs in a worker)
 # ----------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
-class PointJob:
-    """Everything a worker needs for one point (picklable, small)."""
+class SweepContext:
+    """What every point of one sweep shares, solved once: the case, its statics, the channels
+    and the choices of analysis and integrator. Sent to each worker once."""
 
-    case_text: str
-    analysis: str | None
+    case: Case
+    static: StaticResult
     integrator: str | None
-    gamma: float
-    omega: float
     channels: tuple[int, ...]
+
+    def fundamental(self):
+        """The equations of motion and the integrator of this sweep forced at the first mode's
+        frequency."""
+        w = float(self.static.modes.omega[0])
+        eom = build_equations(self.case, self.static, omega=w)
+        return eom, make_integrator(self.case.integrator, eom, w, self.integrator)
+
+    def warm_up(self) -> None:
+        """Load (or compile) the kernels of this sweep: a few forcing periods at the fundamental."""
+        w = float(self.static.modes.omega[0])
+        eom, integ = self.fundamental()
+        steady_response(eom, integ, np.array(self.channels), SteadyCriterion(cap=4 * 2 * np.pi / w,
+                                                                               window=2 * 2 * np.pi / w))
+
+
+@dataclass(frozen=True)
+class PointJob:
+    """One point to compute (small: the rest is in the :class:`SweepContext`)."""
+
     curve: int
-    index: int
+    omega: float
+    gamma: float
     start: tuple | None  # initial state for chains
-    parent: int = 0  # process id of the sweep's driver (workers end when it ends)
 
 
-@functools.lru_cache(maxsize=8)
-def _static_for(case_text: str, analysis: str | None):
-    case = parse_case(case_text)
-    return case, run_static(case, analysis, all_models=False)
-
-
-_WATCHDOG: list[int] = []
-
-
-def end_with_parent(parent: int, interval: float = 0.5) -> None:
-    """In a local worker process: exit as soon as the sweep's driver ``parent`` is gone.
-
-    A worker whose driver was killed would otherwise finish its point (minutes, for a long cap)
-    with nobody to report to. A daemon thread watches the parent process id; the compiled time
-    loop returns to Python many times a second, so the thread gets its turn.
-    """
-    if _WATCHDOG or parent <= 0 or os.getpid() == parent:
-        return  # already watching, or in the driver itself (one job: no workers)
-    if not multiprocessing.current_process().name.startswith("LokyProcess"):
-        return  # not a local worker of this sweep (a Dask worker belongs to its cluster)
-    if os.getppid() != parent:
-        os._exit(1)  # the driver died while this worker was starting
-    _WATCHDOG.append(parent)
-
-    def watch():
-        while True:
-            time.sleep(interval)
-            if os.getppid() != parent:
-                os._exit(1)
-
-    threading.Thread(target=watch, name="cablesim-end-with-parent", daemon=True).start()
-
-
-def solve_point(job: PointJob) -> dict:
+def solve_point(ctx: SweepContext, job: PointJob) -> SweepPoint:
     """Steady response of one sweep point (the unit of parallel work)."""
-    end_with_parent(job.parent)
-    case, static = _static_for(job.case_text, job.analysis)
-    sw = case.sweep
+    case, static, sw = ctx.case, ctx.static, ctx.case.sweep
     eom = build_equations(case, static, omega=job.omega, load_scale=job.gamma)
-    integ = make_integrator(case.integrator, eom, max(job.omega, float(static.modes.omega[0])), job.integrator)
-    crit = SteadyCriterion(
-        cap=sw.duration, window=sw.window, tol=sw.tol, max_period=sw.max_period, floquet=sw.floquet
-    )
+    integ = make_integrator(case.integrator, eom, max(job.omega, float(static.modes.omega[0])), ctx.integrator)
+    crit = SteadyCriterion(cap=sw.duration, window=sw.window, tol=sw.tol, max_period=sw.max_period, floquet=sw.floquet)
     s0 = None if job.start is None else np.array(job.start)
     t0 = time.perf_counter()
     decide = accelerated_steady_response if sw.accelerate else steady_response
-    r = decide(eom, integ, np.array(job.channels), crit, s0=s0)
-    return {
-        "curve": job.curve,
-        "index": job.index,
-        "omega": job.omega,
-        "amplitude": [None if not np.isfinite(x) else float(x) for x in r.amplitude],
-        "halfrange": [None if not np.isfinite(x) else float(x) for x in r.halfrange],
-        "response_frequency": [None if not np.isfinite(x) else float(x) for x in r.response_frequency],
-        "period": int(r.period),
-        "steady": bool(r.steady),
-        "t_end": float(r.t_end),
-        "floquet": None if not np.isfinite(r.floquet) else float(r.floquet),
-        "decided": r.decided,
-        "multipliers": None if r.multipliers is None else [[float(m.real), float(m.imag)] for m in r.multipliers],
-        "status": r.message,
-        "code": int(r.status),
-        "final_state": r.final_state.tolist() if np.all(np.isfinite(r.final_state)) else None,
-        "peak_tension": None if r.peak_tension is None else r.peak_tension.tolist(),
-        "slack_fraction": None if r.slack_fraction is None else r.slack_fraction.tolist(),
-        "wall": time.perf_counter() - t0,
-        "integrator": integ.name,
-    }
+    r = decide(eom, integ, np.array(ctx.channels), crit, s0=s0)
+    return SweepPoint.from_response(job.curve, job.omega, r, time.perf_counter() - t0, integ.name)
+
+
+def _solve_in_worker(key: str, job: PointJob) -> SweepPoint:
+    return solve_point(pool.context(key), job)
+
+
+def _solve_remote(ctx: SweepContext, job: PointJob) -> SweepPoint:
+    return solve_point(ctx, job)
 
 
 # ----------------------------------------------------------------------------------------------
-# Journal and result assembly
+# Setting up: the statics once
 # ----------------------------------------------------------------------------------------------
-def _empty_result(omega, gamma, direction, channels, curves, **meta) -> SweepResult:
-    res = SweepResult(omega=omega, gamma=gamma, direction=direction, channels=channels, curves=curves, **meta)
-    P, C = omega.size, len(channels)
-    n_dof = res.modal_omega.size  # one modal frequency per degree of freedom
-    for c in range(len(curves)):
-        res.data[c] = {
-            "amplitude": np.full((P, C), np.nan),
-            "halfrange": np.full((P, C), np.nan),
-            "response_frequency": np.full((P, C), np.nan),
-            "period": np.zeros(P, dtype=np.int64),
-            "steady": np.zeros(P, dtype=bool),
-            "failed": np.zeros(P, dtype=bool),
-            "t_end": np.full(P, np.nan),
-            "floquet": np.full(P, np.nan),
-            "wall": np.full(P, np.nan),
-            "decided": np.full(P, "", dtype=object),
-            "multipliers": np.full((P, 2 * n_dof), np.nan + 0j),
-            "peak_tension": np.full((P, n_dof // 2 + 1), np.nan),
-            "slack_fraction": np.full((P, n_dof // 2 + 1), np.nan),
-            "done": np.zeros(P, dtype=bool),
-            "status": np.full(P, "", dtype=object),
-        }
-    return res
+def _check_sweepable(case: Case, static) -> None:
+    if static.inextensible is None:
+        raise CablesimError("Sweeps need sum(cable.S) greater than the chord (see `history`).", field="cable.S")
+    if not np.any(case.FL):
+        raise CablesimError("loads.FL is zero, so a sweep has nothing to force the cable with.", field="loads.FL")
 
 
-def record_point(res: SweepResult, rec: dict) -> None:
-    """Enter one point's record (from :func:`solve_point` or a journal) into the result."""
-    d = res.data[rec["curve"]]
-    i = rec["index"]
-    for f in FLOAT_FIELDS:
-        d[f][i] = [np.nan if x is None else x for x in rec[f]]
-    d["period"][i] = rec["period"]
-    d["steady"][i] = rec["steady"]
-    d["failed"][i] = not Status(rec["code"]).success
-    d["t_end"][i] = rec["t_end"]
-    d["floquet"][i] = np.nan if rec["floquet"] is None else rec["floquet"]
-    d["wall"][i] = rec.get("wall", np.nan)
-    d["decided"][i] = rec.get("decided", "")
-    for f in ("peak_tension", "slack_fraction"):
-        if rec.get(f) is not None:
-            d[f][i] = rec[f]
-    if rec.get("multipliers"):
-        mu = np.array([complex(a, b) for a, b in rec["multipliers"]])
-        d["multipliers"][i, : mu.size] = mu
-    d["status"][i] = str(rec.get("status", ""))
-    d["done"][i] = True
-    # Only a point that ran to its end (at forcing phase 0) can start the next one of a chain.
-    res.states[(rec["curve"], i)] = None if d["failed"][i] else rec.get("final_state")
+#: The last statics solved for a sweep, by (case text, analysis): the estimate and the sweep share them.
+_STATICS: dict = {}
 
 
-_NUMBER = (int, float)
+def _statics(case: Case, analysis: str | None) -> StaticResult:
+    key = (case.text or repr(case), analysis)
+    if key not in _STATICS:
+        _STATICS.clear()
+        _STATICS[key] = run_static(case, analysis, all_models=False)
+    return _STATICS[key]
 
 
-def _numbers(x, n: int, none_ok: bool = True) -> bool:
-    return isinstance(x, list) and len(x) == n and all(
-        (v is None and none_ok) or (isinstance(v, _NUMBER) and not isinstance(v, bool)) for v in x)
+def sweep_statics(case: Case, analysis: str | None = None) -> StaticResult:
+    """The static equilibrium a sweep of ``case`` starts from, solved once per case and
+    analysis (the cost estimate and the sweep share it)."""
+    if case.sweep is None:
+        raise CablesimError(
+            "This case has no `sweep:` section. Add one, for example "
+            "`sweep: {omega: {start: 0.5, stop: 6.0, num: 111}, channels: [z2, z4]}` "
+            "(`cablesim example` shows a complete one).",
+            field="sweep",
+        )
+    static = _statics(case, analysis)
+    _check_sweepable(case, static)
+    return static
 
 
-def check_record(res: SweepResult, rec) -> str | None:
-    """Why a journal record cannot be entered into ``res`` (None if it can)."""
-    if not isinstance(rec, dict):
-        return "it is not a record"
-    need = ("curve", "index", "omega", "amplitude", "halfrange", "response_frequency", "period", "steady",
-            "t_end", "code", "floquet")
-    missing = [k for k in need if k not in rec]
-    if missing:
-        return f"it lacks {', '.join(missing)}"
-    c, i = rec["curve"], rec["index"]
-    if not all(isinstance(v, int) and not isinstance(v, bool) for v in (c, i, rec["period"], rec["code"])):
-        return "curve, index, period and code must be whole numbers"
-    if not 0 <= c < len(res.curves) or not 0 <= i < res.omega.size:
-        return f"point ({c}, {i}) is not a point of this sweep"
-    if not isinstance(rec["omega"], _NUMBER) or not abs(rec["omega"] - res.omega[i]) <= 1e-9 * res.omega[i]:
-        return f"its frequency {rec['omega']!r} is not that of point {i + 1} ({res.omega[i]:g} rad/s)"
-    C = len(res.channels)
-    if not all(_numbers(rec[k], C) for k in FLOAT_FIELDS):
-        return f"its per-channel values are not {C} numbers each"
-    if rec["code"] not in {int(s) for s in Status}:
-        return f"its status code {rec['code']} is unknown"
-    if not isinstance(rec["steady"], bool) or not _numbers([rec["t_end"], rec.get("wall", 0.0)], 2, none_ok=False):
-        return "steady must be true or false, t_end and wall numbers"
-    if not _numbers([rec["floquet"]], 1):
-        return "floquet must be a number or null"
-    final, n = rec.get("final_state"), 3 * res.modal_omega.size
-    if final is not None and n and not _numbers(final, n, none_ok=False):
-        return f"its final state is not a list of {n} numbers"
-    return None
+def new_sweep_result(case: Case, case_text: str, analysis: str | None = None,
+                     static: StaticResult | None = None) -> SweepResult:
+    """An empty :class:`SweepResult` for the case's ``sweep:`` section (nothing computed)."""
+    static = static if static is not None else sweep_statics(case, analysis)
+    omega, gamma, curves = plan(case)
+    names, _ = channel_indices(case, case.sweep.channels)
+    sw = case.sweep
+    settings = dict(cap=sw.duration, window=sw.window, tol=sw.tol, max_period=sw.max_period, floquet_check=sw.floquet,
+                    accelerate=sw.accelerate, refine=sw.refine_levels, grid_points=int(omega.size),
+                    finest_step=finest_step(omega, sw.refine_levels))
+    return SweepResult(omega=omega, gamma=gamma, direction=sw.direction, channels=names, curves=curves,
+                       n_dof=2 * case.cable.n_nodes, analysis=static.analysis, modal_omega=static.modes.omega.copy(),
+                       case_name=case.name, case_text=case_text, settings=settings)
+
+
+def estimate_sweep(case: Case, analysis: str | None = None, integrator: str | None = None) -> Cost:
+    """Upper bound of the cost of the case's sweep (:mod:`cablesim.analyses.cost`), nothing
+    integrated: every point, refined ones included, to its cap."""
+    static = sweep_statics(case, analysis)
+    res = new_sweep_result(case, case.text, analysis, static)
+    w1 = float(static.modes.omega[0])
+    picks = np.unique(np.linspace(0, res.omega.size - 1, min(res.omega.size, 12)).round().astype(int))
+    points = []
+    for w in res.omega[picks]:
+        eom = build_equations(case, static, omega=float(w))
+        points.append((eom, make_integrator(case.integrator, eom, max(float(w), w1), integrator), float(w)))
+    sw = case.sweep
+    return sweep_cost(points, res.omega.size, len(res.curves), sw.duration, sw.window, len(res.channels),
+                      refine_budget(res))
+
+
+def refine_budget(res: SweepResult) -> int:
+    """Most frequencies refinement may add (:data:`cablesim.analyses.refine.BUDGET` times the
+    grid's and :data:`~cablesim.analyses.refine.BUDGET_FLOOR`)."""
+    return BUDGET * int(res.settings["grid_points"]) + BUDGET_FLOOR if res.settings.get("refine") else 0
 
 
 # ----------------------------------------------------------------------------------------------
-# The driver
+# The recorder
 # ----------------------------------------------------------------------------------------------
 class SweepRecorder(Protocol):
     """What :func:`run_sweep` tells about its progress (all methods optional in spirit: a
     recorder that keeps nothing returns ``[]`` from :meth:`previous` and ignores the rest)."""
 
     def previous(self) -> list[dict]:
-        """Records of points already computed (resuming an interrupted sweep)."""
+        """Journal records (JSON form) of points already computed (resuming a sweep)."""
 
     def begin(self) -> None:
         """Called once the settings are valid, before the first point."""
 
-    def point(self, record: dict, result: SweepResult) -> None:
-        """Called after each point, with its record and the result so far."""
+    def point(self, point: SweepPoint, result: SweepResult) -> None:
+        """Called after each point, with it and the result so far."""
 
     def end(self, result: SweepResult, complete: bool) -> None:
         """Called last, also when the sweep is interrupted or fails."""
@@ -329,92 +336,148 @@ class _NoRecorder:
     def begin(self) -> None:
         pass
 
-    def point(self, record: dict, result: SweepResult) -> None:
+    def point(self, point: SweepPoint, result: SweepResult) -> None:
         pass
 
     def end(self, result: SweepResult, complete: bool) -> None:
         pass
 
 
-def _parallel(n_jobs: int, backend: str | None, scheduler: str | None):
-    """``(config context, Parallel, client)``; the context selects joblib's backend."""
-    if backend == "dask":
+def _read_previous(res: SweepResult, records) -> dict:
+    """Check the journal's records: ``{(curve, omega): point}``; warnings for those skipped."""
+    found = {}
+    lo, hi = float(res.omega.min()), float(res.omega.max())
+    for rec in records:
+        where = f"journal line {rec['line']}" if isinstance(rec, dict) and "line" in rec else "a journal record"
         try:
-            from dask.distributed import Client  # optional extra, loaded only when asked for
-        except ImportError:
-            raise CablesimError(
-                "--backend dask needs dask.distributed: install cablesim with the 'dask' extra "
-                "(pip install 'cablesim[dask]')."
-            ) from None
-        if scheduler is None:
-            raise CablesimError("--backend dask needs --scheduler ADDRESS (e.g. tcp://host:8786).")
-        try:
-            client = Client(scheduler, timeout=10)
-        except OSError as exc:
-            raise CablesimError(f"Could not reach the Dask scheduler at {scheduler}: {exc}.") from None
-        # joblib registers its Dask backend through parallel_config, not by name in Parallel.
-        return joblib.parallel_config(backend="dask"), joblib.Parallel(return_as="generator_unordered"), client
-    return contextlib.nullcontext(), joblib.Parallel(n_jobs=n_jobs, return_as="generator_unordered"), None
+            p = SweepPoint.from_json(rec, len(res.channels), res.n_dof)
+            if not 0 <= p.curve < len(res.curves):
+                raise BadRecord(f"curve {p.curve} is not a curve of this sweep")
+            on_grid = np.abs(res.omega - p.omega) <= 1e-9 * p.omega
+            if "index" in rec:  # journals of earlier versions name the grid point by its index too
+                i = rec["index"]
+                if not isinstance(i, int) or isinstance(i, bool) or not 0 <= i < res.omega.size:
+                    raise BadRecord(f"point ({p.curve}, {i}) is not a point of this sweep")
+                if not on_grid[i]:
+                    raise BadRecord(f"its frequency {p.omega!r} is not that of point {i + 1} ({res.omega[i]:g} rad/s)")
+            if not on_grid.any() and not (res.settings.get("refine") and lo < p.omega < hi):
+                raise BadRecord(f"its frequency {p.omega:g} rad/s is not a point of this sweep")
+            p = replace(p, omega=float(res.omega[np.argmax(on_grid)])) if on_grid.any() else p
+        except BadRecord as why:
+            res.warnings.append(f"{where} was skipped ({why}); its point is computed again")
+            continue
+        found[(p.curve, p.omega)] = p
+    return found
 
 
-def _check_sweepable(case: Case, static) -> None:
-    if static.inextensible is None:
-        raise CablesimError("Sweeps need sum(cable.S) greater than the chord (see `history`).", field="cable.S")
-    if not np.any(case.FL):
-        raise CablesimError("loads.FL is zero, so a sweep has nothing to force the cable with.", field="loads.FL")
+# ----------------------------------------------------------------------------------------------
+# The driver
+# ----------------------------------------------------------------------------------------------
+def _dask(scheduler: str | None):
+    """``(joblib config context, Parallel, client)`` for a Dask cluster."""
+    import joblib
 
-
-def new_sweep_result(case: Case, case_text: str, analysis: str | None = None) -> SweepResult:
-    """An empty :class:`SweepResult` for the case's ``sweep:`` section (nothing computed)."""
-    if case.sweep is None:
+    try:
+        from dask.distributed import Client  # optional extra, loaded only when asked for
+    except ImportError:
         raise CablesimError(
-            "This case has no `sweep:` section. Add one, for example "
-            "`sweep: {omega: {start: 0.5, stop: 6.0, num: 111}, channels: [z2, z4]}` "
-            "(`cablesim example` shows a complete one).",
-            field="sweep",
-        )
-    static = run_static(case, analysis, all_models=False)
-    _check_sweepable(case, static)
-    omega, gamma, curves = plan(case)
-    names, _ = channel_indices(case, case.sweep.channels)
-    sw = case.sweep
-    settings = dict(cap=sw.duration, window=sw.window, tol=sw.tol, max_period=sw.max_period, floquet_check=sw.floquet,
-                    accelerate=sw.accelerate)
-    return _empty_result(omega, gamma, sw.direction, names, curves, analysis=static.analysis,
-                         modal_omega=static.modes.omega.copy(), case_name=case.name, case_text=case_text,
-                         settings=settings)
+            "--backend dask needs dask.distributed: install cablesim with the 'dask' extra "
+            "(pip install 'cablesim[dask]')."
+        ) from None
+    if scheduler is None:
+        raise CablesimError("--backend dask needs --scheduler ADDRESS (e.g. tcp://host:8786).")
+    try:
+        client = Client(scheduler, timeout=10)
+    except OSError as exc:
+        raise CablesimError(f"Could not reach the Dask scheduler at {scheduler}: {exc}.") from None
+    # joblib registers its Dask backend through parallel_config, not by name in Parallel.
+    return joblib.parallel_config(backend="dask"), joblib.Parallel(return_as="generator_unordered"), client
 
 
-def estimate_sweep(case: Case, analysis: str | None = None, integrator: str | None = None) -> Cost:
-    """Upper bound of the cost of the case's sweep (:mod:`cablesim.analyses.cost`), nothing integrated."""
-    res = new_sweep_result(case, case.text, analysis)
-    static = _static_for(case.text, analysis)[1] if case.text else run_static(case, analysis, all_models=False)
-    w1 = float(static.modes.omega[0])
-    picks = np.unique(np.linspace(0, res.omega.size - 1, min(res.omega.size, 12)).round().astype(int))
-    points = []
-    for w in res.omega[picks]:
-        eom = build_equations(case, static, omega=float(w))
-        points.append((eom, make_integrator(case.integrator, eom, max(float(w), w1), integrator), float(w)))
-    sw = case.sweep
-    return sweep_cost(points, res.omega.size, len(res.curves), sw.duration, sw.window, len(res.channels))
+class _Runner:
+    """Runs the rounds of points: in this process, in a warm local pool, or on Dask."""
+
+    def __init__(self, ctx: SweepContext, jobs: int, backend: str | None, scheduler: str | None, rate: float):
+        self.ctx, self.jobs, self.rate = ctx, jobs, rate
+        self.pool = None
+        self.dask = _dask(scheduler) if backend == "dask" else None
+        self.key = uuid.uuid4().hex
+        self.workers = 1
+
+    def run(self, batch: list[PointJob], rounds: int = 1):
+        """Every job of a round (``rounds``: how many such rounds are to come, for the estimate
+        of the work), results in the order they finish."""
+        if self.dask is not None:
+            import joblib
+
+            config, parallel, _ = self.dask
+            with config:
+                yield from parallel(joblib.delayed(_solve_remote)(self.ctx, j) for j in batch)
+            return
+        if self.pool is None and len(batch) > 1:
+            work = len(batch) * rounds * self.ctx.case.sweep.duration * self.rate
+            workers = pool.choose_workers(self.jobs, work, len(batch))
+            if workers > 1:
+                self.workers = workers
+                self.pool = pool.WorkerPool(workers, self.key, self.ctx)
+        if self.pool is None:
+            for j in batch:
+                yield solve_point(self.ctx, j)
+            return
+        yield from self.pool.map_unordered(_solve_in_worker, batch)
+
+    def close(self, failed: bool) -> None:
+        if self.pool is not None:
+            self.pool.__exit__(KeyboardInterrupt if failed else None, None, None)
+        if self.dask is not None:
+            self.dask[2].close()
 
 
-def _chain_batches(res: SweepResult, make_job):
-    """Rounds of up/down chains: each round advances every unfinished chain by one point."""
+def _calibrate(ctx: SweepContext, measure: bool) -> float:
+    """Load the kernels here before any worker is forked; if ``measure``, the wall seconds one
+    simulated second of this sweep costs (from a second, warm, run; else 0)."""
+    ctx.warm_up()
+    if not measure:
+        return 0.0
+    w = float(ctx.static.modes.omega[0])
+    t0 = time.perf_counter()
+    ctx.warm_up()
+    return (time.perf_counter() - t0) / (4 * 2 * np.pi / w)
+
+
+def _chain_rounds(res: SweepResult, make_job):
+    """Rounds of up/down chains over the grid: each advances every unfinished chain by one point."""
     n = res.omega.size
     order = {c: (list(range(n)) if cv.direction == "up" else list(range(n - 1, -1, -1))) for c, cv in enumerate(res.curves)}
     pos = {c: 0 for c in order}
     while True:
         batch = []
         for c, seq in order.items():
-            while pos[c] < len(seq) and res.data[c]["done"][seq[pos[c]]]:
+            while pos[c] < len(seq) and res.has(c, res.omega[seq[pos[c]]]):
                 pos[c] += 1
             if pos[c] < len(seq):
-                prev = res.states.get((c, seq[pos[c] - 1])) if pos[c] > 0 else None
-                batch.append(make_job(c, seq[pos[c]], prev))
+                prev = res.state(c, res.omega[seq[pos[c] - 1]]) if pos[c] > 0 else None
+                batch.append(make_job(c, float(res.omega[seq[pos[c]]]), prev))
         if not batch:
             return
         yield batch
+
+
+def _refined_round(res: SweepResult, new: np.ndarray, make_job) -> list[PointJob]:
+    """The jobs of the new frequencies on every curve; a chain's point starts from its done
+    neighbour before it in the chain's direction."""
+    res.extend(new)
+    batch = []
+    for c, cv in enumerate(res.curves):
+        for w in new:
+            start = None
+            if cv.direction != "independent":
+                i = int(np.searchsorted(res.omega, w))
+                j = i - 1 if cv.direction == "up" else i + 1
+                start = res.state(c, res.omega[j]) if 0 <= j < res.omega.size else None
+            if not res.has(c, w):
+                batch.append(make_job(c, float(w), start))
+    return batch
 
 
 def run_sweep(
@@ -435,15 +498,16 @@ def run_sweep(
     case : Case
         Must have a ``sweep:`` section.
     case_text : str
-        Its YAML text (sent to the workers and stored with the results).
+        Its YAML text (stored with the results).
     analysis, integrator : str, optional
         Overrides of the case file.
     n_jobs : int
-        Worker processes (-1: all cores).
+        Most worker processes (-1: one per core). The sweep uses a pool only when its estimated
+        work exceeds what starting one costs (:func:`cablesim.analyses.pool.choose_workers`).
     backend, scheduler : str, optional
         ``"dask"`` and the scheduler address to run the points on a Dask cluster.
     progress : callable, optional
-        Called as ``progress(done, total)`` after each point.
+        Called as ``progress(done, total)`` after each point (``total`` grows with refinement).
     recorder : SweepRecorder, optional
         Receives every finished point and supplies those of an interrupted run
         (:class:`cablesim.io.journal.SweepFile` journals them and writes the HDF5 file).
@@ -453,57 +517,69 @@ def run_sweep(
     SweepResult
     """
     recorder = recorder or _NoRecorder()
-    res = new_sweep_result(case, case_text, analysis)
+    static = sweep_statics(case, analysis)
+    res = new_sweep_result(case, case_text, analysis, static)
     _, idx = channel_indices(case, case.sweep.channels)
-    for rec in recorder.previous():
-        why = check_record(res, rec)
-        if why is None:
-            record_point(res, rec)
-        else:
-            where = f"journal line {rec['line']}" if isinstance(rec, dict) and "line" in rec else "a journal record"
-            res.warnings.append(f"{where} was skipped ({why}); its point is computed again")
+    stored = _read_previous(res, recorder.previous())
     res.warnings[:0] = list(getattr(recorder, "warnings", ()))
-    gamma = res.gamma
+    ctx = SweepContext(case, static, integrator, tuple(int(x) for x in idx))
 
-    def job(c: int, i: int, start) -> PointJob:
-        g = 1.0 if gamma is None else float(gamma[res.curves[c].gamma_index])
-        return PointJob(case_text, analysis, integrator, g, float(res.omega[i]), tuple(int(x) for x in idx), c, i,
-                        None if start is None else tuple(start), os.getpid())
+    def make_job(c: int, w: float, start) -> PointJob:
+        g = 1.0 if res.gamma is None else float(res.gamma[res.curves[c].gamma_index])
+        return PointJob(c, w, g, None if start is None else tuple(start))
 
-    config, parallel, client = _parallel(n_jobs, backend, scheduler)  # settings errors first
-    _warm_up(case_text, analysis, integrator, idx)
+    local = backend != "dask"
+    runner = _Runner(ctx, n_jobs, backend, scheduler, rate=_calibrate(ctx, n_jobs != 1) if local else 0.0)
+    res.settings.update(integrator_record(ctx.fundamental()[1]))
     recorder.begin()
 
-    def done(rec):
-        record_point(res, rec)
-        recorder.point(rec, res)
+    def done(p: SweepPoint, new: bool = True):
+        res.add(p)
+        if new:
+            recorder.point(p, res)
         if progress is not None:
             progress(res.n_done, res.n_total)
 
-    completed = False
+    def take_stored(batch):
+        for j in batch:
+            p = stored.pop((j.curve, j.omega), None)
+            if p is not None:
+                res.add(p)
+        return [j for j in batch if not res.has(j.curve, j.omega)]
+
+    completed, failed = False, True
     try:
-        with config, parallel:
-            if case.sweep.direction == "independent":
-                todo = [job(c, i, None) for c in range(len(res.curves)) for i in range(res.omega.size)
-                        if not res.data[c]["done"][i]]
-                batches = [todo]
-            else:
-                batches = _chain_batches(res, job)
-            for batch in batches:
-                for rec in parallel(joblib.delayed(solve_point)(j) for j in batch):
-                    done(rec)
-        completed = res.complete
+        take_stored([make_job(c, float(w), None) for c in range(len(res.curves)) for w in res.omega])
+        chains = case.sweep.direction != "independent"
+        rounds = _chain_rounds(res, make_job) if chains else iter([[make_job(c, float(w), None)
+                                                                     for c in range(len(res.curves))
+                                                                     for w in dict.fromkeys(res.omega.tolist())
+                                                                     if not res.has(c, w)]])
+        for batch in rounds:
+            for p in runner.run(batch, res.omega.size if chains else 1):
+                done(p)
+        while True:
+            new = refinements(res.omega, [res.table(c) for c in range(len(res.curves))],
+                              res.settings["finest_step"], refine_budget(res) - res.n_refined)
+            if not new.size:
+                break
+            batch = take_stored(_refined_round(res, new, make_job))
+            if progress is not None:
+                progress(res.n_done, res.n_total)
+            for p in runner.run(batch):
+                done(p)
+        for (c, w) in stored:
+            res.warnings.append(f"a journal record of w = {w:g} rad/s (curve {c + 1}) is not a point of this sweep; "
+                                "it was skipped")
+        completed, failed = res.complete, False
     finally:
+        res.settings["workers"] = runner.workers
+        runner.close(failed)
         recorder.end(res, completed)
-        if client is not None:
-            client.close()
     return res
 
 
-def _warm_up(case_text, analysis, integrator, idx) -> None:
-    """Compile (or load from numba's cache) the kernels once before forking workers."""
-    case, static = _static_for(case_text, analysis)
-    w = float(static.modes.omega[0])
-    eom = build_equations(case, static, omega=w)
-    integ = make_integrator(case.integrator, eom, w, integrator)
-    steady_response(eom, integ, np.array(idx), SteadyCriterion(cap=4 * 2 * np.pi / w, window=2 * 2 * np.pi / w))
+def workers_used(res: SweepResult) -> int:
+    """Worker processes the sweep ran on (1: in the driver), as recorded in its settings."""
+    return int(res.settings.get("workers", 1))
+

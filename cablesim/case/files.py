@@ -133,9 +133,18 @@ def check_step_flags(case, dt: Optional[float]) -> None:
             "adapts its step to --rtol instead.", field="integrator.dt")
 
 
-def sweep_flag_overrides(omega: Optional[str], duration: Optional[float], channels: Optional[str]) -> list[str]:
-    """``--omega``, ``--duration`` and ``--channels`` of ``sweep`` as ``--set`` overrides (so that
-    they are recorded with the case and checked like it)."""
+def load_with_steps(path, overrides, dt: Optional[float], rtol: Optional[float], integrator: Optional[str]) -> Case:
+    """:func:`load_case` with ``--dt`` or ``--rtol`` set in the ``integrator:`` section
+    (:func:`step_flag_overrides`, :func:`check_step_flags`); ``integrator`` the scheme named."""
+    case = load_case(path, [*(overrides or ()), *step_flag_overrides(dt, rtol, integrator)])[0]
+    check_step_flags(case, dt)
+    return case
+
+
+def sweep_flag_overrides(omega: Optional[str], duration: Optional[float], channels: Optional[str],
+                         window: Optional[float] = None) -> list[str]:
+    """``--omega``, ``--duration``, ``--channels`` and ``--window`` of ``sweep`` as ``--set``
+    overrides (so that they are recorded with the case and checked like it)."""
     sets = []
     if omega is not None:
         parts = omega.split(":") if ":" in omega else None
@@ -157,6 +166,9 @@ def sweep_flag_overrides(omega: Optional[str], duration: Optional[float], channe
     if duration is not None:
         check_flag(DURATION, duration, "--duration", "sweep.duration")
         sets.append(f"sweep.duration={duration!r}")
+    if window is not None:
+        check_flag(DURATION, window, "--window", "sweep.window")
+        sets.append(f"sweep.window={window!r}")
     if channels is not None:
         names = [c.strip() for c in channels.split(",") if c.strip()]
         if not names:
@@ -165,7 +177,24 @@ def sweep_flag_overrides(omega: Optional[str], duration: Optional[float], channe
     return sets
 
 
-def parse_case(text: str, source: str = "<case>", default_name: str = "case", overrides=None) -> Case:
+def sweep_flag_error(exc: CablesimError, duration: Optional[float], window: Optional[float]) -> CablesimError:
+    """A case-file error that ``--duration`` or ``--window`` caused, worded for the flags (the
+    case file is not at fault when a flag shortened the cap below its window)."""
+    found = re.search(r"sweep\.window \(([^ ]+) s\) is longer than sweep\.duration \(([^ ]+) s\)", str(exc))
+    if found is None or (duration is None and window is None):
+        return exc
+    w, d = found.groups()
+    cap = f"--duration {d} s" if duration is not None else f"the case's sweep.duration ({d} s)"
+    if window is not None:
+        return CablesimError(f"--window {w} s is longer than {cap}, the cap on each point's run, of which the window "
+                             f"is the final part: give a --window of at most {d} s.", field="sweep.window")
+    return CablesimError(f"--duration {d} s is shorter than the case's sweep.window ({w} s), the final part of each "
+                         f"point's run used for its amplitude when it does not become steady: give --window too (at "
+                         f"most {d} s, e.g. --window {float(d) / 4:g}), or a longer --duration.", field="sweep.window")
+
+
+def parse_case(text: str, source: str = "<case>", default_name: str = "case", overrides=None,
+               record_name: bool = False) -> Case:
     """Parse and validate the YAML text of a case file.
 
     Parameters
@@ -178,6 +207,9 @@ def parse_case(text: str, source: str = "<case>", default_name: str = "case", ov
         The case name if the file gives none.
     overrides : list of str, optional
         ``KEY=VALUE`` settings applied over the file (command-line ``--set``).
+    record_name : bool
+        If the text has no ``name:``, record ``default_name`` in the case's stored text (a case
+        file named after its file keeps that name when its stored text is read again).
 
     Returns
     -------
@@ -197,8 +229,9 @@ def parse_case(text: str, source: str = "<case>", default_name: str = "case", ov
     # Overrides recorded in a stored case text apply too, so a result file's case re-parses
     # to exactly what was run.
     apply_overrides(data, [*stored_overrides(text), *(overrides or ())], source)
-    if data.get("name") is None:  # absent, or a blank `name:` (YAML null)
-        data["name"] = default_name
+    named = data.get("name") is not None
+    if not named:  # absent, or a blank `name:` (YAML null): the stored name, else the default
+        data["name"] = stored_name(text) or default_name
     try:
         case = Case.model_validate(data)
     except ValidationError as err:
@@ -206,8 +239,26 @@ def parse_case(text: str, source: str = "<case>", default_name: str = "case", ov
     if _uses_shorthand(data):
         case.set_text(_expanded_text(text, data, case, overrides))
     else:
-        case.set_text(_with_overrides(text, overrides))
+        stored = text if named or stored_name(text) or not record_name else _with_name(text, case.name)
+        case.set_text(_with_overrides(stored, overrides))
     return case
+
+
+#: Marks the name a case took from its file (it has no ``name:``) in the text stored with
+#: results, so that the stored case re-reads under the same name.
+NAME_MARK = "# cablesim name (the case file's):"
+
+
+def _with_name(text: str, name: str) -> str:
+    return text.rstrip("\n") + f"\n{NAME_MARK} {name}\n"
+
+
+def stored_name(text: str) -> str | None:
+    """The name recorded in a stored case text for a case that took it from its file."""
+    for line in text.splitlines():
+        if line.startswith(NAME_MARK):
+            return line[len(NAME_MARK):].strip() or None
+    return None
 
 
 #: yaml's safe dumper, compiled (libyaml) when available.
@@ -246,13 +297,14 @@ def load_case(path: str | Path | None, overrides=None) -> tuple[Case, str]:
     """
     if path is None:
         text = example_text()
-        case = parse_case(text, source="(embedded paper example)", default_name="paper-example", overrides=overrides)
+        case = parse_case(text, source="(embedded paper example)", default_name="paper-example", overrides=overrides,
+                          record_name=True)
         return case, case.text
     p = Path(path)
     text = read_text_file(p, "Case file", MAX_CASE_BYTES)
     # A valid case name starts with a letter or digit; derive one from the file stem.
     stem = re.sub(r"[^A-Za-z0-9._-]", "-", p.stem).lstrip("._-") or "case"
-    case = parse_case(text, source=str(p), default_name=stem, overrides=overrides)
+    case = parse_case(text, source=str(p), default_name=stem, overrides=overrides, record_name=True)
     return case, case.text
 
 
@@ -322,9 +374,24 @@ def read_text_file(path: Path, what: str, limit: int) -> str:
         raise CablesimError(f"{what} {path} cannot be read ({exc.strerror or exc.__class__.__name__}).") from None
 
 
-def example_text() -> str:
-    """The embedded default case (the paper's example), as commented YAML."""
-    return resources.files("cablesim").joinpath("data", EXAMPLE_RESOURCE).read_text()
+def example_cases() -> dict[str, str]:
+    """The case files shipped with cablesim: name -> what it is (the first line of its comments)."""
+    out = {}
+    for item in sorted(resources.files("cablesim").joinpath("data").iterdir(), key=lambda f: f.name):
+        if item.name.endswith(".yaml"):
+            first = item.read_text().splitlines()[0].lstrip("# ").removeprefix("cablesim case file: ")
+            out[item.name.removesuffix(".yaml")] = first
+    return out
+
+
+def example_text(name: str = EXAMPLE_RESOURCE.removesuffix(".yaml")) -> str:
+    """A case shipped with cablesim, as commented YAML: by default the paper's example (the
+    embedded default case, with every section); :func:`example_cases` lists the others."""
+    cases = example_cases()
+    if name not in cases:
+        raise CablesimError(f"There is no shipped case named {name!r}; the shipped cases are {', '.join(cases)} "
+                            "(`cablesim example --list` says what each is).", field="example")
+    return resources.files("cablesim").joinpath("data", f"{name}.yaml").read_text()
 
 
 def read_figure(path):

@@ -358,7 +358,8 @@ class FreeVibrationSpec(StrictModel):
     z0: tuple[real(-1e5, 1e5, "m"), ...] | None = Field(default=None, description="initial displacement from equilibrium, m")
     v0: tuple[real(-1e3, 1e3, "m/s"), ...] | None = Field(default=None, description="initial velocities, m/s")
     damping_ratio: DAMPING_RATIO | None = Field(default=None, description="overrides damping.ratio")
-    duration: DURATION = Field(default=20.0, description="simulated time, s")
+    duration: DURATION | None = Field(default=None, description="simulated time, s (default: until the motion "
+                                      "has decayed to 0.01 %, from the damping)")
     output_step: OUTPUT_STEP | None = Field(default=None, description="interval between saved instants, s")
     channels: tuple[str, ...] | None = Field(default=None, description="DOF to plot, e.g. [z2, z4]")
 
@@ -368,6 +369,12 @@ class FreeVibrationSpec(StrictModel):
         if explicit and (self.mode is not None or self.peak_velocity is not None):
             raise ValueError("give either mode with peak_velocity, or z0/v0, not both")
         return self
+
+
+#: Halvings of a sweep grid's step where neighbouring points disagree (``sweep.refine``): the
+#: default for a grid, and the most allowed.
+REFINE_LEVELS = 4
+REFINE_MOST = 10
 
 
 class OmegaGrid(StrictModel):
@@ -397,6 +404,9 @@ class SweepSpec(StrictModel):
     max_period: integer(1, 50) = Field(default=6, description="largest response period sought")
     floquet: bool = Field(default=True, description="check the stability of periodic responses")
     accelerate: bool = Field(default=True, description="decide steady points by shooting from the transient")
+    refine: bool | integer(0, REFINE_MOST) | None = Field(
+        default=None, description="halvings of the grid step where neighbouring points disagree (true: "
+        f"{REFINE_LEVELS}, false or 0: none; default: {REFINE_LEVELS} for a grid, none for a list)")
 
     @field_validator("omega", mode="before")
     @classmethod
@@ -446,6 +456,15 @@ class SweepSpec(StrictModel):
                 "the window is the final part of each point's run, so shorten it"
             )
         return self
+
+    @property
+    def refine_levels(self) -> int:
+        """How many times the grid step may be halved where neighbouring points disagree."""
+        if self.refine is None:
+            return REFINE_LEVELS if isinstance(self.omega, OmegaGrid) and self.omega.num > 1 else 0
+        if isinstance(self.refine, bool):
+            return REFINE_LEVELS if self.refine else 0
+        return int(self.refine)
 
     def frequencies(self) -> np.ndarray:
         """The frequency grid, rad/s (ascending for up/down sweeps)."""

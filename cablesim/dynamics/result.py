@@ -23,8 +23,9 @@ class SlackRecord:
         ``"slack"`` (onset: the segment's length fell to its natural length) or ``"taut"``
         (re-tightening).
     peak_tension : ndarray, shape (n + 1,)
-        Largest tension of each segment over the run, N (tracked at every step, not only at the
-        saved instants).
+        Largest tension of each segment over the run, N (located on every step's interpolant
+        where the integrator tracks slack segments, else between the saved instants from the
+        tensions and their rates; :mod:`cablesim.dynamics.peaks`).
     peak_time : ndarray, shape (n + 1,)
         When it occurred, s.
     slack_time : ndarray, shape (n + 1,)

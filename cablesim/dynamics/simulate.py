@@ -22,9 +22,11 @@ from ..statics import inextensible_equilibrium, resisting_force, segment_geometr
 from .interrupts import MAX_CHUNK_STEPS, MIN_CHUNK_STEPS, Deferred, received
 from ..mechanics.model import approximate_workspace
 from .equations import EquationsOfMotion
+from .extremes import signal_extremes
 from .field import equilibrium_factors, observe
 from .integrators import Integrator
 from .integrators.events import CHATTER_TEXT
+from .peaks import tension_rates
 from .result import HistoryResult, SlackRecord
 from .status import INNER_SOLVE, NONFINITE, OK, SLACK, STEP_UNDERFLOW, Status
 
@@ -141,12 +143,16 @@ def _inner_diagnosis(eom: EquationsOfMotion, t: float, s) -> str:
     )
 
 
-def _slack_record(eom: EquationsOfMotion, state, T: np.ndarray, t: np.ndarray) -> SlackRecord:
-    """Events and per-segment peak tension, time slack and episodes of a run up to ``t[-1]``."""
+def _slack_record(eom: EquationsOfMotion, state, T: np.ndarray, t: np.ndarray, S: np.ndarray) -> SlackRecord:
+    """Events and per-segment peak tension, time slack and episodes of a run up to ``t[-1]``:
+    the peak located on the step interpolants where the integrator tracked it, else between the
+    saved instants (``S``) from the tensions and their rates (:mod:`.extremes`)."""
     ex = state.extra
     n1 = eom.cable.n_segments
-    peak = T.max(axis=0)
-    when = t[T.argmax(axis=0)]
+    nd = eom.n_dof
+    rates = np.empty((t.size, n1))
+    tension_rates(eom.model(), np.ascontiguousarray(t, dtype=float), np.ascontiguousarray(S), rates)
+    peak, when, _, _ = signal_extremes(t, T, rates)
     if "evw" in ex:
         tracked = (ex["evw"][3] > peak) & (ex["evw"][4] <= t[-1])
         peak = np.where(tracked, ex["evw"][3], peak)
@@ -256,7 +262,7 @@ def simulate(
         if status is Status.COMPLETED or first < written:
             status, t_stop = Status.OUTPUT_NONFINITE, float(t[first])
             message = f"stopped at t = {t[first]:.6g} s: {Status.OUTPUT_NONFINITE.text}"
-    record = _slack_record(eom, state, T[:m], t[:m]) if eom.exact else None
+    record = _slack_record(eom, state, T[:m], t[:m], S[:m]) if eom.exact else None
     return HistoryResult(
         slack=record,
         t=t[:m],

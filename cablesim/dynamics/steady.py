@@ -17,7 +17,10 @@ before it jumps (the paper's Figs. 3b and 8c). Such a point is integrated on, an
 not steady if the cap is reached first.
 
 When steady, ``p`` more periods are sampled finely for the peak ``|z_i|`` from the equilibrium,
-the half peak-to-peak range and the dominant response frequency. When the cap is reached first,
+the half peak-to-peak range and the dominant response frequency (the extremes located between
+the samples on the quintic Hermite interpolant of ``z``, ``y'``, ``y''``:
+:mod:`cablesim.dynamics.extremes`; dopri5's steps held to the sample spacing over that orbit,
+its dense output being a cubic interpolant). When the cap is reached first,
 the same quantities come from the last ``window`` seconds and the point is flagged not steady.
 """
 
@@ -29,7 +32,8 @@ from typing import Callable
 import numpy as np
 
 from .equations import EquationsOfMotion
-from .integrators import DOPRI5, Integrator
+from .extremes import peak_and_half_range
+from .integrators import Integrator
 from .simulate import advance_in_chunks, failure_text
 from .result import SlackRecord
 from .status import OK, Status
@@ -134,25 +138,19 @@ class PointResult:
         return not self.status.success
 
 
-def _refined_extreme(x: np.ndarray, sign: float) -> float:
-    """Largest value of ``sign * x`` refined by a parabola through the best sample."""
-    y = sign * x
-    i = int(np.argmax(y))
-    if 0 < i < y.size - 1:
-        a, b, c = y[i - 1], y[i], y[i + 1]
-        den = a - 2.0 * b + c
-        if den < 0:
-            return sign * (b - 0.25 * (a - c) ** 2 / den)
-    return sign * y[i]
+def _amplitudes(rec: np.ndarray, t: np.ndarray, nd: int, channels: np.ndarray, period: float = 0.0):
+    """Peak |z| and half range per channel, located between the samples on the Hermite
+    interpolant of ``z`` with its rates ``y'`` and curvatures ``y''`` (:mod:`.extremes`);
+    ``period`` > 0: the record spans exactly one orbit of that period."""
+    z, v, a = (rec[:, o + channels] for o in (0, nd, 2 * nd))
+    return peak_and_half_range(t, z, v, a, period)
 
 
-def _amplitudes(z: np.ndarray, periodic: bool) -> tuple[np.ndarray, np.ndarray]:
-    """Peak |z| and half range per channel (columns), refined between samples."""
-    if periodic:  # wrap around so an extreme at the record's end is refined too
-        z = np.concatenate([z[-2:], z, z[:2]])
-    zmax = np.array([_refined_extreme(z[:, c], 1.0) for c in range(z.shape[1])])
-    zmin = np.array([_refined_extreme(z[:, c], -1.0) for c in range(z.shape[1])])
-    return np.maximum(np.abs(zmax), np.abs(zmin)), 0.5 * (zmax - zmin)
+def _joined(pieces, state) -> tuple[np.ndarray, np.ndarray]:
+    """Times and states of consecutive ``(times, states)`` pieces (the current state if none)."""
+    if not pieces:
+        return np.array([state.t]), state.s[None, :]
+    return np.concatenate([p[0] for p in pieces]), np.concatenate([p[1] for p in pieces])
 
 
 def _dominant_frequency(z: np.ndarray, dt: float) -> np.ndarray:
@@ -284,7 +282,7 @@ def _steady(eom, integrator, channels, criterion, s0, decide, track, decide_ever
     strobes = np.empty((n_cap + 1, 2 * nd))
     strobes[0, :nd] = s0[:nd]
     strobes[0, nd:] = s0[nd : 2 * nd] / w
-    fine: list[np.ndarray] = []
+    fine: list[tuple[np.ndarray, np.ndarray]] = []  # (times, states) of the final window
     k = 0
     chunk = 20 if decide is None else decide_every
     floquet = np.nan
@@ -309,9 +307,9 @@ def _steady(eom, integrator, channels, criterion, s0, decide, track, decide_ever
         out = np.empty((t_out.size, 3 * nd))
         n, code = advance_in_chunks(integrator, model, state, t_out[-1], t_out, out)
         if code != OK:
-            return _failed(eom, integrator, channels, out[:n], state, code, fine)
+            return _failed(eom, integrator, channels, (t_out[:n], out[:n]), state, code, fine)
         if in_window:
-            fine.append(out)
+            fine.append((t_out, out))
             sel = out[spp - 1 :: spp]
         else:
             sel = out
@@ -345,9 +343,9 @@ def _cap_reached(eom, channels, state, fine, spp, floquet, s_end, t_end) -> Poin
     must be at forcing phase 0: ``y''`` there is consistent with ``F = F0`` only)."""
     nd = eom.n_dof
     T = 2.0 * np.pi / eom.omega
-    rec = np.concatenate(fine) if fine else state.s[None, :]
+    t, rec = _joined(fine, state)
     z = rec[:, :nd][:, channels]
-    amp, half = _amplitudes(z, periodic=False)
+    amp, half = _amplitudes(rec, t, nd, channels)
     freq = _dominant_frequency(z, T / spp) if z.shape[0] > 8 else np.full(channels.size, np.nan)
     return PointResult(
         omega=eom.omega,
@@ -454,11 +452,16 @@ def _finish_steady(eom, integrator, model, state, channels, p, k, T, spp, floque
     nd = eom.n_dof
     t_out = T * (k + np.arange(1, p * spp + 1) / spp)
     out = np.empty((t_out.size, 3 * nd))
-    n, code = advance_in_chunks(integrator, model, state, t_out[-1], t_out, out)
+    # the orbit whose amplitudes are measured: an adaptive scheme's saved states come from the
+    # cubic Hermite interpolant between its steps, whose error h^4 |z^(4)| / 384 at its natural
+    # steps reaches 2e-7 of the amplitude (paper example, 4-5 rad/s), so its steps are held to
+    # the sample spacing over this one orbit (1.5e-8 for a sinusoid)
+    n, code = advance_in_chunks(integrator.for_measuring(T / spp), model, state, t_out[-1], t_out, out)
     if code != OK:
-        return _failed(eom, integrator, channels, out[:n], state, code, [])
+        return _failed(eom, integrator, channels, (t_out[:n], out[:n]), state, code, [])
     z = out[:, :nd][:, channels]
-    amp, half = _amplitudes(z, periodic=True)
+    # the record spans one orbit: its last sample is the image of the one before the first
+    amp, half = _amplitudes(out, t_out, nd, channels, period=p * T)
     return PointResult(
         omega=eom.omega,
         amplitude=amp,
@@ -476,10 +479,8 @@ def _finish_steady(eom, integrator, model, state, channels, p, k, T, spp, floque
 
 def _failed(eom, integrator, channels, out, state, code, fine) -> PointResult:
     nd = eom.n_dof
-    pieces = [f for f in fine] + ([out] if out.shape[0] else [])
-    rec = np.concatenate(pieces) if pieces else state.s[None, :]
-    z = rec[:, :nd][:, channels]
-    amp, half = _amplitudes(z, periodic=False)
+    t, rec = _joined([*fine, out] if out[1].shape[0] else fine, state)
+    amp, half = _amplitudes(rec, t, nd, channels)
     return PointResult(
         omega=eom.omega,
         amplitude=amp,

@@ -513,3 +513,24 @@ def read_static_drawing(path: Path, case):
 
 
 
+
+
+def describe_result(path) -> str | None:
+    """``"a complete sweep of 56 points, written 2026-12-01 21:40 UTC by `cablesim sweep ...`"``
+    for a complete cablesim result at ``path``; None if it is not one (or cannot be read)."""
+    if not is_complete_result(path):
+        return None
+    try:
+        with h5py.File(path, "r") as f:
+            command = attr_text(f.attrs.get("command", "?"))
+            when = attr_text(f.attrs.get("created_utc", ""))[:16].replace("T", " ")
+            line = attr_text(f.attrs.get("command_line", ""))
+            size = ""
+            if "sweep" in f:
+                size = f" of {int(f['sweep'].attrs.get('points_total', 0))} points"
+            elif "history" in f and "t" in f["history"]:
+                size = f" of {float(f['history/t'][-1]):g} s"
+    except (OSError, KeyError, ValueError, IndexError):
+        return None
+    by = f" by `{line}`" if line else ""
+    return f"a complete {command} result{size}, written {when} UTC{by}" if when else f"a complete {command} result{size}{by}"

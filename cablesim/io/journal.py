@@ -177,9 +177,10 @@ class SweepFile:
         self._journal = _Journal(self.journal_path, self.fingerprint, fresh=not self.resume)
         self._last = time.monotonic()
 
-    def point(self, record: dict, result) -> None:
-        """Journal one point; rewrite the HDF5 file if the last snapshot is old enough."""
-        self._journal.append(dict(record, fingerprint=self.fingerprint))
+    def point(self, point, result) -> None:
+        """Journal one point (a :class:`~cablesim.analyses.sweep_points.SweepPoint`, in its JSON
+        form); rewrite the HDF5 file if the last snapshot is old enough."""
+        self._journal.append(dict(point.to_json(), fingerprint=self.fingerprint))
         if time.monotonic() - self._last >= self.snapshot_every:
             write_sweep(self.snapshot, result, self.fingerprint)
             self._last = time.monotonic()

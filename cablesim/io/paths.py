@@ -132,8 +132,11 @@ def check_output(path, *, inputs=(), flag: str = "-o", suffixes=HDF5_SUFFIXES, c
     if path.suffix.lower() not in suffixes:
         what = "an HDF5 result" if suffixes == HDF5_SUFFIXES else f"a {suffixes[0]} file"
         extra = " (the plots are written beside it as PNG files)" if suffixes == HDF5_SUFFIXES else ""
-        raise _fail(flag, path, f"this option names {what}{extra}, so its name must end in "
-                    f"{' or '.join(suffixes)}", f"Give, for example, {flag} {path.with_suffix(suffixes[0])}.")
+        named = [x for x in suffixes if x]
+        ends = " or ".join(named) + (" (or have no suffix: a prefix for several files)" if "" in suffixes else "")
+        other = f"; {path.suffix} files are not written" if path.suffix else ""
+        raise _fail(flag, path, f"this option names {what}{extra}, so its name must end in {ends}{other}",
+                    f"Give, for example, {flag} {path.with_suffix(suffixes[0])}.")
     if callable(companions):
         companions = companions(path)
     for p in (path, *map(Path, companions)):

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..analyses.records import spectrum_part
+from ..dynamics.extremes import peak_and_half_range
 from ..dynamics.spectra import spectrum_peaks
 from ..version import __version__
 
@@ -122,6 +124,20 @@ def static_summary(case, result, full: bool = False) -> str:
     return "\n".join(out)
 
 
+def response_peaks(hist, z) -> list[float]:
+    """The two strongest frequencies of one channel, rad/s, over the part of the record a
+    spectrum reads (:func:`cablesim.analyses.records.spectrum_part`; none if it is too short)."""
+    t = np.asarray(hist.t, dtype=float)
+    forcing = hist.omega if hist.omega is not None and hist.omega > 0 else None
+    part = spectrum_part(t, z, forcing, hist.completed)
+    if part.short is not None:
+        return []
+    peaks = spectrum_peaks(t[part.start:part.stop], z[part.start:part.stop], 1.0, max_peaks=2)
+    if forcing is None and len(peaks) and spectrum_part(t, z, None, frequency=float(peaks[0])).short is not None:
+        return []
+    return list(peaks)
+
+
 def history_summary(case, hist, integ, wall: float, full: bool = False) -> str:
     """Summary of a time history: status, peak displacements, response frequencies, drift.
 
@@ -139,11 +155,14 @@ def history_summary(case, hist, integ, wall: float, full: bool = False) -> str:
 
     def row(i):
         z = hist.z[:, i]
-        peaks = spectrum_peaks(hist.t, z, 0.5, max_peaks=2) if hist.t.size > 16 else []
+        peaks = response_peaks(hist, z)
+        # extremes between the saved instants, from z and its velocity (cablesim.dynamics.extremes)
+        peak, _ = peak_and_half_range(hist.t, z, hist.v[:, i])
+        _, half_range = peak_and_half_range(hist.t[half:], z[half:], hist.v[half:, i])
         return [
             f"z{hist.dof_numbers[i]}",
-            _g(np.abs(z).max(), 5),
-            _g(0.5 * np.ptp(z[half:]), 5) if half > 0 else "-",
+            _g(float(peak[0]), 5),
+            _g(float(half_range[0]), 5) if half > 0 else "-",
             ", ".join(f"{p:.4g}" for p in peaks) or "-",
         ]
 
@@ -151,8 +170,10 @@ def history_summary(case, hist, integ, wall: float, full: bool = False) -> str:
     rows = _rows(_shown(channels, full or channels <= 2 * SUMMARY_NODES, 2 * SUMMARY_ENDS), row, 4)
     lines.append(_table(["DOF", "max |z| (m)", "half range, 2nd half (m)", "response peaks (rad/s)"], rows))
     dT = hist.T - hist.T0
+    # the peak tensions located between the saved instants, where recorded
+    top = dT.max() if hist.slack is None else max(dT.max(), float((hist.slack.peak_tension - hist.T0).max()))
     lines.append(
-        f"tension change: min {dT.min() / 1e3:.4g} kN, max {dT.max() / 1e3:.4g} kN "
+        f"tension change: min {dT.min() / 1e3:.4g} kN, max {top / 1e3:.4g} kN "
         f"(static {', '.join(f'{t / 1e3:.5g}' for t in hist.T0[:6])} kN)"
     )
     lines.append(f"largest drift of eq. 15 (relative to |F0|): {np.max(hist.residual):.2e}")
@@ -186,53 +207,93 @@ def slack_lines(rec, duration: float, full: bool = True) -> list[str]:
     return out
 
 
-def sweep_summary(case, res, wall: float) -> str:
+def grid_note(omega, refine, grid_points=None, finest=None) -> str:
+    """How a sweep's frequencies were chosen, in words: the grid, and its refinement or the
+    warning that it was not refined (a feature narrower than its step can fall between points).
+
+    ``refine`` is the number of halvings allowed (None: unknown, a file of an earlier version);
+    ``grid_points`` the points of the grid before refinement.
+    """
+    omega = np.unique(np.asarray(omega, dtype=float))
+    if refine is None or omega.size < 2:
+        return ""
+    n_grid = int(grid_points) if grid_points is not None else omega.size
+    added = omega.size - n_grid
+    if int(refine) > 0:
+        step = f" to {float(finest):.3g} rad/s" if finest is not None and np.isfinite(finest) else ""
+        return (f"grid of {n_grid} frequencies refined{step} where neighbouring points disagree "
+                f"({added} added)" if added else f"grid of {n_grid} frequencies; no neighbouring points disagree")
+    return (f"grid step up to {float(np.diff(omega).max()):.3g} rad/s, not refined (sweep.refine): "
+            "a narrower feature can fall between points")
+
+
+def sweep_summary(case, res, wall: float, full: bool = False) -> str:
     """Summary of a sweep: points, steady fraction, resonance peaks per curve and channel, and
-    every point that stopped early with why (such points hold partial values: never a peak)."""
+    every point that stopped early with why (such points hold partial values: never a peak).
+
+    More than 2 SUMMARY_NODES channels are shown as the first and last few unless ``full``;
+    so are more than 2 SUMMARY_NODES failed points."""
     lines = [
         f"cablesim {__version__}: sweep of '{case.name}', {res.omega.size} frequencies from "
         f"{res.omega.min():.4g} to {res.omega.max():.4g} rad/s, {len(res.curves)} curve(s), "
         f"{res.n_done} of {res.n_total} points in {wall:.3g} s wall time",
     ]
+    st = res.settings
+    if "integrator" in st:
+        tols = "" if "integrator_rtol" not in st else (
+            f" (rtol = {st['integrator_rtol']:g}, atol = {st['integrator_atol']:.3g} m at every point)")
+        lines.append(f"integrator {st['integrator']}{tols}")
+    grid = grid_note(res.omega, st.get("refine"), st.get("grid_points"), st.get("finest_step"))
+    if grid:
+        lines.append(f"  {grid}")
     rows = []
     for k, c in enumerate(res.curves):
-        d = res.data[k]
+        d = res.table(k)
         label = c.direction + ("" if res.gamma is None else f", gamma = {res.gamma[c.gamma_index]:g}")
-        done = d["done"]
+        done = d.done
         if not done.any():
             continue
-        good = done & ~d["failed"]
-        for j, name in enumerate(res.channels):
-            a = np.where(good & np.isfinite(d["amplitude"][:, j]), d["amplitude"][:, j], -np.inf)
+        good = done & ~d.failed
+        many = len(res.channels) > 2 * SUMMARY_NODES
+        for j in _shown(len(res.channels), full or not many):
+            if j is None:
+                rows.append(["...", f"({len(res.channels) - 2 * SUMMARY_ENDS} more channels)", "", ""])
+                continue
+            name = res.channels[j]
+            a = np.where(good & np.isfinite(d.amplitude[:, j]), d.amplitude[:, j], -np.inf)
             if np.isfinite(a).any():
                 i = int(np.argmax(a))
-                rows.append([label, name, f"{res.omega[i]:.4g}", _g(d["amplitude"][i, j], 5)])
+                rows.append([label, name, f"{res.omega[i]:.4g}", _g(d.amplitude[i, j], 5)])
             else:
                 rows.append([label, name, "-", "no point ran to its end"])
-        steady = d["steady"][done]
-        failed = d["failed"][done]
+        steady = d.steady[done]
+        failed = d.failed[done]
         capped = ~steady & ~failed
-        sub = d["period"][done] >= 2
+        sub = d.period[done] >= 2
         lines.append(
             f"  {label}: {steady.sum()} of {done.sum()} points steady"
             + (f", {sub.sum()} subharmonic (period >= 2)" if sub.any() else "")
             + (f", {capped.sum()} reached the cap" if capped.any() else "")
             + (f", {failed.sum()} FAILED (stopped early; listed below, left out of the peaks)" if failed.any() else "")
         )
-        frac = d.get("slack_fraction")
-        if frac is not None and np.any(frac[done] > 0):
+        frac = d.slack_fraction
+        if frac.size and np.any(frac[done] > 0):
             slack = np.any(frac > 0, axis=1) & done
             worst = np.nanmax(frac[done], axis=0)
             lines.append(
                 f"    {slack.sum()} point(s) with slack episodes; largest slack fraction per segment "
                 + ", ".join(f"{100.0 * x:.3g} %" for x in worst)
-                + "; largest peak tension " + ", ".join(f"{x / 1e3:.4g}" for x in np.nanmax(d["peak_tension"][done], axis=0)) + " kN"
+                + "; largest peak tension " + ", ".join(f"{x / 1e3:.4g}" for x in np.nanmax(d.peak_tension[done], axis=0)) + " kN"
             )
     lines.append(_table(["curve", "channel", "peak at (rad/s)", "peak amplitude (m)"], rows))
     failures = res.failures()
     if failures:
         lines += ["", f"{len(failures)} point(s) failed (values partial, not used as peaks):"]
-        lines += [f"  {f}" for f in failures]
+        shown = _shown(len(failures), full or len(failures) <= 2 * SUMMARY_NODES)
+        lines += [f"  {failures[k]}" if k is not None else f"  ... ({len(failures) - 2 * SUMMARY_ENDS} more)"
+                  for k in shown]
+    if not full and (len(res.channels) > 2 * SUMMARY_NODES or len(failures) > 2 * SUMMARY_NODES):
+        lines.append("(the first and last rows; --verbose prints every one, /sweep in the file holds them all)")
     return "\n".join(lines)
 
 

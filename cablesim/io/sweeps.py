@@ -9,42 +9,53 @@ from pathlib import Path
 import h5py
 import numpy as np
 
+from ..analyses.sweep_points import COLUMNS, CurveTable
 from ..channels import normalise_channel
 from ..errors import CablesimError
 from ..names import DIRECTIONS
 from .hdf5 import DIRECTION_GROUPS, atomic_h5, attr_text, attribute_units, put, stamp
 
 
+#: Each column of a sweep curve in the file: unit and description.
+COLUMN_UNITS = {
+    "amplitude": ("m", "peak |z| from the static equilibrium"),
+    "halfrange": ("m", "half the peak-to-peak range"),
+    "response_frequency": ("rad/s", "dominant response frequency"),
+    "period": ("forcing periods", "response period p (0: no periodic response found)"),
+    "steady": ("1", "whether a stable periodic response was found before the cap"),
+    "failed": ("1", "whether the run stopped early (slack segment, blow-up); its values are partial"),
+    "t_end": ("s", "simulated time used"),
+    "floquet": ("1", "largest Floquet multiplier modulus of the last periodic orbit checked"),
+    "done": ("1", "whether the point has been computed"),
+    "wall": ("s", "wall-clock time of the point"),
+    "multipliers": ("1", "Floquet multipliers of the orbit where computed by shooting (NaN elsewhere)"),
+    "peak_tension": ("N", "per segment, the largest tension over the point's integration, transient included "
+                     "(exact analysis with slack: continue; NaN elsewhere)"),
+    "slack_fraction": ("1", "per segment, the fraction of the point's integration spent slack "
+                       "(exact analysis with slack: continue; NaN elsewhere)"),
+}
+#: The sweep's settings stored as attributes of /sweep.
+SETTINGS_ATTRS = ("cap", "window", "tol", "max_period", "floquet_check", "accelerate", "refine", "grid_points",
+                  "finest_step", "integrator", "integrator_rtol", "integrator_atol", "integrator_dt_max")
+
+
 def write_sweep(path: str | Path, res, fingerprint: str | None = None) -> Path:
     """Write a (possibly incomplete) :class:`~cablesim.analyses.sweep.SweepResult` atomically.
 
     Layout: ``/sweep/omega``, optional ``/sweep/gamma`` (then every result dataset has a
-    leading gamma axis); for ``independent`` sweeps ``/sweep/{amplitude, halfrange, period,
-    steady, response_frequency, t_end, floquet, done, peak_tension, slack_fraction}``, for up/down sweeps the same under
-    ``/sweep/up/`` and ``/sweep/down/``; ``/modal/omega``. Points not yet computed have
-    ``done = False`` and NaN in the float datasets; a point that stopped early (``failed``) may
-    have NaN response frequencies. These marked gaps are the only NaN cablesim writes. ``status``
-    holds each point's outcome in words (``"steady"``, ``"cap reached"``, ``"stopped at t = ...:
-    segment 2 went slack ..."``, ``""`` when not computed). ``fingerprint`` (of the case and
-    settings, :func:`cablesim.io.journal.fingerprint`) is stored as an attribute of ``/sweep``.
+    leading gamma axis); for ``independent`` sweeps the columns of
+    :class:`~cablesim.analyses.sweep_points.CurveTable` (``/sweep/{amplitude, halfrange,
+    period, steady, response_frequency, t_end, floquet, done, peak_tension, slack_fraction,
+    ...}``), for up/down sweeps the same under ``/sweep/up/`` and ``/sweep/down/``;
+    ``/modal/omega``. Points not yet computed have ``done = False`` and NaN in the float
+    datasets; a point that stopped early (``failed``) may have NaN response frequencies. These
+    marked gaps are the only NaN cablesim writes. ``status`` holds each point's outcome in words
+    (``"steady"``, ``"cap reached"``, ``"stopped at t = ...: segment 2 went slack ..."``, ``""``
+    when not computed). ``fingerprint`` (of the case and settings,
+    :func:`cablesim.io.journal.fingerprint`) is stored as an attribute of ``/sweep``; so are the
+    settings, and, for a refined sweep, ``grid_points`` (the grid's frequencies come first in
+    no particular place: ``omega`` is ascending) and ``points_refined``.
     """
-    units = {
-        "amplitude": ("m", "peak |z| from the static equilibrium"),
-        "halfrange": ("m", "half the peak-to-peak range"),
-        "response_frequency": ("rad/s", "dominant response frequency"),
-        "period": ("forcing periods", "response period p (0: no periodic response found)"),
-        "steady": ("1", "whether a stable periodic response was found before the cap"),
-        "failed": ("1", "whether the run stopped early (slack segment, blow-up); its values are partial"),
-        "t_end": ("s", "simulated time used"),
-        "floquet": ("1", "largest Floquet multiplier modulus of the last periodic orbit checked"),
-        "done": ("1", "whether the point has been computed"),
-        "wall": ("s", "wall-clock time of the point"),
-        "multipliers": ("1", "Floquet multipliers of the orbit where computed by shooting (NaN elsewhere)"),
-        "peak_tension": ("N", "per segment, the largest tension over the point's integration, transient included "
-                         "(exact analysis with slack: continue; NaN elsewhere)"),
-        "slack_fraction": ("1", "per segment, the fraction of the point's integration spent slack "
-                           "(exact analysis with slack: continue; NaN elsewhere)"),
-    }
     with atomic_h5(path) as f:
         stamp(f, res.case_text, "sweep", analysis=res.analysis)
         g = f.create_group("sweep")
@@ -54,9 +65,10 @@ def write_sweep(path: str | Path, res, fingerprint: str | None = None) -> Path:
         g.attrs["direction"] = res.direction
         g.attrs["channels"] = np.array(res.channels, dtype="S")
         g.attrs["case_name"] = res.case_name
-        for k in ("cap", "window", "tol", "max_period", "floquet_check", "accelerate"):
-            if k in res.settings:
+        for k in SETTINGS_ATTRS:
+            if k in res.settings and not (k == "finest_step" and not np.isfinite(res.settings[k])):
                 g.attrs[k] = res.settings[k]
+        g.attrs["points_refined"] = res.n_refined
         g.attrs["complete"] = res.complete
         if fingerprint is not None:
             g.attrs["fingerprint"] = fingerprint
@@ -67,18 +79,18 @@ def write_sweep(path: str | Path, res, fingerprint: str | None = None) -> Path:
         dirs = sorted({c.direction for c in res.curves}, key=DIRECTIONS.index)
         for d in dirs:
             target = g if d == "independent" else g.create_group(d)
-            cs = [k for k, c in enumerate(res.curves) if c.direction == d]
-            for name, (u, desc) in units.items():
-                arrs = [res.data[k][name] for k in cs if name in res.data[k]]
-                if arrs:
-                    arr = np.stack(arrs) if res.gamma is not None else arrs[0]
-                    put(target, name, arr, u, desc, allow_nan=True)
-            decided = [np.array([str(x) for x in res.data[k].get("decided", [])], dtype="S") for k in cs]
-            put(target, "decided", np.stack(decided) if res.gamma is not None else decided[0], "1",
+            tables = [res.table(k) for k, c in enumerate(res.curves) if c.direction == d]
+
+            def column(name):
+                arrs = [getattr(t, name) for t in tables]
+                return np.stack(arrs) if res.gamma is not None else arrs[0]
+
+            for name, (u, desc) in COLUMN_UNITS.items():
+                put(target, name, column(name), u, desc, allow_nan=True)
+            put(target, "decided", np.asarray(column("decided"), dtype="S"), "1",
                 "how each point was decided: integrated, shooting, cap, failed (empty: not computed)")
-            texts = [res.data[k]["status"] for k in cs]
-            texts = np.stack(texts) if res.gamma is not None else texts[0]
-            ds = target.create_dataset("status", data=np.asarray(texts, dtype=object), dtype=h5py.string_dtype())
+            ds = target.create_dataset("status", data=np.asarray(column("status"), dtype=object),
+                                       dtype=h5py.string_dtype())
             ds.attrs["units"] = "text"
             ds.attrs["description"] = "outcome of each point in words ('' if not computed)"
         m = f.create_group("modal")
@@ -101,23 +113,24 @@ def stored_sweep_state(path) -> tuple[bool, str | None]:
 
 @dataclass
 class StoredCurve:
-    """One sweep curve: one gamma value (or none) and one direction; arrays over P points."""
+    """One sweep curve: one gamma value (or none) and one direction; its columns over P points
+    (a :class:`~cablesim.analyses.sweep_points.CurveTable`, ascending omega)."""
 
     gamma: float | None
     direction: str  # "independent", "up" or "down"
-    data: dict  # name -> (P, C) or (P,) array, in ascending omega order
+    data: CurveTable
 
     @property
     def valid(self) -> np.ndarray:
         """Points computed to their end (done, not stopped early, with a finite amplitude): the
         ones a response curve or a peak may be drawn from."""
-        return self.data["done"] & ~self.data["failed"] & np.all(np.isfinite(self.data["amplitude"]), axis=1)
+        return self.data.valid
 
     @property
     def failed(self) -> np.ndarray:
         """Points that stopped early (a segment went slack, the state blew up): their values are
         partial and never part of a curve."""
-        return self.data["done"] & self.data["failed"]
+        return self.data.done & self.data.failed
 
     @property
     def label(self) -> str:
@@ -139,14 +152,15 @@ class StoredSweep:
     modal: np.ndarray = field(default_factory=lambda: np.empty(0))
 
 
-
-
 def _str_list(value) -> list[str]:
     if isinstance(value, (str, bytes)):
         return [attr_text(value)]
     return [attr_text(v) for v in np.asarray(value, dtype=object).ravel()]
 
 
+#: Columns with a second axis (channels, segments or multipliers), and their kind.
+_WIDE = {"amplitude": "C", "halfrange": "C", "response_frequency": "C", "peak_tension": "any",
+         "slack_fraction": "any", "multipliers": "any"}
 
 
 def _read_group(where, name: str, P: int, G: int | None, order, bad):
@@ -154,16 +168,19 @@ def _read_group(where, name: str, P: int, G: int | None, order, bad):
     if "amplitude" not in where:
         raise bad(f"{name}/amplitude is missing")
     raw = {}
-    C = None
-    for key in ("amplitude", "halfrange", "response_frequency", "period", "steady", "done", "failed", "slack_fraction"):
-        if key not in where:
+    amp = np.asarray(where["amplitude"][()])
+    C = amp.shape[-1] if amp.ndim >= 2 else 0
+    for key in COLUMNS:
+        if key not in where or not isinstance(where[key], h5py.Dataset):
             continue
         arr = np.asarray(where[key][()])
-        if key == "amplitude":
-            C = arr.shape[-1] if arr.ndim >= 2 else 0
-        tail = (P, C) if key in ("amplitude", "halfrange", "response_frequency") else (P,)
-        if key == "slack_fraction":  # per segment: its own second axis
+        kind = _WIDE.get(key)
+        if kind == "C":
+            tail = (P, C)
+        elif kind == "any":  # per segment or per multiplier: its own second axis
             tail = (P, arr.shape[-1]) if arr.ndim >= 2 else (P,)
+        else:
+            tail = (P,)
         if G is not None and arr.ndim == len(tail):  # gamma axis left out for G = 1
             if G != 1:
                 raise bad(f"{name}/{key} has no gamma axis but /sweep/gamma has {G} values")
@@ -175,27 +192,29 @@ def _read_group(where, name: str, P: int, G: int | None, order, bad):
     return raw, C
 
 
-def _curve_data(data: dict, P: int) -> dict:
-    """One curve's arrays with their types, and defaults for datasets older files lack."""
-    amp = data["amplitude"].astype(float)
-    data["amplitude"] = amp
+def _curve_table(data: dict, P: int, C: int) -> CurveTable:
+    """One curve's columns with their types, and defaults for datasets older files lack."""
+    t = CurveTable.empty(P, C, 0)
+    t.peak_tension = t.slack_fraction = np.full((P, 0), np.nan)  # unless stored
+    amp = data["amplitude"].astype(float).reshape(P, C)
+    t.amplitude = amp
     for key in ("halfrange", "response_frequency"):
-        data[key] = data[key].astype(float) if key in data else np.full_like(amp, np.nan)
-    data["period"] = data["period"].astype(int) if "period" in data else np.ones(P, dtype=int)
-    data["steady"] = data["steady"].astype(bool) if "steady" in data else np.ones(P, dtype=bool)
-    data["failed"] = data["failed"].astype(bool) if "failed" in data else np.zeros(P, dtype=bool)
-    # a point on which some segment went slack (at any time of its integration)
-    slack = data.get("slack_fraction")
-    data["went_slack"] = (np.nan_to_num(slack.astype(float)) > 0).any(axis=1) if slack is not None and slack.ndim == 2 \
-        else np.zeros(P, dtype=bool)
+        setattr(t, key, data[key].astype(float) if key in data else np.full_like(amp, np.nan))
+    t.period = data["period"].astype(int) if "period" in data else np.ones(P, dtype=int)
+    t.steady = data["steady"].astype(bool) if "steady" in data else np.ones(P, dtype=bool)
+    t.failed = data["failed"].astype(bool) if "failed" in data else np.zeros(P, dtype=bool)
+    for key in ("t_end", "floquet", "wall"):
+        if key in data:
+            setattr(t, key, data[key].astype(float))
+    for key in ("peak_tension", "slack_fraction", "multipliers"):
+        if key in data and data[key].ndim == 2:
+            setattr(t, key, data[key])
+    for key in ("decided", "status"):
+        if key in data:
+            setattr(t, key, np.array([attr_text(x) for x in data[key]], dtype=object))
     finite = np.all(np.isfinite(amp), axis=1)
-    data["done"] = (data["done"].astype(bool) & finite) if "done" in data else finite
-    data["failed"] = data["failed"].astype(bool) if "failed" in data else np.zeros(P, dtype=bool)
-    # a point on which some segment went slack (at any time of its integration)
-    slack = data.get("slack_fraction")
-    data["went_slack"] = (np.nan_to_num(slack.astype(float)) > 0).any(axis=1) if slack is not None and slack.ndim == 2 \
-        else np.zeros(P, dtype=bool)
-    return data
+    t.done = (data["done"].astype(bool) & finite) if "done" in data else finite
+    return t
 
 
 def read_sweep(h5_path) -> StoredSweep:
@@ -247,14 +266,15 @@ def read_sweep(h5_path) -> StoredSweep:
                 raise bad(f"{name} holds {C} channels, another group {n_chan}")
             n_chan = C
             for gi in range(1 if G is None else G):
-                data = _curve_data({k: (v if G is None else v[gi]) for k, v in raw.items()}, P)
+                data = _curve_table({k: (v if G is None else v[gi]) for k, v in raw.items()}, P, C)
                 curves.append(StoredCurve(None if G is None else float(gamma[gi]), sub or "independent", data))
         channels = _str_list(g.attrs["channels"]) if "channels" in g.attrs else [f"z{k + 1}" for k in range(n_chan)]
         if len(channels) != n_chan:
             raise bad(f"the attribute channels names {len(channels)} channels but the results hold {n_chan}")
         channels = [normalise_channel(c) or c for c in channels]
         analysis = attr_text(f.attrs.get("analysis", g.attrs.get("analysis", "unknown")))
-        attrs = {k: g.attrs[k] for k in ("case_name", "integrator", "cap", "window") if k in g.attrs}
+        attrs = {k: g.attrs[k] for k in ("case_name", "integrator", "integrator_rtol", "integrator_atol", "cap", "window",
+                                         "refine", "grid_points", "finest_step", "points_refined") if k in g.attrs}
         modal = np.empty(0)
         if "modal" in f and "omega" in f["modal"]:
             modal = np.sort(np.asarray(f["modal"]["omega"][()], dtype=float).ravel())

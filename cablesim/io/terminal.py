@@ -18,18 +18,20 @@ from pathlib import Path
 import typer
 from typer.core import TyperGroup
 
-from ..jit import cache_dir
+from .. import jit
 from ..names import ANALYSES, INTEGRATORS, SLACK_POLICIES
 
 
-#: Where numba caches the compiled kernels (their index files tell whether a run must compile).
-KERNEL_CACHE = cache_dir()
+def paragraph(text: str, width: int = 100) -> str:
+    """``text`` wrapped to ``width`` at spaces only: a file path, a command or a hyphenated
+    option is never cut in two (a long one runs past the width)."""
+    return textwrap.fill(text, width=width, break_long_words=False, break_on_hyphens=False)
 
 
 def say_error(message: str, command: str | None = None) -> None:
     """A refusal or failure: one ``error:`` paragraph on standard error, then ``command`` (one to
     copy, such as the --resume hint) whole on a line of its own."""
-    sys.stderr.write(textwrap.fill("error: " + message, width=100) + "\n")
+    sys.stderr.write(paragraph("error: " + message) + "\n")
     if command:  # a command to copy: whole, on one line of its own
         sys.stderr.write(command + "\n")
 
@@ -37,7 +39,7 @@ def say_error(message: str, command: str | None = None) -> None:
 def say_warnings(warnings) -> None:
     """Plausibility warnings: one paragraph each on standard error; they never stop a run."""
     for w in warnings or ():
-        sys.stderr.write(textwrap.fill("warning: " + w, width=100) + "\n")
+        sys.stderr.write(paragraph("warning: " + w) + "\n")
 
 
 class CommandGroup(TyperGroup):
@@ -46,6 +48,8 @@ class CommandGroup(TyperGroup):
     the command quietly."""
 
     def main(self, *args, standalone_mode: bool = True, **kwargs):
+        argv = kwargs.pop("args", None) if "args" in kwargs else (args[0] if args else None)
+        args = (root_flags_first(sys.argv[1:] if argv is None else list(argv)), *args[1:])
         if not standalone_mode:
             return super().main(*args, standalone_mode=False, **kwargs)
         try:
@@ -70,6 +74,18 @@ class CommandGroup(TyperGroup):
                 sys.exit(1)
             raise
         sys.exit(code if isinstance(code, int) else 0)
+
+
+#: Options of cablesim itself that may also be written after the command (`cablesim static -q`).
+ROOT_FLAGS = ("--quiet", "-q", "--verbose", "-v")
+
+
+def root_flags_first(argv: list[str]) -> list[str]:
+    """The arguments with ``--quiet`` and ``--verbose`` moved before the command, wherever they
+    were given (they belong to cablesim, not to one command); nothing after ``--`` moves."""
+    end = argv.index("--") if "--" in argv else len(argv)
+    head = argv[:end]
+    return [a for a in head if a in ROOT_FLAGS] + [a for a in head if a not in ROOT_FLAGS] + argv[end:]
 
 
 def quiet_pipe() -> None:
@@ -138,29 +154,81 @@ class StatusLine:
         return False
 
 
-def compile_notice(note, cache: Path | None = None, pattern: str = "field.rate-*.nbi") -> bool:
-    """Tell ``note`` (a line to print) that the compiled kernels are not yet in numba's cache."""
-    cache = cache if cache is not None else KERNEL_CACHE
-    if any(cache.rglob(pattern)):
-        return False
-    note("compiling the numerical kernels on first use (about a minute; cached for later runs) ...")
-    return True
+class CompileNotice:
+    """Tells a user that the numerical kernels are being compiled (their first use on this
+    machine), and for how long: :func:`compiling` makes one.
+
+    numba compiles a kernel the first time it is needed and caches it on disk; only a cache
+    miss counts (:mod:`cablesim.jit` watches numba's compile events). Once compilation has
+    lasted ``delay`` seconds a line names the kernel; on a terminal a status line counts the
+    kernels; at the end one line says how many took how long. A refusal found in the first
+    moments is never preceded by the notice.
+    """
+
+    def __init__(self, note, delay: float = 1.0, tty: bool | None = None):
+        self.note, self.delay = note, delay
+        self.tty = sys.stderr.isatty() if tty is None else tty
+        self.kernels0, self.seconds0 = jit.kernels_compiled(), jit.compile_seconds()
+        self.said = False
+        self.timer = None
+        self.shown = 0.0
+
+    def kernels(self) -> int:
+        """Kernels compiled since the notice began."""
+        return jit.kernels_compiled() - self.kernels0
+
+    def seconds(self) -> float:
+        """Seconds spent compiling since the notice began."""
+        return jit.compile_seconds() - self.seconds0
+
+    def started(self, name: str) -> None:
+        """A kernel starts compiling (the hook of :class:`cablesim.jit.on_compile`)."""
+        if self.said:
+            self._status(name)
+        elif self.timer is None or not self.timer.is_alive():  # the delay counts compiling time only
+            self.timer = threading.Timer(max(0.05, self.delay - self.seconds()), self._say)
+            self.timer.daemon = True
+            self.timer.start()
+
+    def _say(self) -> None:
+        name = jit.compiling_now()
+        if self.said or (name is None and self.seconds() < self.delay):
+            return
+        self.said = True
+        name = name or "the kernels"
+        self.note(f"compiling {name} and the kernels it needs (first use on this machine; cached for later "
+                  "runs: `cablesim compile` compiles them all at once) ...")
+
+    def _status(self, name: str) -> None:
+        now = time.monotonic()
+        if self.tty and now - self.shown > 0.2:
+            self.shown = now
+            sys.stderr.write(f"\rcompiling: {self.kernels()} kernels, {self.seconds():.0f} s ({name})   ")
+            sys.stderr.flush()
+
+    def close(self) -> None:
+        """Stop watching; if the notice was given, say what the compilation took."""
+        if self.timer is not None:
+            self.timer.cancel()
+        if not self.said and self.kernels() and self.seconds() >= self.delay:
+            self.said = True  # it ended between two checks: say it now
+        if self.said:
+            if self.tty and self.shown:
+                sys.stderr.write("\n")
+            self.note(f"compiled {self.kernels()} kernels in {self.seconds():.1f} s (not counted in the run's "
+                      "times; later runs load them from the cache)")
 
 
 @contextlib.contextmanager
-def compiling(note, pattern: str = "field.rate-*.nbi", delay: float = 1.5):
-    """Say that the kernels are being compiled, if they are (cold cache) and it takes a while:
-    a refusal found in the first moments is then never preceded by the notice."""
-    timer = None
-    if not any(KERNEL_CACHE.rglob(pattern)):
-        timer = threading.Timer(delay, compile_notice, args=(note,), kwargs={"pattern": pattern})
-        timer.daemon = True
-        timer.start()
-    try:
-        yield
-    finally:
-        if timer is not None:
-            timer.cancel()
+def compiling(note, delay: float = 1.0):
+    """Within this context, say so when the kernels are compiled (see :class:`CompileNotice`);
+    yields the notice, whose :meth:`~CompileNotice.seconds` a caller subtracts from its times."""
+    notice = CompileNotice(note, delay)
+    with jit.on_compile(notice.started):
+        try:
+            yield notice
+        finally:
+            notice.close()
 
 
 # ----------------------------------------------------------------------------------------------

@@ -26,8 +26,9 @@ explicit Runge-Kutta scheme, together with
   ``t = tau T(omega)``, ``dT/domega = -T/omega``; ``df/domega`` at fixed ``theta`` is the field's
   own, explicit dependence);
 - the divergence integral ``q = int tr J dt`` (Liouville: ``det Y = exp q`` for the exact flow);
-- the extremes of every component over the segment, from the cubic Hermite interpolant
-  between steps (the samples and their rates).
+- the extremes of every component over the segment, from the Hermite interpolant between
+  steps (the samples and their rates; for a displacement whose velocity is a component too, its
+  curvature as well: quintic), located by :func:`cablesim.dynamics.extremes.hermite_extreme`.
 
 Because the augmented system is integrated by the same scheme, ``Y`` and ``eta`` are the exact
 derivatives of the discrete flow map. The Jacobian is propagated in *chunks*, restarted from the
@@ -45,6 +46,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from ..dynamics.extremes import hermite_extreme
 from ..dynamics.status import INNER_SOLVE, NONFINITE, OK, SLACK
 from ..jit import njit
 
@@ -89,42 +91,16 @@ class FlowCall:
 
 
 @njit
-def _hermite_extremes(xa, xb, da, db, h, i, xmax, xmin):
-    """Update ``xmax[i]``, ``xmin[i]`` with the interior extremes of the cubic Hermite
-    interpolant through ``(xa, da)`` and ``(xb, db)`` over a step ``h``."""
-    ha = h * da
-    hb = h * db
-    # p'(s) = a s^2 + b s + c on s in [0, 1]
-    a = 6.0 * xa + 3.0 * ha - 6.0 * xb + 3.0 * hb
-    b = -6.0 * xa - 4.0 * ha + 6.0 * xb - 2.0 * hb
-    c = ha
-    r0 = -1.0
-    r1 = -1.0
-    scale = abs(a) + abs(b) + abs(c)
-    if scale == 0.0:
-        return
-    if abs(a) <= 1e-12 * scale:
-        if b != 0.0:
-            r0 = -c / b
-    else:
-        disc = b * b - 4.0 * a * c
-        if disc >= 0.0:
-            sq = np.sqrt(disc)
-            q = -0.5 * (b + sq) if b >= 0.0 else -0.5 * (b - sq)
-            r0 = q / a
-            if q != 0.0:
-                r1 = c / q
-    for r in range(2):
-        s = r0 if r == 0 else r1
-        if 0.0 < s < 1.0:
-            s2 = s * s
-            s3 = s2 * s
-            p = ((2.0 * s3 - 3.0 * s2 + 1.0) * xa + (s3 - 2.0 * s2 + s) * ha
-                 + (-2.0 * s3 + 3.0 * s2) * xb + (s3 - s2) * hb)
-            if p > xmax[i]:
-                xmax[i] = p
-            if p < xmin[i]:
-                xmin[i] = p
+def _hermite_extremes(xa, xb, da, db, ca, cb, h, i, xmax, xmin):
+    """Update ``xmax[i]``, ``xmin[i]`` with the interior extremes of the Hermite interpolant
+    through ``(xa, da)`` and ``(xb, db)`` over a step ``h`` (quintic where the curvatures ``ca``,
+    ``cb`` are known, else cubic: :func:`cablesim.dynamics.extremes.hermite_extreme`)."""
+    s, p = hermite_extreme(xa, xb, da, db, ca, cb, h, 1.0)
+    if s > 0.0 and p > xmax[i]:
+        xmax[i] = p
+    s, p = hermite_extreme(xa, xb, da, db, ca, cb, h, -1.0)
+    if s > 0.0 and p < xmin[i]:
+        xmin[i] = p
 
 
 @njit
@@ -282,9 +258,15 @@ def _sample_step(k, x, K, xprev, dprev, h, xmax, xmin, rec):
     """Extremes over the interval ending at sample ``k`` (the rate at ``x_k`` is ``K[0]``) and,
     if ``rec`` has rows, the sample and its rate."""
     n = x.size
+    half = n // 2
     if k > 0:
         for i in range(n):
-            _hermite_extremes(xprev[i], x[i], dprev[i], K[0, i], h, i, xmax, xmin)
+            # A component whose rate is another component (a displacement beside its velocity,
+            # as in the cable's (z, v)) has that component's rate for its curvature.
+            ca = cb = np.nan
+            if i < half and dprev[i] == xprev[half + i] and K[0, i] == x[half + i]:
+                ca, cb = dprev[half + i], K[0, half + i]
+            _hermite_extremes(xprev[i], x[i], dprev[i], K[0, i], ca, cb, h, i, xmax, xmin)
     for i in range(n):
         if x[i] > xmax[i]:
             xmax[i] = x[i]

@@ -114,11 +114,22 @@ def figure_grid(nrows, ncols, row_height, *, sharex=False, sharey=False, extra_h
 
 
 def title_line(fig, text: str, note: str | None = None) -> None:
-    """The figure's title line; an optional line of conditions under it (wrapped to the width)."""
+    """The figure's title line; an optional line of conditions under it (both wrapped to the
+    figure's width: a long scene title would otherwise run past its edges)."""
+    chars = int(TITLE_CHARS * fig.get_window_extent().width / (fig.get_figure(root=True).dpi * FIGURE_WIDTH))
+    lines = wrap_text(text, chars) or [text]
     if note:  # without the conditions the title states already
         parts = [p for p in note.split("; ") if p.lower() not in text.lower()]
-        text += "\n" + "\n".join(textwrap.wrap("; ".join(parts), width=TITLE_CHARS)) if parts else ""
-    fig.suptitle(text, fontsize=9.5)
+        lines += wrap_text("; ".join(parts), chars) if parts else []
+    fig.suptitle("\n".join(lines), fontsize=9.5)
+
+
+def wrap_text(text: str, width: int) -> list[str]:
+    """``text`` in lines of at most ``width`` characters, never broken inside ``$...$`` (a
+    mathtext expression cut in two would not parse) nor inside a word."""
+    pieces = text.split("$")
+    guarded = "$".join(p.replace(" ", "\0") if k % 2 else p for k, p in enumerate(pieces))
+    return [line.replace("\0", " ") for line in textwrap.wrap(guarded, width=width, break_long_words=False)]
 
 
 def legend_below(fig, handles, ncol: int = 2) -> None:

@@ -59,6 +59,8 @@ def plot_cable(result, path: str | Path, title: str) -> Path:
     span = max(cable.L, np.ptp(pts[:, 1]), 1e-9)
     if pmax > 0:
         scale = 0.15 * span / np.hypot(P[:, 0], P[:, 1]).max()
+        # the axes hold every arrow's tip (an annotation whose point is outside is not drawn)
+        ax.update_datalim(pts[1:-1] + P * scale)
         if cable.n_nodes > ARROW_NODES:  # one quiver: thousands of annotations take many seconds
             ax.quiver(pts[1:-1, 0], pts[1:-1, 1], P[:, 0] * scale, P[:, 1] * scale, angles="xy",
                       scale_units="xy", scale=1.0, color=loads, width=0.002)
@@ -82,18 +84,7 @@ def plot_cable(result, path: str | Path, title: str) -> Path:
                 )
         ax.plot([], [], color=loads, label="sustained loads $F_0$")
     if cable.n_segments <= 12:
-        T = result.T0
-        mid = 0.5 * (pts[1:] + pts[:-1])
-        for k in range(cable.n_segments):
-            ax.annotate(
-                f"$T_{{{k + 1}}}$ = {T[k] / 1e3:.4g} kN",
-                mid[k],
-                textcoords="offset points",
-                xytext=(0, -12),
-                ha="center",
-                fontsize=8,
-                color="0.25",
-            )
+        label_tensions(ax, pts, result.T0)
     ax.invert_yaxis()
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("horizontal coordinate (m)")
@@ -103,3 +94,16 @@ def plot_cable(result, path: str | Path, title: str) -> Path:
                f"n = {cable.n_nodes} nodes, L = {cable.L:g} m, H = {cable.H:g} m, EA = {cable.EA:.3g} N; "
                f"lowest frequencies {lowest_modes_text(cable, y, result.modes)}")
     return save_atomic(fig, path)
+
+
+def label_tensions(ax, pts: np.ndarray, T: np.ndarray) -> None:
+    """Each segment's tension beside its middle, on its upper side (the sustained loads, and
+    their labels, mostly point down): the normal ``(dy, dx)`` points up on screen, the vertical
+    axis pointing down."""
+    mid = 0.5 * (pts[1:] + pts[:-1])
+    for k in range(T.size):
+        dx, dy = pts[k + 1] - pts[k]
+        nx, ny = np.array([dy, dx]) / max(np.hypot(dx, dy), 1e-300)
+        ax.annotate(f"$T_{{{k + 1}}}$ = {T[k] / 1e3:.4g} kN", mid[k], textcoords="offset points",
+                    xytext=(8 * nx, 8 * ny), ha="left" if nx > 0.3 else "right" if nx < -0.3 else "center",
+                    va="bottom", fontsize=8, color="0.25")

@@ -31,12 +31,13 @@ from ..channels import (
     resolve_columns,
     stored_names,
 )
-from ..dynamics.spectra import amplitude_spectrum, spectral_peaks
+
 from ..errors import CablesimError
 from ..io.hdf5 import FAMILY_TEXT, ResultInfo, inspect_result, read_history
-from .base import FIGURE_WIDTH, bottom_notes, envelope_plot, pyplot, save_atomic, steady_start, two_tone
+from .base import FIGURE_WIDTH, bottom_notes, envelope_plot, pyplot, save_atomic, steady_start, two_tone, wrap_text
 from .fdr import draw_fdr
-from .history import draw_modal_lines, label_peaks, resolved_peaks, spectrum_window, time_text, window_text
+from .history import (channel_spectrum, draw_modal_lines, label_peaks, resolved_peaks, spectrum_range, time_text,
+                      window_text)
 from .insets import add_time_inset
 from .style import COLOURS, SERIES, channel_tex, force_unit, styled, symbols
 
@@ -294,8 +295,13 @@ def _tension_window(h, tw, path: Path):
 
 
 
-def _label_axes(ax, h, col, xlabel: bool, name_suffix: str = ""):
-    ax.set_ylabel(f"{channel_tex(column_name(h, col))}{name_suffix} (m)\n{column_description(h, col)}")
+def _label_axes(ax, h, col, xlabel: bool, name_suffix: str = "", stacked: bool = False):
+    """The y label; what the channel is under it, or, in a stack of low panels (where a two-line
+    label runs into the next panel's), above the panel at its right."""
+    label, what = f"{channel_tex(column_name(h, col))}{name_suffix} (m)", column_description(h, col)
+    ax.set_ylabel(label if stacked else f"{label}\n{what}")
+    if stacked:
+        ax.set_title(what, loc="right", fontsize=8, color="0.3", pad=2)
     if xlabel:
         ax.set_xlabel("time $t$ (s)")
 
@@ -314,7 +320,7 @@ def _draw_waveforms(sf, h, cols, win, tw=None) -> dict:
         envelope_plot(ax, t[i0:i1], h.z[i0:i1, c], "-", color=COLOURS["response"], lw=0.9,
                       label=f"{channel_tex(column_name(h, c))}$(t)$")
         ax.axhline(0.0, color=COLOURS["reference"], lw=0.7, ls="--", label="static equilibrium")
-        _label_axes(ax, h, c, xlabel=(r == len(cols) - 1))
+        _label_axes(ax, h, c, xlabel=(r == len(cols) - 1), stacked=len(cols) > 1)
         _xlim(ax, t, win, tw)
         add_time_inset(ax, t[i0:i1], h.z[i0:i1, c])
         if r == 0:
@@ -391,22 +397,17 @@ def _draw_waveform_fft(sf, h, c, win, tw=None) -> dict:
     name = channel_tex(column_name(h, c))
     ax2.set_xlabel("circular frequency $\\omega$ (rad/s)")
     ax2.set_ylabel(f"amplitude of {name} (m)")
-    fraction, how = spectrum_window(h)
-    try:
-        omega, amp, n, dt = amplitude_spectrum(t, h.z[:, c], fraction)
-    except CablesimError as exc:
-        ax2.text(0.5, 0.5, f"no spectrum:\n{exc}", transform=ax2.transAxes, ha="center", va="center",
-                 color=COLOURS["failure"], wrap=True)
+    sp = channel_spectrum(h, c)
+    if sp.short is not None:
+        ax2.text(0.5, 0.5, "no spectrum:\n" + textwrap.fill(sp.short, 40), transform=ax2.transAxes, ha="center",
+                 va="center", color=COLOURS["failure"], fontsize=8)
         return {"y:waveform": ax1}
-    bin_width = 2 * np.pi / (n * dt)
-    ax2.set_title(f"amplitude spectrum of {name}\n" + window_text(t[-n], t[-1], t, how, bin_width, "\n"), fontsize=8)
-    w_pk, a_pk = spectral_peaks(omega, amp, 4, 0.05)
+    omega, amp, w_pk, a_pk, bin_width = sp.omega, sp.amplitude, sp.peaks, sp.peak_amplitudes, sp.bin_width
+    ax2.set_title(f"amplitude spectrum of {name}\n" + "\n".join(
+        wrap_text(window_text(sp.t0, sp.t1, t, sp.how, bin_width, "; "), 46)), fontsize=8)
     modal = np.sort(np.asarray(h.modal_omega, dtype=float).ravel())
     modal = modal[np.isfinite(modal) & (modal > 0)]
-    # Frequency range: 1.5 x the largest of the peaks and the forcing frequency (free vibration:
-    # and the four lowest modal frequencies), capped at the Nyquist frequency.
-    refs = list(w_pk) + ([h.omega] if h.omega is not None else list(modal[:4])) + list(modal[:1])
-    x_max = min(float(omega[-1]), 1.5 * max(refs)) if refs else float(omega[-1])
+    x_max = spectrum_range([sp], h.omega)
     sel = omega <= x_max
     ax2.semilogy(omega[sel], np.maximum(amp[sel], 1e-300), "-", color=COLOURS["response"], lw=0.9,
                  label="amplitude spectrum")

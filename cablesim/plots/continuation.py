@@ -66,9 +66,9 @@ def _draw_overlay(ax, sweep, c_name: str) -> set:
     c = sweep.channels.index(c_name)
     for curve in sweep.curves:
         ok = curve.valid
-        y = curve.data["amplitude"][:, c]
-        for kind, mask, colour in (("steady", ok & curve.data["steady"], COLOURS["annotation"]),
-                                   ("not steady", ok & ~curve.data["steady"], COLOURS["failure"])):
+        y = curve.data.amplitude[:, c]
+        for kind, mask, colour in (("steady", ok & curve.data.steady, COLOURS["annotation"]),
+                                   ("not steady", ok & ~curve.data.steady, COLOURS["failure"])):
             if mask.any():
                 drawn.add(kind)
                 ax.plot(sweep.omega[mask], y[mask], "o", ms=3.2, mfc="none", mec=colour, mew=0.7, zorder=5)
@@ -113,17 +113,24 @@ def plot_continuation(h5_path, png_path=None, overlay=None, title: str | None = 
     for c, (ax, name) in enumerate(zip(axes[:, 0], chans)):
         for b in d["branches"]:
             _draw_branch(ax, b, c, colour[b["period"]])
-        for k, kind in enumerate(bif["kind"]):
-            marker, short, _ = BIFURCATION_STYLE.get(kind, ("o", kind, kind))
+        placed: list[tuple[float, float]] = []
+        y_top = float(np.nanmax(bif["amplitude"][:, c])) if len(bif["kind"]) else 0.0
+        for k in np.argsort(np.asarray(bif["parameter"], dtype=float)) if len(bif["kind"]) else ():
+            marker, short, _ = BIFURCATION_STYLE.get(bif["kind"][k], ("o", bif["kind"][k], bif["kind"][k]))
             x, y = float(bif["parameter"][k]), float(bif["amplitude"][k, c])
             ax.plot(x, y, marker, color=COLOURS["annotation"], mfc="white", ms=5, zorder=6)
-            ax.annotate(short, (x, y), textcoords="offset points", xytext=(5, 6 if k % 2 == 0 else -12), fontsize=8,
-                        zorder=7)
+            # above the point (below it would be under the axis for a small response); a label
+            # whose neighbour is close goes to the left, a third one higher up
+            near = sum(abs(x - px) < 0.05 * (hi - lo) and abs(y - py) <= 0.1 * max(y_top, 1e-300) for px, py in placed)
+            offset, ha = [((5, 6), "left"), ((-5, 6), "right"), ((5, 17), "left")][min(near, 2)]
+            ax.annotate(short, (x, y), textcoords="offset points", xytext=offset, ha=ha, fontsize=8, zorder=7)
+            placed.append((x, y))
         if sweep is not None and is_omega:
             overlaid |= _draw_overlay(ax, sweep, name)
         for _, w in modal:
             ax.axvline(w, color=COLOURS["reference"], ls=":", lw=0.9, alpha=0.8, zorder=1)
         ax.set_ylim(bottom=0.0)
+        ax.set_ylim(top=ax.get_ylim()[1] * 1.12)  # room above the highest bifurcation for its label
         ax.set_ylabel(channel_label(name))
     axes[-1, 0].set_xlim(lo - pad, hi + pad)
     axes[-1, 0].set_xlabel("forcing frequency $\\omega$ (rad/s)" if is_omega else "load factor $\\gamma$ (multiplies $F_L$)")

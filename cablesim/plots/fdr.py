@@ -113,9 +113,9 @@ def draw_fdr(fig_spec, infos, png: Path, title: str) -> Path:
         handles.append(Line2D([], [], ls=":", color=colour, lw=1.0,
                               label=f"linear modal frequencies{whose} (" + ", ".join(f"{w:.4g}" for w in ws) + " rad/s)"))
     legend_below(fig, handles, ncol=2)
-    incomplete = [f"{nm}: {sum(int(cv.data['done'].sum()) for cv in sw.curves)} of {sw.omega.size * len(sw.curves)} points"
+    incomplete = [f"{nm}: {sum(int(cv.data.done.sum()) for cv in sw.curves)} of {sw.omega.size * len(sw.curves)} points"
                   for sw, nm in zip(sweeps, names)
-                  if sum(int(cv.data["done"].sum()) for cv in sw.curves) < sw.omega.size * len(sw.curves)]
+                  if sum(int(cv.data.done.sum()) for cv in sw.curves) < sw.omega.size * len(sw.curves)]
     if incomplete:
         notes.insert(0, "incomplete sweep(s): " + "; ".join(incomplete))
     bottom_notes(fig, notes, bool(incomplete))
@@ -145,8 +145,8 @@ def subharmonic_band(sweeps, name: str):
             continue
         c = sw.channels.index(name)
         for curve in sw.curves:
-            sub = curve.valid & curve.data["steady"] & (curve.data["period"] >= 2)
-            a = curve.data["amplitude"][:, c]
+            sub = curve.valid & curve.data.steady & (curve.data.period >= 2)
+            a = curve.data.amplitude[:, c]
             sub &= np.isfinite(a)
             w_sub += list(sw.omega[sub])
             a_sub += list(a[sub])

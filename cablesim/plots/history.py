@@ -8,11 +8,14 @@ to their resolution (times to the output step, spectral peaks to the bin width).
 from __future__ import annotations
 
 import numbers
+import textwrap
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..channels import column_description, column_name, column_of, default_pair, resolve_columns
+from ..analyses.records import spectrum_part
 from ..dynamics.spectra import amplitude_spectrum, spectral_peaks
 from ..errors import CablesimError
 from .base import bottom_notes, envelope_plot, figure_grid, legend_below, save_atomic, steady_start, title_line, two_tone
@@ -59,9 +62,11 @@ def _finish(fig, result, title: str, what: str, path: Path, notes: list[str] = (
     return save_atomic(fig, path)
 
 
-def _ylabel(result, i: int, what: str = "") -> str:
-    name = channel_tex(column_name(result, i))
-    return f"{name}{what} (m)\n{column_description(result, i)}"
+def panel_label(ax, label: str, description: str) -> None:
+    """A stacked panel's y label (one line: a two-line label is taller than a low panel and runs
+    into its neighbours') and, above the panel at its left, what the channel is."""
+    ax.set_ylabel(label)
+    ax.set_title(description, loc="left", fontsize=8, color="0.3", pad=2)
 
 
 # --------------------------------------------------------------------------------------------
@@ -81,7 +86,7 @@ def _plot_waveforms(result, chans, title, path, notes):
             envelope_plot(ax, t, result.zc[:, i], "--", color=COLOURS["configurational"], lw=0.8)
         if result.ze is not None:
             envelope_plot(ax, t, result.ze[:, i], "-", color=COLOURS["elastic"], lw=0.7, alpha=0.8)
-        ax.set_ylabel(_ylabel(result, i))
+        panel_label(ax, f"{channel_tex(column_name(result, i))} (m)", column_description(result, i))
         add_time_inset(ax, t, result.z[:, i])
     handles = [Line2D([], [], color=COLOURS["response"], label="$z = z_c + z_e$" if split else "displacement $z$")]
     if result.zc is not None:
@@ -95,6 +100,8 @@ def _plot_waveforms(result, chans, title, path, notes):
 
 
 def _plot_phase(result, chans, title, path, notes):
+    from matplotlib.ticker import MaxNLocator
+
     t = np.asarray(result.t, dtype=float)
     chans = chans[:MAX_PHASE_CHANNELS]
     i0 = steady_start(t)
@@ -106,7 +113,8 @@ def _plot_phase(result, chans, title, path, notes):
         two_tone(ax, result.z[:, i], result.v[:, i], i0, f"$t$ < {t_s}", f"$t \\geq$ {t_s} (last half)")
         ax.set_xlabel(f"{name} (m)")
         ax.set_ylabel(f"{name}' (m/s)")
-        ax.set_title(f"{name}: {column_description(result, i)}")
+        ax.set_title(f"{name}:\n{column_description(result, i)}", fontsize=9)
+        ax.xaxis.set_major_locator(MaxNLocator(nbins=7 - k, steps=[1, 2, 2.5, 5, 10]))  # room for long labels
     legend_below(fig, axes[0, 0].get_legend_handles_labels()[0], ncol=3)
     return _finish(fig, result, title, "phase plots (velocity against displacement)", path, notes)
 
@@ -175,9 +183,8 @@ def _mark_slack(ax, rec, segs, t_end, t, unit=(1e3, "kN")):
     for c, r in enumerate(segs):
         color = SERIES[c % len(SERIES)]
         spans = slack_intervals(rec, r + 1, t_end)
-        for i, (a, b) in enumerate(spans):
-            ax.axvspan(a, b, color=COLOURS["failure"], alpha=0.12, lw=0,
-                       label=f"segment {r + 1} slack" if i == 0 else None)
+        for i, (a, b) in enumerate(spans):  # the segment's own colour: which one is slack, when
+            ax.axvspan(a, b, color=color, alpha=0.18, lw=0, label=f"segment {r + 1} slack" if i == 0 else None)
         if spans:
             ax.plot(rec.peak_time[r], rec.peak_tension[r] / unit[0], "v", color=color, mec=COLOURS["annotation"], ms=6,
                     label=f"snap load $T_{{{r + 1}}}$ = {rec.peak_tension[r] / unit[0]:.4g} {unit[1]} "
@@ -189,13 +196,44 @@ def _mark_slack(ax, rec, segs, t_end, t, unit=(1e3, "kN")):
 # --------------------------------------------------------------------------------------------
 
 
-def spectrum_window(result) -> tuple[float, str]:
-    """The part of a record a spectrum analyses, as ``(fraction from the end, description)``:
-    the last half (the steady part) of a completed run; the whole of a run that stopped early,
-    whose steady part never came (the longest stretch available, for the finest bins)."""
-    if getattr(result, "completed", True):
-        return 0.5, "last half"
-    return 1.0, "whole run, stopped early"
+@dataclass(frozen=True)
+class ChannelSpectrum:
+    """The amplitude spectrum of one channel over the part of its record a spectrum reads
+    (:func:`cablesim.analyses.records.spectrum_part`), with its peaks; ``short`` says why there
+    is none (the record too short, or not finite)."""
+
+    omega: np.ndarray
+    amplitude: np.ndarray
+    n: int
+    dt: float
+    peaks: np.ndarray
+    peak_amplitudes: np.ndarray
+    t0: float
+    t1: float
+    how: str
+    short: str | None = None
+
+    @property
+    def bin_width(self) -> float:
+        """``2 pi / T`` of the analysed part, rad/s."""
+        return 2 * np.pi / (self.n * self.dt)
+
+
+def channel_spectrum(result, i: int) -> ChannelSpectrum:
+    """The spectrum of column ``i`` of a time history (see :class:`ChannelSpectrum`)."""
+    t, z = np.asarray(result.t, dtype=float), np.asarray(result.z[:, i], dtype=float)
+    forcing = result.omega if result.omega is not None and np.isfinite(result.omega) and result.omega > 0 else None
+    part = spectrum_part(t, z, forcing, getattr(result, "completed", True))
+    empty = np.empty(0)
+    try:
+        omega, amp, n, dt = amplitude_spectrum(t[part.start:part.stop], z[part.start:part.stop], 1.0)
+    except CablesimError as exc:
+        return ChannelSpectrum(empty, empty, 0, 1.0, empty, empty, 0.0, 0.0, part.how, str(exc).rstrip("."))
+    w_pk, a_pk = spectral_peaks(omega, amp, 4, 0.05)
+    if forcing is None and w_pk.size:  # a free vibration: count the periods of its strongest motion
+        part = spectrum_part(t, z, None, frequency=float(w_pk[0]))
+    t0, t1 = float(t[part.start]), float(t[part.stop - 1])
+    return ChannelSpectrum(omega, amp, n, dt, w_pk, a_pk, t0, t1, part.how, part.short)
 
 
 def resolved_peaks(w_pk, a_pk, bin_width: float, x_max: float):
@@ -229,30 +267,42 @@ def label_peaks(ax, w_pk, a_pk, bin_width: float, span: float) -> None:
                     fontsize=8, color=COLOURS["annotation"])
 
 
-def _fft_range(result, spectra, refs) -> float:
-    """Common frequency range: 1.5 x the largest of the forcing and the 4 lowest modal
-    frequencies, widened to show each channel's strongest peak, capped at the Nyquist frequency."""
+#: The frequency axis of a spectrum ends past its highest peak of at least this fraction of
+#: the strongest (beyond it there is only the tail of the peaks, nothing to see) ...
+SIGNIFICANT = 1e-3
+#: ... by this factor, and past 1.5 times the forcing frequency and the strongest peak.
+RANGE_MARGIN, FORCING_MARGIN = 1.25, 1.5
+
+
+def spectrum_range(spectra, forcing: float | None) -> float:
+    """The end of the frequency axis, rad/s: past every channel's significant peaks and the
+    forcing, capped at the Nyquist frequency (0 if no channel has a spectrum)."""
     x_max = 0.0
-    for item in spectra.values():
-        if isinstance(item, CablesimError):
+    for sp in spectra:
+        if sp.short is not None or not sp.omega.size:
             continue
-        omega, amp, n, dt, w_pk, a_pk = item
-        top = 1.5 * max(refs) if refs else np.pi / dt
-        if w_pk.size:
-            top = max(top, 1.15 * w_pk[0])
-        x_max = max(x_max, min(top, np.pi / dt))
+        peaks, _ = spectral_peaks(sp.omega, sp.amplitude, 16, SIGNIFICANT)
+        end = max([RANGE_MARGIN * float(peaks.max())] if peaks.size else [float(sp.omega[-1])])
+        if sp.peaks.size:
+            end = max(end, FORCING_MARGIN * float(sp.peaks[0]))
+        if forcing is not None:
+            end = max(end, FORCING_MARGIN * forcing)
+        x_max = max(x_max, min(end, float(sp.omega[-1])))
     return x_max
 
 
 def draw_modal_lines(ax, modal, x_max: float) -> None:
     """Linear modal frequencies as dotted reference lines, the ones with room named."""
-    last_text = -np.inf
+    last_end = -np.inf
+    width_pt = max(ax.bbox.width * 72.0 / ax.get_figure(root=True).dpi, 1.0)  # the axes' width in points
     for r, w in enumerate(modal[modal <= x_max]):
         ax.axvline(w, color=COLOURS["reference"], ls=":", lw=0.9, alpha=0.8,
                    label="linear modal frequencies" if r == 0 else None)
-        if w - last_text >= 0.08 * x_max and w < 0.93 * x_max:
-            last_text = w
-            ax.text(w, 0.98, f" mode {r + 1}", transform=ax.get_xaxis_transform(), fontsize=8,
+        text = f" mode {r + 1}"
+        span = (len(text) + 1) * 5.0 / width_pt * x_max  # its width at 8 pt, about 5 pt a character
+        if w >= last_end and w + span < x_max:
+            last_end = w + span
+            ax.text(w, 0.98, text, transform=ax.get_xaxis_transform(), fontsize=8,
                     color=COLOURS["reference"], ha="left", va="top", clip_on=True)
 
 
@@ -263,36 +313,27 @@ def _plot_fft(result, chans, title, path, notes):
     modal = np.sort(np.asarray(result.modal_omega, dtype=float).ravel())
     modal = modal[np.isfinite(modal) & (modal > 0)]
     forcing = result.omega if result.omega is not None and np.isfinite(result.omega) and result.omega > 0 else None
-    refs = list(modal[:4]) + ([float(forcing)] if forcing is not None else [])
-    fraction, how = spectrum_window(result)
-    spectra = {}
-    for i in chans:
-        try:
-            omega, amp, n, dt = amplitude_spectrum(t, result.z[:, i], fraction)
-        except CablesimError as exc:
-            spectra[i] = exc
-            continue
-        spectra[i] = (omega, amp, n, dt, *spectral_peaks(omega, amp, 4, 0.05))
-    x_max = _fft_range(result, spectra, refs)
+    spectra = {i: channel_spectrum(result, i) for i in chans}
+    x_max = spectrum_range(spectra.values(), forcing)
     fig, axes = figure_grid(len(chans), 1, 1.8, sharex=True, extra_height=1.4)
     window = ""
     for ax, i in zip(axes[:, 0], chans):
-        ax.set_ylabel(f"amplitude of {channel_tex(column_name(result, i))} (m)\n{column_description(result, i)}")
-        if isinstance(spectra[i], CablesimError):
-            ax.text(0.5, 0.5, f"no spectrum: {spectra[i]}", transform=ax.transAxes, ha="center", va="center",
-                    color=COLOURS["failure"], wrap=True)
+        sp = spectra[i]
+        panel_label(ax, f"amplitude of {channel_tex(column_name(result, i))} (m)", column_description(result, i))
+        if sp.short is not None:
+            ax.text(0.5, 0.5, "no spectrum: " + textwrap.fill(sp.short, 80), transform=ax.transAxes, ha="center",
+                    va="center", color=COLOURS["failure"], fontsize=8)
+            ax.set_yticks([])
             continue
-        omega, amp, n, dt, w_pk, a_pk = spectra[i]
-        bin_width = 2 * np.pi / (n * dt)
-        window = window_text(t[-n], t[-1], t, how, bin_width)
-        sel = omega <= x_max
-        ax.semilogy(omega[sel], np.maximum(amp[sel], 1e-300), "-", color=COLOURS["response"], lw=0.9,
+        window = window_text(sp.t0, sp.t1, t, sp.how, sp.bin_width)
+        sel = sp.omega <= x_max
+        ax.semilogy(sp.omega[sel], np.maximum(sp.amplitude[sel], 1e-300), "-", color=COLOURS["response"], lw=0.9,
                     label="amplitude spectrum")
         ax.yaxis.set_minor_locator(NullLocator())  # log minor ticks are slow to lay out
-        a_top = amp[sel][1:].max() if sel.sum() > 1 else 0.0
+        a_top = sp.amplitude[sel][1:].max() if sel.sum() > 1 else 0.0
         if a_top > 0:
             ax.set_ylim(a_top * 1e-6, a_top * 20.0)  # headroom for the labels
-        label_peaks(ax, *resolved_peaks(w_pk, a_pk, bin_width, x_max), bin_width, x_max)
+        label_peaks(ax, *resolved_peaks(sp.peaks, sp.peak_amplitudes, sp.bin_width, x_max), sp.bin_width, x_max)
         if forcing is not None and forcing <= x_max:
             ax.axvline(forcing, color=COLOURS["forcing"], ls="--", lw=1.0, label="forcing frequency")
         draw_modal_lines(ax, modal, x_max)
@@ -300,7 +341,7 @@ def _plot_fft(result, chans, title, path, notes):
         axes[-1, 0].set_xlim(0.0, x_max)
     axes[-1, 0].set_xlabel("circular frequency $\\omega$ (rad/s)")
     legend_below(fig, axes[0, 0].get_legend_handles_labels()[0], ncol=4)
-    axes[0, 0].set_title(window, loc="right", fontsize=8, color="0.3")
+    axes[0, 0].set_title(window, loc="right", fontsize=8, color="0.3", pad=2)
     return _finish(fig, result, title, "amplitude spectra (Hann window)", path, notes)
 
 

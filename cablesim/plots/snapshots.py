@@ -51,6 +51,41 @@ def snapshot_indices(m: int, count: int) -> np.ndarray:
     return np.unique(np.round(np.linspace(0, m - 1, min(count, m))).astype(int))
 
 
+#: A response is periodic at its end when its last period repeats the one before to this
+#: fraction of its range ...
+PERIODIC_TOL = 1e-3
+#: ... for a period of at most this many forcing periods.
+MAX_PERIODS = 6
+
+
+def steady_period(t: np.ndarray, z: np.ndarray, omega: float | None) -> float | None:
+    """The period of a forced response that is periodic at the end of its record, s: the
+    smallest ``p`` forcing periods over which its last stretch repeats the one before (None if
+    it does not, for a free vibration, or if the record is too short)."""
+    if omega is None or not omega > 0 or t.size < 8:
+        return None
+    T = 2.0 * np.pi / omega
+    scale = np.ptp(z, axis=0).max()
+    if not scale > 0:
+        return None
+    for p in range(1, MAX_PERIODS + 1):
+        lo = t[-1] - 2 * p * T
+        if lo < t[0]:
+            return None
+        late = (t >= t[-1] - p * T)
+        earlier = np.column_stack([np.interp(t[late] - p * T, t, z[:, j]) for j in range(z.shape[1])])
+        if np.max(np.abs(z[late] - earlier)) <= PERIODIC_TOL * scale:
+            return p * T
+    return None
+
+
+def periodic_snapshot_indices(t: np.ndarray, period: float, count: int) -> np.ndarray:
+    """Indices of ``count`` instants evenly spaced over the last ``period`` of the record (its
+    steady period: every phase of the motion, once)."""
+    targets = t[-1] - period + period * np.arange(count) / count
+    return np.unique(np.clip(np.searchsorted(t, targets), 0, t.size - 1))
+
+
 @styled
 def plot_snapshots(hist, cable: Cable, path: str | Path, title: str, count: int = 6) -> Path:
     """Draw the cable at ``count`` instants of a time history as a PNG (see
@@ -70,8 +105,9 @@ def snapshot_figure(hist, cable: Cable, title: str, count: int = 6):
     title : str
         First title line.
     count : int
-        Number of instants, 1 to :data:`MAX_SNAPSHOTS`, spread evenly over the record
-        (:func:`snapshot_indices`).
+        Number of instants, 1 to :data:`MAX_SNAPSHOTS`: evenly spaced over the last period of a
+        response that is periodic at its end (:func:`steady_period`), else spread evenly over
+        the record (:func:`snapshot_indices`).
 
     Raises
     ------
@@ -94,7 +130,9 @@ def snapshot_figure(hist, cable: Cable, title: str, count: int = 6):
     base = nodes_with_supports(cable, hist.y0)[:, :2]  # a spatial cable: its elevation (x, v)
     shape_ax.plot(base[:, 0], base[:, 1], "--", color=COLOURS["reference"], lw=1.2, label="static equilibrium $y_0$")
     label_nodes(shape_ax, base)
-    picks = snapshot_indices(hist.t.size, count)
+    period = steady_period(np.asarray(hist.t, dtype=float), np.asarray(hist.z, dtype=float), hist.omega)
+    picks = snapshot_indices(hist.t.size, count) if period is None else \
+        periodic_snapshot_indices(np.asarray(hist.t, dtype=float), period, count)
     colours = plt.get_cmap("viridis")(np.linspace(0.0, 0.9, picks.size))
     vertical = np.zeros((hist.t.size, cable.n_nodes + 2))  # zero at the supports
     vertical[:, 1:-1] = hist.z[:, 1::cable.dim]
@@ -114,6 +152,8 @@ def snapshot_figure(hist, cable: Cable, title: str, count: int = 6):
     disp_ax.set_xlabel("horizontal coordinate at equilibrium (m)")
     disp_ax.set_ylabel("vertical displacement (m), down +")
     disp_ax.legend(loc="lower left")
+    when = (f"over one steady period of the response ({period:.4g} s, "
+            f"{period * hist.omega / (2 * np.pi):.0f} of the forcing)" if period is not None else "spread over the record")
     title_line(fig, f"{title}: the cable at {picks.size} instants (true scale)",
-               f"{cable.n_nodes} nodes; span L = {cable.L:g} m, H = {cable.H:g} m")
+               f"{cable.n_nodes} nodes; span L = {cable.L:g} m, H = {cable.H:g} m; instants {when}")
     return fig

@@ -13,6 +13,7 @@ import numpy as np
 from ..channels import channel_description
 from ..errors import CablesimError
 from ..io.hdf5 import attr_text
+from ..io.report import grid_note
 from ..io.sweeps import StoredSweep, read_sweep, select_channels
 from .base import bottom_notes, figure_grid, legend_below, save_atomic, title_line
 from .style import COLOURS, SERIES, WORDS, channel_tex, styled
@@ -66,6 +67,10 @@ def sweep_conditions(sweep: StoredSweep) -> str:
     if "integrator" in sweep.attrs:
         analysis += f" ({attr_text(sweep.attrs['integrator'])})"
     parts = [analysis, dir_text]
+    grid = grid_note(sweep.omega, sweep.attrs.get("refine"), sweep.attrs.get("grid_points"),
+                     sweep.attrs.get("finest_step"))
+    if grid:
+        parts.append(grid)
     if "cap" in sweep.attrs:
         cap = f"at most {float(sweep.attrs['cap']):.4g} s per point"
         if "window" in sweep.attrs:
@@ -87,8 +92,8 @@ def draw_curve(ax, omega, curve, c: int, quantity: str, color, marked: bool, lw:
     subharmonic points as black diamonds labelled ``1/p``. Returns which markers were drawn:
     ``(not steady, subharmonic, stopped early, went slack)``."""
     valid = curve.valid
-    steady = valid & curve.data["steady"]
-    period = curve.data["period"]
+    steady = valid & curve.data.steady
+    period = curve.data.period
     values = curve.data[quantity][:, c]
     y = np.where(steady, values, np.nan)
     # break the line between responses of different period (different branches)
@@ -97,7 +102,7 @@ def draw_curve(ax, omega, curve, c: int, quantity: str, color, marked: bool, lw:
     st = DIRECTION_STYLE[curve.direction]
     ax.plot(x_line, y_line, ls=st["ls"], marker=st["marker"] if marked else "none", ms=st["ms"], color=color,
             lw=lw, zorder=2)
-    unsteady = valid & ~curve.data["steady"] & np.isfinite(values)
+    unsteady = valid & ~curve.data.steady & np.isfinite(values)
     if unsteady.any():
         ax.plot(omega[unsteady], values[unsteady], ls="none", marker="o", ms=7, mfc="none",
                 mec=COLOURS["failure"], mew=1.1, zorder=4)
@@ -105,7 +110,7 @@ def draw_curve(ax, omega, curve, c: int, quantity: str, color, marked: bool, lw:
     if failed.any():
         ax.plot(omega[failed], values[failed], ls="none", marker="x", ms=6, color=COLOURS["failed_point"], mew=1.2,
                 zorder=4)
-    went_slack = valid & curve.data["went_slack"] & np.isfinite(values)
+    went_slack = valid & curve.data.went_slack & np.isfinite(values)
     if went_slack.any():
         ax.plot(omega[went_slack], values[went_slack], ls="none", marker="s", ms=6, mfc="none",
                 mec=COLOURS["failure"], mew=0.9, zorder=4)
@@ -141,10 +146,11 @@ def _legend(sweep: StoredSweep, gammas, colors, markers, modal_k, marked: bool) 
 
     handles = []
     if gammas:
-        shown = list(range(len(gammas))) if len(gammas) <= 12 else [0, len(gammas) - 1]
+        many = len(gammas) > 12
+        shown = [0, len(gammas) - 1] if many else list(range(len(gammas)))
         for r in shown:
             handles.append(Line2D([], [], color=colors[r], lw=2.5, label=f"$\\gamma$ = {gammas[r]:g}"))
-            if len(shown) == 2 and r == 0:
+            if many and r == 0:  # the colours run between the first and the last
                 handles.append(Line2D([], [], ls="none", label=f"... ({len(gammas) - 2} more)"))
     style_color = "0.3" if gammas else colors[0]
     for d in dict.fromkeys(cv.direction for cv in sweep.curves):
@@ -229,7 +235,7 @@ def plot_sweep(h5_path, png_path=None, channels=None, quantity: str = "amplitude
     axes[-1, 0].set_xlabel("forcing frequency $\\omega$ (rad/s)")
     legend_below(fig, _legend(sweep, gammas, colors, markers, modal_k, marked), ncol=2)
     warn = _incomplete_note(sweep, notes)
-    if not any(int(cv.data["done"].sum()) for cv in sweep.curves):
+    if not any(int(cv.data.done.sum()) for cv in sweep.curves):
         axes[0, 0].text(0.5, 0.5, "no computed points", transform=axes[0, 0].transAxes, ha="center",
                         va="center", color=COLOURS["failure"], fontsize=10)
     first = title if title is not None else f"{attr_text(sweep.attrs.get('case_name', sweep.path.stem))}: frequency response"
@@ -262,11 +268,11 @@ def _incomplete_note(sweep: StoredSweep, notes: list) -> bool:
     """Put the note of an incomplete sweep first in ``notes``; whether the sweep is incomplete."""
     P = sweep.omega.size
     total = P * len(sweep.curves)
-    done = sum(int(cv.data["done"].sum()) for cv in sweep.curves)
+    done = sum(int(cv.data.done.sum()) for cv in sweep.curves)
     if done >= total:
         return False
     text = f"incomplete sweep: {done} of {total} points"
-    short = [f"{cv.label}: {int(cv.data['done'].sum())} of {P}" for cv in sweep.curves if cv.data['done'].sum() < P]
+    short = [f"{cv.label}: {int(cv.data.done.sum())} of {P}" for cv in sweep.curves if cv.data.done.sum() < P]
     if len(sweep.curves) > 1:
         more = f"; and {len(short) - 4} more curves" if len(short) > 4 else ""
         text += " (" + "; ".join(short[:4]) + more + ")"

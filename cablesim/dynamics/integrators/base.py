@@ -98,6 +98,12 @@ class Integrator(ABC):
         does not show in the differences."""
         return self
 
+    def for_measuring(self, spacing: float) -> "Integrator":
+        """A version whose saved states are accurate at samples ``spacing`` apart: an adaptive
+        scheme (whose states between steps are interpolated) with its steps held to that
+        spacing; a fixed-step scheme as it is."""
+        return self
+
     def for_transient(self, rtol: float) -> "Integrator":
         """A version for a transient that need only come near a steady state: an adaptive scheme
         with its relative tolerance loosened to ``rtol`` (never tightened); a fixed-step one as

@@ -20,6 +20,7 @@ from ...jit import njit
 
 from ...mechanics import segments as sg
 from ...mechanics.supports import support_positions
+from ..peaks import step_peaks
 from .base import hermite_weights
 
 #: Samples of the gaps per step.
@@ -82,20 +83,11 @@ def _root(model, ta, tb, sa, sb, k, lo, hi, y, sign):
 
 
 @njit
-def _update_peaks(model, t, g, peak, peak_t):
-    S, EA = model.S, model.EA
-    for k in range(S.size):
-        T = sg.tension_of_stretch(max(g[k], 0.0), S[k], EA)
-        if T > peak[k]:
-            peak[k] = T
-            peak_t[k] = t
-
-
-@njit
 def locate_event(model, ta, tb, sa, sb, taut, evw):
     """The first mode change in ``(ta, tb]`` on the step's interpolant: ``(t_event, segment)``,
     or ``(tb, -1)``. ``sa``, ``sb`` start with ``(z, y')``; ``evw`` is :func:`event_workspace`.
-    Peak tensions ``EA max(g, 0) / S`` are tracked at the samples."""
+    Peak tensions ``EA max(g, 0) / S`` up to the event are located on the interpolant
+    (:func:`cablesim.dynamics.peaks.step_peaks`)."""
     hold, y, g, peak, peak_t = evw
     S = model.S
     t_prev = ta
@@ -113,13 +105,10 @@ def locate_event(model, ta, tb, sa, sb, taut, evw):
                 if te < best_t:
                     best_t, best_k = te, k
         if best_k >= 0:
-            _config_at(model, best_t, ta, tb, sa, sb, y)
-            A, B = support_positions(model, best_t)
-            sg.gaps(y, S, A, B, g)
-            _update_peaks(model, best_t, g, peak, peak_t)
+            step_peaks(model, ta, best_t, tb, sa, sb, peak, peak_t)
             return best_t, best_k
-        _update_peaks(model, ts, g, peak, peak_t)
         t_prev = ts
+    step_peaks(model, ta, tb, tb, sa, sb, peak, peak_t)
     return tb, -1
 
 

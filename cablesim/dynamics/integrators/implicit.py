@@ -92,6 +92,11 @@ class GeneralizedAlpha(Integrator):
             return replace(self, dt=self.dt_max / FD_STEPS_PER_DT_MAX)
         return replace(self, rtol=self.rtol * 1e-3, atol=self.atol * 1e-3)
 
+    def for_measuring(self, spacing: float) -> "GeneralizedAlpha":
+        if self.fixed_step or self.dt_max <= spacing:
+            return self
+        return replace(self, dt_max=spacing)
+
     def for_transient(self, rtol: float) -> "GeneralizedAlpha":
         if self.fixed_step or self.rtol >= rtol:
             return self

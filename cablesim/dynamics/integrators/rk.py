@@ -257,6 +257,9 @@ class DOPRI5(Integrator):
     def for_finite_differences(self) -> "DOPRI5":
         return DOPRI5(rtol=1e-11, atol=self.atol * 1e-3, dt_max=self.dt_max)
 
+    def for_measuring(self, spacing: float) -> "DOPRI5":
+        return self if self.dt_max <= spacing else DOPRI5(rtol=self.rtol, atol=self.atol, dt_max=spacing)
+
     def for_transient(self, rtol: float) -> "DOPRI5":
         return self if self.rtol >= rtol else DOPRI5(rtol=rtol, atol=self.atol, dt_max=self.dt_max)
 

@@ -10,7 +10,7 @@ of :class:`~cablesim.dynamics.integrators.base.Integrator`), it does not branch 
 Defaults (``docs/theory.md`` and the README's "Integrators" say why):
 
 - ``dopri5``: ``rtol`` :data:`DEFAULT_RTOL`, ``atol`` :data:`DEFAULT_ATOL_PER_CHORD` times the
-  chord (m);
+  chord (m) at that ``rtol``, following ``rtol`` when it is given (:func:`default_atol`);
 - ``newmark``, ``generalized-alpha``: error-controlled steps (:mod:`.adaptive`) at ``rtol``
   :data:`IMPLICIT_RTOL` and ``atol`` :data:`IMPLICIT_ATOL_PER_CHORD` times the chord (m), with
   at least :data:`MIN_STEPS_PER_PERIOD` steps per period of the frequency of interest; a ``dt``
@@ -39,9 +39,11 @@ from .base import Integrator
 from .implicit import GeneralizedAlpha, Newmark
 from .rk import DOPRI5, RK4
 
-#: dopri5's default relative tolerance.
+#: Default tolerances of dopri5: relative, and absolute per metre of chord at that rtol. An atol
+#: not given follows rtol (``atol = DEFAULT_ATOL_PER_CHORD * chord * rtol / DEFAULT_RTOL``): a
+#: fixed atol would dominate the error test once rtol is tightened (the paper example's
+#: displacements are metres, atol 3e-8 m), and halving rtol would change nothing.
 DEFAULT_RTOL = 1e-8
-#: dopri5's default absolute displacement tolerance, per m of chord.
 DEFAULT_ATOL_PER_CHORD = 1e-10
 #: rk4's fixed steps per period of the highest frequency of interest, when no ``dt`` is given.
 STEPS_PER_PERIOD = 100
@@ -77,6 +79,12 @@ def dividing_step(dt: float, omega: float) -> float:
     return period / np.ceil(period / dt - 1e-9)
 
 
+def default_atol(chord: float, rtol: float) -> float:
+    """dopri5's absolute tolerance on displacements (m) when the case gives none: it scales with
+    ``rtol``, ``1e-10`` of the chord at the default rtol 1e-8."""
+    return DEFAULT_ATOL_PER_CHORD * chord * (rtol / DEFAULT_RTOL)
+
+
 def _period_step(eom, omega_interest: float, steps: int) -> float:
     return dividing_step(2.0 * np.pi / omega_interest / steps, eom.omega)
 
@@ -109,7 +117,8 @@ class Scheme:
         s = dict(given)
         chord = eom.cable.chord_length
         if self.cls is DOPRI5:
-            return DOPRI5(rtol=s.get("rtol") or DEFAULT_RTOL, atol=s.get("atol") or DEFAULT_ATOL_PER_CHORD * chord)
+            rtol = s.get("rtol") or DEFAULT_RTOL
+            return DOPRI5(rtol=rtol, atol=s.get("atol") or default_atol(eom.cable.chord_length, rtol))
         dt = s.get("dt")
         if self.cls is RK4:
             return RK4(dt=dt if dt is not None else rk4_default_step(eom, omega_interest))
@@ -158,7 +167,7 @@ _IMPLICIT_DEFAULT = (f"error-controlled steps, rtol {IMPLICIT_RTOL:g}, atol {IMP
                      f"at least {MIN_STEPS_PER_PERIOD} steps per period of interest (dt: a fixed step)")
 _DEFAULTS = {
     "rk4": f"dt: {STEPS_PER_PERIOD} steps per period of interest, inside the stability limit",
-    "dopri5": f"rtol {DEFAULT_RTOL:g}, atol {DEFAULT_ATOL_PER_CHORD:g} x chord (m)",
+    "dopri5": f"rtol {DEFAULT_RTOL:g}, atol {DEFAULT_ATOL_PER_CHORD:g} x chord x rtol / {DEFAULT_RTOL:g} (m)",
     "newmark": _IMPLICIT_DEFAULT,
     "generalized-alpha": f"{_IMPLICIT_DEFAULT}, rho_inf {DEFAULT_RHO_INF:g}",
 }

@@ -36,6 +36,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_accelerate.py
 	$(PY) benchmarks/bench_heavy.py
 	$(PY) benchmarks/bench_approximate.py
+	$(PY) benchmarks/bench_adaptive.py
 	$(PY) benchmarks/bench_tolerances.py
 	$(PY) benchmarks/bench_spatial.py
 	$(PY) benchmarks/bench_heavy_orbits.py

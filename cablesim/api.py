@@ -29,6 +29,7 @@ from .analyses.sweep import SweepResult, estimate_sweep, run_sweep
 from .case import Case, case_from_dict, example_text, parse_case
 from .case import load_case as _read_case_file
 from .case.numbers import DAMPING_RATIO, DURATION, MODE, OMEGA, OUTPUT_STEP, PEAK_VELOCITY, check_flag
+from .case.files import check_step_flags, step_flag_overrides
 from .dynamics.integrators import Integrator
 from .dynamics.result import HistoryResult
 from .errors import CablesimError
@@ -47,7 +48,8 @@ from .plots.redraw import redraw
 from .plots.sweep import plot_sweep
 
 
-def load_case(source: str | Path | dict | None = None, overrides: list[str] | None = None) -> Case:
+def load_case(source: str | Path | dict | None = None, overrides: list[str] | None = None, *,
+              dt: float | None = None, rtol: float | None = None, integrator: str | None = None) -> Case:
     """A validated case: from a YAML file, a mapping, or (None) the paper's example.
 
     Parameters
@@ -57,15 +59,21 @@ def load_case(source: str | Path | dict | None = None, overrides: list[str] | No
         example (``cablesim example`` prints it).
     overrides : list of str, optional
         ``KEY=VALUE`` settings over the file, as ``--set`` on the command line.
+    dt, rtol : float, optional
+        A fixed time step, s, or the tolerance of error-controlled steps, set in the
+        ``integrator:`` section (clearing the other kind), as ``--dt`` and ``--rtol``.
+    integrator : str, optional
+        The scheme those apply to (``integrator.name``), as ``--integrator``.
 
     Raises
     ------
     CablesimError
         Naming the field at fault and what to do.
     """
-    if isinstance(source, dict):
-        return case_from_dict(source, overrides)
-    return _read_case_file(source, overrides)[0]
+    overrides = [*(overrides or ()), *step_flag_overrides(dt, rtol, integrator)]
+    case = case_from_dict(source, overrides) if isinstance(source, dict) else _read_case_file(source, overrides)[0]
+    check_step_flags(case, dt)
+    return case
 
 
 @dataclass(frozen=True)
@@ -439,6 +447,12 @@ def _warm_up_runs() -> list[tuple[str, Callable[[], object]]]:
     for integ in ("dopri5", "rk4", "newmark", "generalized-alpha"):
         runs.append((f"history through slack segments: {integ}",
                      lambda i=integ: history(slack, omega=2.45, duration=6.0, integrator=i)))
+    fixed = [*_SMALL, "integrator={name: generalized-alpha, dt: 0.01}"]  # the implicit fixed-step loop
+    for analysis in ("exact", "approximate"):
+        runs.append((f"history: {analysis} analysis, generalized-alpha at a fixed step",
+                     lambda a=analysis: history(load_case(None, fixed), omega=2.4, duration=1.0, analysis=a)))
+    runs.append(("history through slack segments: generalized-alpha at a fixed step",
+                 lambda: history(load_case(None, [*fixed, *_SLACKENING]), omega=2.45, duration=6.0)))
     z0 = load_case(None, [*_SMALL, "free_vibration={z0: [0.01, 0.01, 0.0, 0.0], duration: 0.5}"])
     runs += [
         ("free vibration from a displacement", lambda: free_vibration(z0)),

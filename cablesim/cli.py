@@ -29,9 +29,9 @@ import typer
 
 from . import cli_charts
 from .errors import CablesimError
-from .io.terminal import (ANALYSIS_OPT, CASE_ARG, FORCE_OPT, INTEGRATOR_OPT, MODES_OPT, SET_OPT, SLACK_OPTION,
-                           SNAPSHOTS_OPT, STAMP_OPT, Analysis, CommandGroup, IntegratorName, LazyBar, SlackPolicy, StatusLine,
-                           compiling, say_error, say_warnings)
+from .io.terminal import (ANALYSIS_OPT, CASE_ARG, DT_OPT, FORCE_OPT, INTEGRATOR_OPT, MODES_OPT, RTOL_OPT, SET_OPT, SLACK_OPTION,
+                           SNAPSHOTS_OPT, STAMP_OPT, Analysis, CommandGroup, IntegratorName, LazyBar, SlackPolicy, StatusLine, compiling,
+                           say_error, say_warnings)
 from .version import __version__
 
 app = typer.Typer(
@@ -241,7 +241,6 @@ def static(
     from .analyses.static import run_static
     from .io.hdf5 import write_static
     from .io.report import static_summary
-
     with compiling(_note):
         result = run_static(case, analysis.value if analysis else None, all_models=all_models)
     say_warnings(result.warnings)
@@ -267,6 +266,7 @@ def history(
     output_step: Optional[float] = typer.Option(None, "--output-step", help="Interval between saved instants, s (default: history.output_step, else 40 per period of w)."),
     analysis: Optional[Analysis] = ANALYSIS_OPT,
     integrator: Optional[IntegratorName] = INTEGRATOR_OPT,
+    dt: Optional[float] = DT_OPT, rtol: Optional[float] = RTOL_OPT,
     channels: Optional[str] = typer.Option(None, "--channels", help="DOF to plot, e.g. z2,z4 (default: history.channels, else all)."),
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file (default: runs/<name>/history-w<omega>.h5); the plots go beside it."),
     slack: Optional[SlackPolicy] = SLACK_OPTION,
@@ -275,7 +275,7 @@ def history(
     full: bool = typer.Option(False, "--full", help="Print every channel (default: over 40 channels show the first and last)."),
 ):
     """Forced response F(t) = F0 + FL sin(w t) at one frequency, from the equilibrium at rest."""
-    from .case import load_case
+    from .case.files import load_with_steps
     from .case.numbers import DURATION, OMEGA, OUTPUT_STEP, check_flag
     from .channels import parse_channels
 
@@ -283,7 +283,7 @@ def history(
     check_flag(OMEGA, omega, "--omega", "history.omega")
     check_flag(DURATION, duration, "--duration", "history.duration")
     check_flag(OUTPUT_STEP, output_step, "--output-step", "history.output_step")
-    case = load_case(case_file, _with_slack(overrides, slack))[0]
+    case = load_with_steps(case_file, _with_slack(overrides, slack), dt, rtol, integrator and integrator.value)
     dur = duration if duration is not None else case.history.duration
     w = omega if omega is not None else case.history.omega
     if w is None:
@@ -297,8 +297,7 @@ def history(
 
     stem = history_stem(w, dur, analysis.value if analysis else None, integrator.value if integrator else None)
     out = output if output is not None else Path("runs") / case.name / f"{stem}.h5"
-    chans = parse_channels(channels, case.history.channels, case.dim * case.cable.n_nodes, kept=case.outputs.channels,
-                           dim=case.dim)
+    chans = parse_channels(channels, case.history.channels, case.dim * case.cable.n_nodes, kept=case.outputs.channels, dim=case.dim)
     _check_outputs(out, case_file, (lambda o: figures(o, "history")[:5]) if plot else [])
     from . import api
     from .io.finish import finish_history, guard, simulate
@@ -327,6 +326,7 @@ def free_vibration(
     output_step: Optional[float] = typer.Option(None, "--output-step", help="Interval between saved instants, s (default: free_vibration.output_step, else 40 per period)."),
     analysis: Optional[Analysis] = ANALYSIS_OPT,
     integrator: Optional[IntegratorName] = INTEGRATOR_OPT,
+    dt: Optional[float] = DT_OPT, rtol: Optional[float] = RTOL_OPT,
     channels: Optional[str] = typer.Option(None, "--channels", help="DOF to plot, e.g. z2,z4 (default: free_vibration.channels, else all)."),
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file (default: runs/<name>/free-vibration-mode<K>-v<V>.h5); the plots go beside it."),
     slack: Optional[SlackPolicy] = SLACK_OPTION,
@@ -334,7 +334,7 @@ def free_vibration(
     force: bool = FORCE_OPT,
 ):
     """Damped free vibration about the equilibrium, started with velocities along a linear mode."""
-    from .case import load_case
+    from .case.files import load_with_steps
     from .case.numbers import DAMPING_RATIO, DURATION, MODE, OUTPUT_STEP, PEAK_VELOCITY, check_flag
     from .channels import parse_channels
 
@@ -344,7 +344,7 @@ def free_vibration(
     check_flag(DAMPING_RATIO, damping_ratio, "--damping-ratio", "free_vibration.damping_ratio")
     check_flag(DURATION, duration, "--duration", "free_vibration.duration")
     check_flag(OUTPUT_STEP, output_step, "--output-step", "free_vibration.output_step")
-    case = load_case(case_file, _with_slack(overrides, slack))[0]
+    case = load_with_steps(case_file, _with_slack(overrides, slack), dt, rtol, integrator and integrator.value)
     fv = case.free_vibration
     dur = duration if duration is not None else fv.duration
     k = mode if mode is not None else fv.mode
@@ -392,6 +392,7 @@ def sweep(
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file (default: runs/<name>/sweep.h5); the plot goes beside it."),
     analysis: Optional[Analysis] = ANALYSIS_OPT,
     integrator: Optional[IntegratorName] = INTEGRATOR_OPT,
+    dt: Optional[float] = DT_OPT, rtol: Optional[float] = RTOL_OPT,
     slack: Optional[SlackPolicy] = SLACK_OPTION,
     backend: Backend = typer.Option(Backend.loky, "--backend", help="Run points locally (loky) or on a Dask cluster."),
     scheduler: Optional[str] = typer.Option(None, "--scheduler", help="Dask scheduler address, with --backend dask (e.g. tcp://host:8786)."),
@@ -401,10 +402,8 @@ def sweep(
     """Frequency-domain response: steady amplitude of each channel against forcing frequency.
     Exit status 3 if any point stopped early (the summary names which and why)."""
     from .analyses.pool import check_jobs
-    from .case import load_case
-    from .case.files import sweep_flag_error, sweep_flag_overrides
+    from .case.files import load_with_steps, sweep_flag_error, sweep_flag_overrides
     from .io.naming import sweep_stem
-
     _begin(ctx)
     check_jobs(jobs)
     if scheduler is not None and backend != Backend.dask:
@@ -413,8 +412,9 @@ def sweep(
             "the points on this machine): add --backend dask, or drop --scheduler."
         )
     try:
-        case = load_case(case_file, _with_slack([*(overrides or ()), *sweep_flag_overrides(omega, duration, channels,
-                                                                                         window)], slack))[0]
+        case = load_with_steps(case_file, _with_slack([*(overrides or ()), *sweep_flag_overrides(omega, duration, channels,
+                                                                                               window)], slack),
+                               dt, rtol, integrator and integrator.value)
     except CablesimError as exc:
         raise sweep_flag_error(exc, duration, window) from None
     stem = sweep_stem(omega, analysis.value if analysis else None, integrator.value if integrator else None)

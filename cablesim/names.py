@@ -15,8 +15,8 @@ ANALYSES = ("exact", "approximate")
 INTEGRATOR_SETTINGS = {
     "rk4": ("dt",),
     "dopri5": ("rtol", "atol"),
-    "newmark": ("dt",),
-    "generalized-alpha": ("dt", "rho_inf"),
+    "newmark": ("dt", "rtol", "atol"),
+    "generalized-alpha": ("dt", "rtol", "atol", "rho_inf"),
 }
 INTEGRATORS = tuple(INTEGRATOR_SETTINGS)
 #: Every setting some scheme takes.

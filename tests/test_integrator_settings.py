@@ -12,7 +12,8 @@ from pydantic import ValidationError
 
 from cablesim.case import IntegratorSpec, parse_case
 from cablesim.dynamics.integrators import INTEGRATORS
-from cablesim.dynamics.integrators.settings import SCHEMES, default_scheme, ignored_keys, make
+from cablesim.dynamics.integrators.settings import (IMPLICIT_ATOL_PER_CHORD, IMPLICIT_RTOL, SCHEMES, default_scheme,
+                                                     ignored_keys, make)
 from cablesim.names import INTEGRATOR_KEYS, INTEGRATOR_SETTINGS
 
 ROOT = Path(__file__).resolve().parents[1] / "cablesim"
@@ -49,11 +50,19 @@ def test_the_factory_fills_in_the_defaults_of_the_table():
     assert default_scheme(eom, 2.4) == "dopri5"
     d = make(None, eom, 2.4)
     assert d.name == "dopri5" and d.rtol == 1e-8 and d.atol == pytest.approx(1e-10 * eom.cable.chord_length)
-    for name in ("rk4", "newmark", "generalized-alpha"):
+    period = 2.0 * 3.141592653589793 / 2.4
+    rk = make("rk4", eom, 2.4)
+    assert rk.fixed_step and period / rk.dt == pytest.approx(round(period / rk.dt), rel=1e-9)  # divides the period
+    assert rk.dt <= period / 100 * (1 + 1e-12)
+    for name in ("newmark", "generalized-alpha"):  # error-controlled by default; dt fixes the step
         integ = make(name, eom, 2.4)
-        period = 2.0 * 3.141592653589793 / 2.4
-        assert period / integ.dt == pytest.approx(round(period / integ.dt), rel=1e-9)  # divides the period
-        assert integ.dt <= period / 100 * (1 + 1e-12)
+        assert not integ.fixed_step and integ.rtol == IMPLICIT_RTOL
+        assert integ.atol == pytest.approx(IMPLICIT_ATOL_PER_CHORD * eom.cable.chord_length)
+        assert integ.omega_ref == 2.4 and period / integ.dt_max == pytest.approx(round(period / integ.dt_max), rel=1e-9)
+        fixed = make(name, eom, 2.4, {"dt": period / 300})
+        assert fixed.fixed_step and fixed.dt == period / 300 and "rtol" not in fixed.settings()
+        with pytest.raises(ValueError, match="exclude each other"):
+            make(name, eom, 2.4, {"dt": 0.01, "rtol": 1e-6})
     assert make("generalized-alpha", eom, 2.4, {"rho_inf": 0.3}).rho_inf == 0.3
     with pytest.raises(ValueError, match="takes dt"):
         make("rk4", eom, 2.4, {"rtol": 1e-6})

@@ -134,7 +134,8 @@ def slack_reference(eom, t_out, rtol=1e-12, s0=None):
         assert sol.status >= 0, sol.message
         t_new = sol.t[-1]
         pick = (t_out >= t) & (t_out <= t_new)
-        out[pick] = sol.sol(t_out[pick])[:nd].T
+        if pick.any():  # an event may follow the last one before the next output instant
+            out[pick] = sol.sol(t_out[pick])[:nd].T
         if sol.status == 1:
             k = min((k for k in range(S.size) if sol.t_events[k].size), key=lambda k: sol.t_events[k][0])
             t_new, x = sol.t_events[k][0], sol.y_events[k][0]

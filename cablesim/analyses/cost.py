@@ -7,7 +7,9 @@ in this machine's memory at all is refused even then (it would only fail later).
 Step counts are exact for the fixed-step schemes (``duration / dt``) and an estimate for
 ``dopri5``, whose step is set by stability (about ``3.3 / rate``, the fastest damped rate of
 the linearised cable) or accuracy (a fraction ``rtol ** (1/5)`` of the forcing period),
-whichever is smaller. A sweep's count is an upper bound: every point integrated to the cap.
+whichever is smaller, and for the error-controlled implicit schemes, which are not limited by
+stability: ``w h = sqrt(12 rtol / amplification)``, the step at which their local error
+``(w h)^2 / 12`` per radian meets the tolerance (:mod:`cablesim.dynamics.integrators.adaptive`). A sweep's count is an upper bound: every point integrated to the cap.
 """
 
 from __future__ import annotations
@@ -125,9 +127,13 @@ def steps_per_second(eom: EquationsOfMotion, integ: Integrator, omega_interest: 
     """Time steps per simulated second (exact for fixed steps, estimated for dopri5)."""
     if integ.fixed_step:
         return 1.0 / integ.dt
+    rtol = float(getattr(integ, "rtol", 1e-8))
+    if integ.stability_limit is None:  # implicit, error-controlled: (w h)^2 / 12 per radian, amplified
+        w_ref = float(getattr(integ, "omega_ref", 0.0)) or omega_interest
+        h = math.sqrt(12.0 * max(rtol, 1e-16) / float(getattr(integ, "amplification", 1.0))) / w_ref
+        return 1.0 / min(h, float(getattr(integ, "dt_max", np.inf)))
     rate = fastest_rate(eom.frequencies, eom.a0, eom.a1)
     h_stability = 3.3 / rate
-    rtol = float(getattr(integ, "rtol", 1e-8))
     h_accuracy = 2.0 * np.pi / omega_interest * max(rtol, 1e-16) ** 0.2
     h = min(h_stability, h_accuracy, float(getattr(integ, "dt_max", np.inf)))
     return 1.0 / h

@@ -13,8 +13,8 @@ from ..case import Case, IntegratorSpec
 from ..dynamics.equations import EquationsOfMotion
 from ..dynamics.integrators import Integrator
 from ..dynamics.integrators.settings import (DEFAULT_ATOL_PER_CHORD, DEFAULT_RTOL, RK4_SAFE_STEP, SCHEMES,
-                                              STEPS_PER_PERIOD, STIFF_RATIO, STIFF_STEPS_PER_PERIOD, default_atol,
-                                              dividing_step, ignored_keys, is_stiff, make, rk4_stable_step)
+                                              STEPS_PER_PERIOD, STIFF_RATIO, default_atol, dividing_step,
+                                              ignored_keys, is_stiff, make, rk4_stable_step)
 from ..errors import CablesimError
 from ..modal import fastest_rate, modal_analysis_banded, out_of_plane_shape, rayleigh_coefficients
 from .static import StaticResult, damping_modes

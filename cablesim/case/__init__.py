@@ -20,6 +20,7 @@ from .files import (
 )
 from .model import Case
 from .charts import BackboneSpec
+from .integrator_spec import IntegratorSpec
 from .sections import (
     FIGURE_KINDS,
     CableSpec,
@@ -28,7 +29,6 @@ from .sections import (
     FigureSpec,
     FreeVibrationSpec,
     HistorySpec,
-    IntegratorSpec,
     LoadsSpec,
     LociRange,
     ModalSpec,

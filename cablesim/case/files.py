@@ -14,7 +14,7 @@ from pydantic import BaseModel, ConfigDict, ValidationError
 from ..errors import CablesimError
 from . import strict_yaml
 from .model import Case
-from .numbers import DURATION, check_flag
+from .numbers import DURATION, RTOL, TIME_STEP, check_flag
 from .sections import HINTS, FigureSpec
 
 EXAMPLE_RESOURCE = "paper-example.yaml"
@@ -103,6 +103,42 @@ def apply_overrides(data: dict, overrides, source: str) -> dict:
         except (yaml.YAMLError, strict_yaml.StrictYamlError, RecursionError):
             raise CablesimError(f"--set {key}: the value {value!r} is not valid YAML.") from None
     return data
+
+
+def step_flag_overrides(dt: Optional[float], rtol: Optional[float], integrator: Optional[str]) -> list[str]:
+    """``--dt`` and ``--rtol`` as ``--set`` overrides of the ``integrator:`` section (recorded with
+    the case and checked like it). The flag replaces the case's other kind of step: ``--dt`` clears
+    ``rtol`` and ``atol`` (a fixed step), ``--rtol`` clears ``dt`` (error-controlled steps). With
+    ``--integrator`` the scheme is set too, so that the section is checked against it."""
+    if dt is None and rtol is None:
+        return []
+    if dt is not None and rtol is not None:
+        raise CablesimError("--dt and --rtol exclude each other: --dt fixes the time step, --rtol sets the "
+                            "tolerance of error-controlled steps; give one of them.", field="integrator")
+    check_flag(TIME_STEP, dt, "--dt", "integrator.dt")
+    check_flag(RTOL, rtol, "--rtol", "integrator.rtol")
+    sets = [f"integrator.name={integrator}"] if integrator is not None else []
+    if dt is not None:
+        return sets + [f"integrator.dt={dt!r}", "integrator.rtol=null", "integrator.atol=null"]
+    return sets + [f"integrator.rtol={rtol!r}", "integrator.dt=null"]
+
+
+def check_step_flags(case, dt: Optional[float]) -> None:
+    """Refuse ``--dt`` when no scheme is named: cablesim's default for an ordinary cable, dopri5,
+    has no fixed step, and the flag would be ignored."""
+    if dt is not None and case.integrator.name is None:
+        raise CablesimError(
+            f"--dt {dt:g} needs a scheme with a fixed step: add --integrator rk4, newmark or generalized-alpha (or "
+            "integrator.name in the case file). Without one cablesim chooses dopri5 for an ordinary cable, which "
+            "adapts its step to --rtol instead.", field="integrator.dt")
+
+
+def load_with_steps(path, overrides, dt: Optional[float], rtol: Optional[float], integrator: Optional[str]) -> Case:
+    """:func:`load_case` with ``--dt`` or ``--rtol`` set in the ``integrator:`` section
+    (:func:`step_flag_overrides`, :func:`check_step_flags`); ``integrator`` the scheme named."""
+    case = load_case(path, [*(overrides or ()), *step_flag_overrides(dt, rtol, integrator)])[0]
+    check_step_flags(case, dt)
+    return case
 
 
 def sweep_flag_overrides(omega: Optional[str], duration: Optional[float], channels: Optional[str],

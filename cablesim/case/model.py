@@ -14,6 +14,7 @@ from ..channels import channel_index
 from ..errors import CablesimError
 from ..names import ANALYSES, SLACK_POLICIES
 from .charts import BackboneSpec
+from .integrator_spec import IntegratorSpec
 from .sections import (
     CableSpec,
     ContinuationSpec,
@@ -21,7 +22,6 @@ from .sections import (
     FigureSpec,
     FreeVibrationSpec,
     HistorySpec,
-    IntegratorSpec,
     LoadsSpec,
     ModalSpec,
     OutputsSpec,

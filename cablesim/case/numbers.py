@@ -86,6 +86,8 @@ OUTPUT_STEP = real(0.0, 1e7, "s", lo_open=True)
 DISTURBANCE = real(0.0, 1e3, "m")
 DAMPING_RATIO = real(0.0, 1.0, "", hi_open=True)
 PEAK_VELOCITY = real(0.0, 1e3, "m/s", lo_open=True)
+TIME_STEP = real(1e-9, 1e3, "s")
+RTOL = real(1e-14, 0.5)
 MODE = integer(1, 2000)
 
 

@@ -9,7 +9,7 @@ import numpy as np
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, field_validator, model_validator
 from pydantic_core import PydanticCustomError
 
-from ..names import CONTINUATION_PARAMETERS, DIRECTIONS, INTEGRATOR_KEYS, INTEGRATOR_SETTINGS, INTEGRATORS
+from ..names import CONTINUATION_PARAMETERS, DIRECTIONS
 from .numbers import (
     DAMPING_RATIO,
     DISTURBANCE,
@@ -294,36 +294,6 @@ class DampingSpec(StrictModel):
             raise ValueError("give damping.ratio (e.g. 0.01), or a0 and a1")
         if self.modes[0] < 1 or self.modes[1] < 1 or self.modes[0] == self.modes[1]:
             raise ValueError("damping.modes must be two different mode numbers counted from 1")
-        return self
-
-
-class IntegratorSpec(StrictModel):
-    """Time-integration scheme and its settings (section ``integrator:``).
-
-    Without a name cablesim chooses: ``dopri5`` for ordinary cables, ``generalized-alpha`` for
-    stiff ones (highest mode over 200 times the frequency of interest).
-    """
-
-    name: Literal[INTEGRATORS] | None = None
-    dt: real(1e-9, 1e3, "s") | None = Field(default=None, description="fixed step, s (rk4, newmark, generalized-alpha)")
-    rtol: real(1e-14, 0.5) | None = Field(default=None, description="relative tolerance (dopri5)")
-    atol: real(1e-16, 1e3, "m") | None = Field(default=None, description="absolute displacement tolerance, m (dopri5)")
-    rho_inf: real(0.0, 1.0) | None = Field(default=None, description="spectral radius (generalized-alpha)")
-
-    def settings(self) -> dict:
-        """The settings given (``{key: value}``, None left out)."""
-        return {k: getattr(self, k) for k in INTEGRATOR_KEYS if getattr(self, k) is not None}
-
-    @model_validator(mode="after")
-    def _fits(self):
-        if self.name is not None:
-            keys = INTEGRATOR_SETTINGS[self.name]
-            bad = [k for k in self.settings() if k not in keys]
-            if bad:
-                taken = " and ".join(f"integrator.{k}" for k in keys)
-                verb = "does" if len(bad) == 1 else "do"
-                raise ValueError(f"{' and '.join(f'integrator.{k}' for k in bad)} {verb} not apply to {self.name}, "
-                                 f"which takes {taken}")
         return self
 
 

@@ -245,6 +245,11 @@ ANALYSIS_OPT = typer.Option(None, "--analysis", help="Override the case file's a
                             "the case file, else exact).")
 INTEGRATOR_OPT = typer.Option(None, "--integrator", help="Time-integration scheme (default: integrator.name in "
                               "the case file, else dopri5, or generalized-alpha for a stiff cable).")
+DT_OPT = typer.Option(None, "--dt", metavar="SECONDS", help="Fixed time step, s, of the scheme named (rk4, newmark, "
+                      "generalized-alpha; sets integrator.dt, clears its rtol and atol).")
+RTOL_OPT = typer.Option(None, "--rtol", help="Relative tolerance of the error-controlled steps (dopri5, newmark, "
+                        "generalized-alpha; sets integrator.rtol, clears its dt) [default: 1e-8 for dopri5, 1e-5 for "
+                        "the implicit schemes].")
 FORCE_OPT = typer.Option(False, "--force", help="Run even when the cost estimate is above the limits (1e8 time "
                          "steps, a sweep 1e9, or 4 GB of memory).")
 MODES_OPT = typer.Option(None, "--modes", min=1, metavar="K", help="Compute only the lowest K modes and the highest "

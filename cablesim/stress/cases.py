@@ -7,7 +7,8 @@ varied along one axis at a time:
 ========== =================================================================================
 axis       values (reduced version: fewer values, 60 s runs)
 ========== =================================================================================
-EA         1e6, 1e8, 1e9, 1e11, 1e13 N (stiff cables also with generalized-alpha and newmark)
+EA         1e6, 1e8, 1e9, 1e11, 1e13 N (stiff cables also with generalized-alpha and newmark, at a
+           fixed step and error-controlled)
 sag        sum S / chord = 1.0001, 1.001, 1.13 (paper), 2, 3 (S scaled uniformly)
 load       F0 and FL scaled together by 1e-3, 1, 1e3
 n          2, 10, 50, 100 interior nodes: equal segments (sum S as in the paper), equal masses
@@ -53,6 +54,8 @@ import math
 from dataclasses import dataclass
 
 import yaml
+
+from ..dynamics.integrators.settings import DEFAULT_TOLERANCES
 
 
 # ----------------------------------------------------------------------------------------------
@@ -124,9 +127,10 @@ AXIS_TITLES = {
 class Scheme:
     """A time-integration scheme for one run.
 
-    ``kind``: ``dopri5`` (rtol 1e-8, cablesim's default settings), ``rk4`` (``factor`` x the
-    stability limit 2.8 / omega_max), ``generalized-alpha`` or ``newmark`` (``steps`` per period of
-    the frequency of interest; 100 is cablesim's default).
+    ``kind``: ``rk4`` (``factor`` x the stability limit 2.8 / omega_max), ``generalized-alpha`` or
+    ``newmark`` with ``steps`` per period of the frequency of interest (a fixed step), or without
+    ``factor`` and ``steps`` an error-controlled scheme (``dopri5``, ``newmark``,
+    ``generalized-alpha``) at cablesim's default tolerances.
     """
 
     kind: str
@@ -139,7 +143,7 @@ class Scheme:
             return f"{self.kind} dt={self.factor:g}x limit"
         if self.steps is not None:  # an implicit fixed step
             return f"{self.kind} {self.steps}/period"
-        return f"{self.kind} rtol=1e-8"  # an adaptive scheme at cablesim's default tolerances
+        return f"{self.kind} rtol={DEFAULT_TOLERANCES[self.kind]:g}"  # adaptive, at cablesim's default tolerances
 
 
 @dataclass(frozen=True)
@@ -196,6 +200,8 @@ def _n_spec(n: int) -> dict:
 DOPRI = Scheme("dopri5")
 GALPHA = Scheme("generalized-alpha", steps=100)
 NEWMARK = Scheme("newmark", steps=100)
+GALPHA_AUTO = Scheme("generalized-alpha")  # error-controlled, at the default tolerances
+NEWMARK_AUTO = Scheme("newmark")
 
 
 def build_cases(reduced: bool = False) -> list[StressCase]:
@@ -209,7 +215,8 @@ def build_cases(reduced: bool = False) -> list[StressCase]:
     # the approximate analysis is skipped at EA = 1e13 (its explicit runs cost ~20 s).
     for EA in (1e6, 1e9, 1e13) if reduced else (1e6, 1e8, 1e9, 1e11, 1e13):
         if EA >= 1e11:
-            runs = exact(DOPRI, GALPHA, NEWMARK) + (() if EA > 1e11 else (("approximate", DOPRI), ("approximate", GALPHA)))
+            runs = exact(DOPRI, GALPHA, NEWMARK, GALPHA_AUTO, NEWMARK_AUTO) + (
+                () if EA > 1e11 else (("approximate", DOPRI), ("approximate", GALPHA), ("approximate", GALPHA_AUTO)))
         else:
             runs = both(DOPRI)
         cases.append(StressCase(f"EA={EA:.0e}", "EA", f"{EA:.0e}", _spec(EA=EA), dur, runs))
@@ -227,7 +234,7 @@ def build_cases(reduced: bool = False) -> list[StressCase]:
     # Load scale.
     for g in (1e-3, 1e3) if reduced else (1e-3, 1.0, 1e3):
         spec = _spec(F0=[g * v for v in PAPER["F0"]], FL=[g * v for v in PAPER["FL"]])
-        runs = both(DOPRI) + (exact(GALPHA) if g < 1 else ())
+        runs = both(DOPRI) + (exact(GALPHA, GALPHA_AUTO) if g < 1 else ())
         cases.append(StressCase(f"load x{g:g}", "load", f"{g:g}", spec, dur, runs))
 
     # Number of nodes. Explicit runs cost O(n^2) per evaluation and their step must resolve the
@@ -235,7 +242,7 @@ def build_cases(reduced: bool = False) -> list[StressCase]:
     # finely divided cables run for a few fundamental periods only.
     for n in (10, 50) if reduced else (2, 10, 50, 100):
         d = {10: 30.0, 50: 5.0}[n] if reduced else {2: dur, 10: dur, 50: 40.0, 100: 10.0}[n]
-        runs = both(DOPRI) if n <= 10 else exact(DOPRI, GALPHA)
+        runs = both(DOPRI) if n <= 10 else exact(DOPRI, GALPHA, GALPHA_AUTO)
         cases.append(StressCase(f"n={n}", "n", str(n), _n_spec(n), d, runs))
 
     # RK4 step size relative to its stability limit 2.8 / omega_max (paper's example), and the
@@ -257,7 +264,7 @@ def build_cases(reduced: bool = False) -> list[StressCase]:
     gammas = (10.0, 20.0) if reduced else (3.0, 10.0, 15.0, 20.0)
     for g in gammas:
         spec = _spec(FL=[g * v for v in PAPER["FL"]])
-        cases.append(StressCase(f"FL x{g:g}", "slack", f"FL x{g:g}", spec, dur, both(DOPRI)))
+        cases.append(StressCase(f"FL x{g:g}", "slack", f"FL x{g:g}", spec, dur, both(DOPRI) + exact(GALPHA_AUTO)))
     f0 = list(PAPER["F0"])
     f0[0], f0[2] = 3000.0e3, -3000.0e3  # node 1 pushed towards B, node 2 towards A
     cases.append(StressCase("F0 slackens segment 2", "slack", "F0 static slack", _spec(F0=f0), dur, exact(DOPRI)))

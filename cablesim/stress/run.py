@@ -66,10 +66,10 @@ def _make_integrator(scheme: Scheme, prep: _Prepared):
     stability limit over ``omega_max``, an implicit one at ``steps`` per period."""
     row = SCHEMES[scheme.kind]
     given = {}
-    if row.cls.fixed_step:
-        limit = row.cls.stability_limit
-        given["dt"] = (scheme.factor * limit / prep.static.modes.highest if limit is not None
-                       else 2.0 * np.pi / prep.omega_hi / scheme.steps)
+    if scheme.factor is not None:
+        given["dt"] = scheme.factor * row.cls.stability_limit / prep.static.modes.highest
+    elif scheme.steps is not None:
+        given["dt"] = 2.0 * np.pi / prep.omega_hi / scheme.steps
     return row.build(prep.eom, prep.omega_hi, given)
 
 
@@ -109,10 +109,9 @@ def _agreement_tol(scheme: Scheme, hist, half, ref) -> float:
     scheme's own truncation error does not explain (an answer that does not converge to the
     reference) is silently wrong, and so is any answer more than 5 % off.
     """
-    cls = SCHEMES[scheme.kind].cls
-    if not cls.fixed_step or half is None:
+    if half is None:  # an adaptive scheme
         return AGREE_TOL_FLOOR
-    p = cls.order
+    p = SCHEMES[scheme.kind].cls.order
     m = min(hist.t.size, half.t.size, ref.t.size)
     scale = float(np.max(np.abs(ref.z[:m]))) if m else 0.0
     if scale == 0.0:

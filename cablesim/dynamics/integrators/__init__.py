@@ -5,13 +5,15 @@ name                   order  kind
 =====================  =====  =====================================================
 ``rk4``                4      explicit, fixed step, third-order state (paper)
 ``dopri5``             5      explicit, adaptive (rtol, atol), third-order state
-``newmark``            2      implicit, fixed step, average acceleration (paper)
-``generalized-alpha``  2      implicit, fixed step, high-mode dissipation rho_inf
+``newmark``            2      implicit, average acceleration (paper): error-controlled
+                              (rtol, atol), or a fixed step dt
+``generalized-alpha``  2      implicit, high-mode dissipation rho_inf: error-controlled
+                              (rtol, atol), or a fixed step dt
 =====================  =====  =====================================================
 """
 
 from .base import Integrator, IntegratorState
-from .newmark import GeneralizedAlpha, Newmark
+from .implicit import GeneralizedAlpha, Newmark
 from .rk import DOPRI5, RK4
 
 INTEGRATORS: dict[str, type[Integrator]] = {

@@ -15,11 +15,12 @@ Each step solves its equilibrium by Newton's method. Schemes:
   numerical dissipation of the high modes set by the spectral radius ``rho_inf`` in [0, 1]
   (1: none, like ``newmark``; 0: annihilates the highest modes in one step). For stiff cables
   (very large EA) whose axial modes are far above the response of interest.
+
+Here are the kernels of one step and of the fixed-step loop; the error-controlled loop is
+:mod:`.adaptive`, the integrator classes :mod:`.implicit`.
 """
 
 from __future__ import annotations
-
-from dataclasses import dataclass
 
 import numpy as np
 from ...jit import njit
@@ -30,10 +31,10 @@ from ...mechanics import flexibility as fx
 from ...mechanics.linalg import solve_small
 from ...mechanics.model import STOP
 from ...mechanics.supports import add_support_damping, support_positions, support_velocities
-from ..field import approximate_stiffness, exact_force_and_rate
+from ..field import approximate_stiffness
 from ..status import INNER_SOLVE, NONFINITE, OK, SLACK
-from .base import Integrator, IntegratorState, hermite
-from .events import locate_event, start_events, transition
+from .base import hermite
+from .events import locate_event
 
 
 @njit
@@ -80,7 +81,7 @@ def _internal(model, z, P_n, z_n, warm, P1, K, first, wk, awk, check_slack, tb):
 
 
 @njit
-def _store(s, z, v, a):
+def store_state(s, z, v, a):
     """``s = (z, v, a)``."""
     nd = z.size
     s[:nd] = z
@@ -89,7 +90,7 @@ def _store(s, z, v, a):
 
 
 @njit
-def _equilibrium_acceleration(model, t, v, P, a_out, Cv):
+def equilibrium_acceleration(model, t, v, P, a_out, Cv):
     """``y'' = M^-1 (F(t) - C y' - P)`` (eq. 15) from the internal force ``P`` the scheme carries.
 
     For the saved states of the approximate analysis, whose outputs (tensions, ``z_c``, ``z_e``)
@@ -103,7 +104,7 @@ def _equilibrium_acceleration(model, t, v, P, a_out, Cv):
 
 
 @njit
-def _write_outputs(ta, tb, h, z, v, a, z1, v1, a1, sa, sb, da, db, t_out, out, j):
+def write_outputs(ta, tb, h, z, v, a, z1, v1, a1, sa, sb, da, db, t_out, out, j):
     """Interpolate the step ``ta -> tb`` at the output instants it covers; the next index."""
     nd = z.size
     for q in range(nd):
@@ -262,7 +263,7 @@ def _newmark_update(z, v, a, z1, v1, a1, h, beta, gamma):
 
 
 @njit
-def _galpha_step(model, z, v, a, P_n, warm, wk, awk, tb, h, coef, ztol, maxit, z1, v1, a1, P1, scratch):
+def galpha_step(model, z, v, a, P_n, warm, wk, awk, tb, h, coef, ztol, maxit, z1, v1, a1, P1, scratch):
     """One step of size h ending at ``tb`` from ``(z, v, a, P_n)`` into ``(z1, v1, a1, P1)``.
 
     With banded damping every Newton iteration assembles and solves a banded system, O(n) (in
@@ -322,18 +323,25 @@ def _galpha_step(model, z, v, a, P_n, warm, wk, awk, tb, h, coef, ztol, maxit, z
 
 
 @njit
-def _galpha_advance(model, s, P_n, warm, wk, awk, evw, track, t0, h, i, i_end, t, coef, t_out, out, ztol, maxit):
+def step_scratch(model):
+    """Scratch arrays of :func:`galpha_step` (banded Newton matrices: O(n))."""
+    nd = model.mass.size
+    dim = len(model.A)
+    rows = model.C.shape[0] if bd.is_band(model.C) else nd
+    k = model.Cr.shape[1] + dim  # rank of the approximate analysis' correction (damping, stiffness)
+    return (np.empty(nd), np.empty(nd), np.empty((rows, nd)), np.empty((rows, nd)), np.empty((rows, nd)),
+            np.empty((k, nd)), np.empty((k, nd)), np.empty((nd, dim)), np.empty((k, k)), np.empty(nd),
+            (np.empty((k, k)), np.empty((k, k))))
+
+
+@njit
+def fixed_step_advance(model, s, P_n, warm, wk, awk, evw, track, t0, h, i, i_end, t, coef, t_out, out, ztol, maxit):
     """Steps on the grid ``t0 + i h`` up to step ``i_end`` from ``t``, split where a segment
     changes mode; returns ``(i, t, written, status, segment)`` as the explicit schemes do."""
     nd = model.mass.size
-    dim = len(model.A)
     z, v, a = s[:nd].copy(), s[nd : 2 * nd].copy(), s[2 * nd :].copy()
     z1, v1, a1, P1 = np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd)
-    rows = model.C.shape[0] if bd.is_band(model.C) else nd  # banded Newton matrices: O(n)
-    k = model.Cr.shape[1] + dim  # rank of the approximate analysis' correction (damping, stiffness)
-    scratch = (np.empty(nd), np.empty(nd), np.empty((rows, nd)), np.empty((rows, nd)), np.empty((rows, nd)),
-               np.empty((k, nd)), np.empty((k, nd)), np.empty((nd, dim)), np.empty((k, k)), np.empty(nd),
-               (np.empty((k, k)), np.empty((k, k))))
+    scratch = step_scratch(model)
     sa, sb, da, db = np.empty(3 * nd), np.empty(3 * nd), np.empty(3 * nd), np.empty(3 * nd)
     ae, ae1 = np.empty(nd), np.empty(nd)
     j = 0
@@ -341,111 +349,40 @@ def _galpha_advance(model, s, P_n, warm, wk, awk, evw, track, t0, h, i, i_end, t
         tb = t0 + (i + 1) * h
         if tb - t <= 1e-9 * h:  # an event ended at the grid point
             while j < t_out.size and t_out[j] <= tb + 1e-9 * h:
-                _store(out[j], z, v, a)
+                store_state(out[j], z, v, a)
                 j += 1
             t, i = tb, i + 1
             continue
-        st = _galpha_step(model, z, v, a, P_n, warm, wk, awk, tb, tb - t, coef, ztol, maxit, z1, v1, a1, P1, scratch)
+        st = galpha_step(model, z, v, a, P_n, warm, wk, awk, tb, tb - t, coef, ztol, maxit, z1, v1, a1, P1, scratch)
         if st != OK:
-            _store(s, z, v, a)
+            store_state(s, z, v, a)
             return i, t, j, st, -1
         k = -1
         if track:
-            _store(sa, z, v, a)
-            _store(sb, z1, v1, a1)
+            store_state(sa, z, v, a)
+            store_state(sb, z1, v1, a1)
             te, k = locate_event(model, t, tb, sa, sb, wk.taut, evw)
             if k >= 0 and te <= t:  # across already at the start (end of a chatter hold)
-                _store(s, z, v, a)
+                store_state(s, z, v, a)
                 return i, t, j, OK, k
             if k >= 0:  # redo the step up to the event, in the modes valid there
-                st = _galpha_step(model, z, v, a, P_n, warm, wk, awk, te, te - t, coef, ztol, maxit, z1, v1, a1, P1, scratch)
+                st = galpha_step(model, z, v, a, P_n, warm, wk, awk, te, te - t, coef, ztol, maxit, z1, v1, a1, P1, scratch)
                 if st != OK:
-                    _store(s, z, v, a)
+                    store_state(s, z, v, a)
                     return i, t, j, st, -1
             tb = te
         if j < t_out.size and t_out[j] <= tb + (1e-9 * h if k < 0 else 0.0):
             if awk is None:
-                j = _write_outputs(t, tb, tb - t, z, v, a, z1, v1, a1, sa, sb, da, db, t_out, out, j)
-            else:  # saved y'' from the carried internal force (see _equilibrium_acceleration)
-                _equilibrium_acceleration(model, t, v, P_n, ae, scratch[9])
-                _equilibrium_acceleration(model, tb, v1, P1, ae1, scratch[9])
-                j = _write_outputs(t, tb, tb - t, z, v, ae, z1, v1, ae1, sa, sb, da, db, t_out, out, j)
+                j = write_outputs(t, tb, tb - t, z, v, a, z1, v1, a1, sa, sb, da, db, t_out, out, j)
+            else:  # saved y'' from the carried internal force (see equilibrium_acceleration)
+                equilibrium_acceleration(model, t, v, P_n, ae, scratch[9])
+                equilibrium_acceleration(model, tb, v1, P1, ae1, scratch[9])
+                j = write_outputs(t, tb, tb - t, z, v, ae, z1, v1, ae1, sa, sb, da, db, t_out, out, j)
         z[:], v[:], a[:], P_n[:] = z1, v1, a1, P1
         t = tb
         if k >= 0:
-            _store(s, z, v, a)
+            store_state(s, z, v, a)
             return i, t, j, OK, k
         i += 1
-    _store(s, z, v, a)
+    store_state(s, z, v, a)
     return i, t, j, OK, -1
-
-
-@dataclass(frozen=True)
-class GeneralizedAlpha(Integrator):
-    """Chung-Hulbert generalized-alpha with a fixed step ``dt`` (s) and spectral radius ``rho_inf``."""
-
-    dt: float
-    rho_inf: float = 0.8
-
-    name = "generalized-alpha"
-    fixed_step = True
-    order = 2
-    description = "generalized-alpha, fixed step (implicit; dissipates high modes by rho_inf)"
-
-    def _coefficients(self):
-        r = self.rho_inf
-        am = (2.0 * r - 1.0) / (r + 1.0)
-        af = r / (r + 1.0)
-        gamma = 0.5 - am + af
-        beta = 0.25 * (1.0 - am + af) ** 2
-        return am, af, beta, gamma
-
-    def start(self, eom, s0, t0=0.0):
-        st = IntegratorState(t=t0, s=np.array(s0, dtype=float), warm=np.array(eom.F1, dtype=float))
-        st.wk = eom.workspaces()
-        start_events(eom, st)
-        c = eom.cable
-        st.extra.update(P=self._force(eom, st), t0=t0, i=0, ztol=1e-12 * max(c.chord_length, 1.0), eom=eom)
-        return st
-
-    @staticmethod
-    def _force(eom, st):
-        """The internal force at the state: ``P(y)`` of the current segment modes, with the
-        supports where they are at ``st.t`` (exact), or eq. 15."""
-        nd = eom.n_dof
-        if eom.exact:
-            wk = st.wk[0]  # no dense K: O(n) for heavy cables
-            exact_force_and_rate(eom.model(), float(st.t), eom.y0 + st.s[:nd], np.zeros(nd), wk)
-            return wk.P.copy()
-        return eom.internal_force(st.t, st.s)
-
-    def advance(self, model, state, t_end, t_out, out):
-        ex = state.extra
-        coef = np.array(self._coefficients())
-        i_end = max(int(np.ceil((t_end - ex["t0"]) / self.dt - 1e-9)), ex["i"])
-        written = 0
-        while True:
-            i, t, j, code, k = _galpha_advance(
-                model, state.s, ex["P"], state.warm, *state.wk, ex["evw"], ex["track"], ex["t0"], self.dt, ex["i"], i_end,
-                state.t, coef, t_out[written:], out[written:], ex["ztol"], 25,
-            )
-            written += j
-            ex["i"], state.t = i, t
-            if code != OK or k < 0:
-                return written, code
-            transition(state, k, t)
-            ex["P"][:] = self._force(ex["eom"], state)
-
-
-@dataclass(frozen=True)
-class Newmark(GeneralizedAlpha):
-    """Newmark's average-acceleration method (``beta = 1/4``, ``gamma = 1/2``), fixed step ``dt``."""
-
-    dt: float
-    rho_inf: float = 1.0
-
-    name = "newmark"
-    description = "Newmark average acceleration, fixed step (implicit; no numerical damping)"
-
-    def _coefficients(self):
-        return 0.0, 0.0, 0.25, 0.5

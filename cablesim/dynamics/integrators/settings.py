@@ -11,13 +11,20 @@ Defaults (``docs/theory.md`` and the README's "Integrators" say why):
 
 - ``dopri5``: ``rtol`` :data:`DEFAULT_RTOL`, ``atol`` :data:`DEFAULT_ATOL_PER_CHORD` times the
   chord (m) at that ``rtol``, following ``rtol`` when it is given (:func:`default_atol`);
-- ``rk4``, ``newmark``, ``generalized-alpha``: :data:`STEPS_PER_PERIOD` steps per period of the
-  frequency of interest, rounded to divide the forcing period; ``rk4`` kept inside its stability
-  limit (:data:`RK4_SAFE_STEP` over the fastest damped rate); ``generalized-alpha``'s
-  ``rho_inf`` 0.8;
+- ``newmark``, ``generalized-alpha``: error-controlled steps (:mod:`.adaptive`) at ``rtol``
+  :data:`IMPLICIT_RTOL` and ``atol`` :data:`IMPLICIT_ATOL_PER_CHORD` times the chord (m), with
+  at least :data:`MIN_STEPS_PER_PERIOD` steps per period of the frequency of interest; a ``dt``
+  fixes the step instead (``dt`` and ``rtol``/``atol`` exclude each other); ``generalized-alpha``'s
+  ``rho_inf`` :data:`DEFAULT_RHO_INF`;
+- ``rk4``: :data:`STEPS_PER_PERIOD` steps per period of the frequency of interest, rounded to
+  divide the forcing period, kept inside its stability limit (:data:`RK4_SAFE_STEP` over the
+  fastest damped rate);
 - no scheme named: ``dopri5``, unless the cable is stiff (its fastest damped root more than
-  :data:`STIFF_RATIO` times the frequency of interest), then ``generalized-alpha`` with
-  :data:`STIFF_STEPS_PER_PERIOD` steps per period.
+  :data:`STIFF_RATIO` times the frequency of interest), then ``generalized-alpha``.
+
+``benchmarks/bench_adaptive.py --defaults`` measures every default against an independent
+reference on the shipped examples (the aim: within 1e-5 of the peak in z and in the tensions);
+benchmarks/README.md says which of them are measured.
 """
 
 from __future__ import annotations
@@ -29,7 +36,7 @@ import numpy as np
 from ...modal import fastest_rate
 from ...names import INTEGRATOR_SETTINGS
 from .base import Integrator
-from .newmark import GeneralizedAlpha, Newmark
+from .implicit import GeneralizedAlpha, Newmark
 from .rk import DOPRI5, RK4
 
 #: Default tolerances of dopri5: relative, and absolute per metre of chord at that rtol. An atol
@@ -38,11 +45,19 @@ from .rk import DOPRI5, RK4
 #: displacements are metres, atol 3e-8 m), and halving rtol would change nothing.
 DEFAULT_RTOL = 1e-8
 DEFAULT_ATOL_PER_CHORD = 1e-10
-#: Fixed steps per period of the highest frequency of interest, when no ``dt`` is given.
+#: rk4's fixed steps per period of the highest frequency of interest, when no ``dt`` is given.
 STEPS_PER_PERIOD = 100
-#: The same for the default scheme of stiff cables (generalized-alpha): its error falls as dt^2,
-#: and 1600 steps per period give about 3e-5 (100 steps: 7e-3), see benchmarks/README.md.
-STIFF_STEPS_PER_PERIOD = 1600
+#: newmark's and generalized-alpha's default relative tolerance on the local displacement error
+#: (the measured z errors sit 10 to 20 times below it: paper example, slack case, heavy cables,
+#: benchmarks/README.md) ...
+IMPLICIT_RTOL = 1e-5
+#: ... and absolute tolerance, m per m of chord.
+IMPLICIT_ATOL_PER_CHORD = 1e-9
+#: The amplification assumed of an undamped or very lightly damped cable (that of xi = 0.001).
+AMPLIFICATION_MAX = 2000.0
+#: Error-controlled implicit steps are at most a period of interest over this (a step estimate
+#: built from two accelerations cannot see a step that aliases the forcing).
+MIN_STEPS_PER_PERIOD = 20
 #: A cable is stiff when its fastest damped root (the highest mode, or for stiffness-proportional
 #: damping of a finely divided cable the overdamped root ~ a1 w_max^2, which grows as n^2) exceeds
 #: the frequency of interest this many times: an explicit step would then be set by modes that
@@ -94,40 +109,70 @@ class Scheme:
     keys: tuple[str, ...]
     defaults: str
 
-    def build(self, eom, omega_interest: float, given: dict, stiff_default: bool = False) -> Integrator:
-        """The scheme with ``given`` settings and defaults for the others (``stiff_default``:
-        chosen automatically for a stiff cable)."""
+    def build(self, eom, omega_interest: float, given: dict) -> Integrator:
+        """The scheme with ``given`` settings and defaults for the others."""
         bad = sorted(set(given) - set(self.keys))
         if bad:
             raise ValueError(f"{self.name} takes {', '.join(self.keys)}, not {', '.join(bad)}")
         s = dict(given)
+        chord = eom.cable.chord_length
         if self.cls is DOPRI5:
             rtol = s.get("rtol") or DEFAULT_RTOL
             return DOPRI5(rtol=rtol, atol=s.get("atol") or default_atol(eom.cable.chord_length, rtol))
         dt = s.get("dt")
-        if dt is None:
-            dt = _period_step(eom, omega_interest, STEPS_PER_PERIOD)
-            if stiff_default:  # the non-stiff default step refined, still dividing the period
-                dt = dividing_step(dt * STEPS_PER_PERIOD / STIFF_STEPS_PER_PERIOD, eom.omega)
-            if self.cls is RK4 and dt > rk4_stable_step(eom):
-                dt = rk4_stable_step(eom)
-                if eom.omega > 0:  # the stable step, shortened to divide the forcing period
-                    period = 2.0 * np.pi / eom.omega
-                    dt = period / np.ceil(period / dt)
+        if self.cls is RK4:
+            return RK4(dt=dt if dt is not None else rk4_default_step(eom, omega_interest))
+        if dt is not None and ("rtol" in s or "atol" in s):
+            raise ValueError(f"{self.name}: dt (a fixed step) and rtol/atol (error-controlled steps) exclude each "
+                             "other; give one of them")
+        kw = {}
         if self.cls is GeneralizedAlpha:
-            rho = s.get("rho_inf")
-            return GeneralizedAlpha(dt=dt, rho_inf=DEFAULT_RHO_INF if rho is None else rho)
-        return self.cls(dt=dt)
+            kw["rho_inf"] = DEFAULT_RHO_INF if s.get("rho_inf") is None else s["rho_inf"]
+        if dt is not None:
+            return self.cls(dt=dt, **kw)
+        return self.cls(rtol=s.get("rtol") or IMPLICIT_RTOL, atol=s.get("atol") or IMPLICIT_ATOL_PER_CHORD * chord,
+                        dt_max=_period_step(eom, omega_interest, MIN_STEPS_PER_PERIOD), omega_ref=float(omega_interest),
+                        amplification=amplification(eom, omega_interest), **kw)
+
+
+def amplification(eom, omega: float) -> float:
+    """How much a relative error in a natural frequency can grow in the response: ``2 / xi`` at
+    ``omega`` (rad/s), with the Rayleigh damping ratio ``xi = a0 / (2 w) + a1 w / 2`` there, at
+    most :data:`AMPLIFICATION_MAX`.
+
+    A response from rest is a steady part and a decaying free transient. The steady part at
+    resonance errs by ``1 / xi`` times the frequency error (``|d ln H / d ln w_n|`` of
+    ``H = 1 / (w_n^2 - w^2 + 2 i xi w w_n)``, amplitude and phase); the transient's phase error
+    grows as ``w t`` while it decays as ``exp(-xi w t)``, at most ``1 / (e xi)`` times the
+    frequency error. Their sum is below ``2 / xi``.
+    """
+    xi = eom.a0 / (2.0 * omega) + eom.a1 * omega / 2.0
+    return float(min(AMPLIFICATION_MAX, 2.0 / xi)) if xi > 0 else AMPLIFICATION_MAX
+
+
+def rk4_default_step(eom, omega_interest: float) -> float:
+    """rk4's default step: :data:`STEPS_PER_PERIOD` per period of interest dividing the forcing
+    period, shortened (still dividing it) to stay inside the stability limit."""
+    dt = _period_step(eom, omega_interest, STEPS_PER_PERIOD)
+    if dt > rk4_stable_step(eom):
+        dt = rk4_stable_step(eom)
+        if eom.omega > 0:  # the stable step, shortened to divide the forcing period
+            period = 2.0 * np.pi / eom.omega
+            dt = period / np.ceil(period / dt)
+    return dt
 
 
 _CLASSES = {"rk4": RK4, "dopri5": DOPRI5, "newmark": Newmark, "generalized-alpha": GeneralizedAlpha}
+_IMPLICIT_DEFAULT = (f"error-controlled steps, rtol {IMPLICIT_RTOL:g}, atol {IMPLICIT_ATOL_PER_CHORD:g} x chord (m), "
+                     f"at least {MIN_STEPS_PER_PERIOD} steps per period of interest (dt: a fixed step)")
 _DEFAULTS = {
     "rk4": f"dt: {STEPS_PER_PERIOD} steps per period of interest, inside the stability limit",
     "dopri5": f"rtol {DEFAULT_RTOL:g}, atol {DEFAULT_ATOL_PER_CHORD:g} x chord x rtol / {DEFAULT_RTOL:g} (m)",
-    "newmark": f"dt: {STEPS_PER_PERIOD} steps per period of interest",
-    "generalized-alpha": f"dt: {STEPS_PER_PERIOD} steps per period of interest ({STIFF_STEPS_PER_PERIOD} as the "
-                         f"default of stiff cables), rho_inf {DEFAULT_RHO_INF:g}",
+    "newmark": _IMPLICIT_DEFAULT,
+    "generalized-alpha": f"{_IMPLICIT_DEFAULT}, rho_inf {DEFAULT_RHO_INF:g}",
 }
+#: The default relative tolerance of each adaptive scheme, for labels and listings.
+DEFAULT_TOLERANCES = {"dopri5": DEFAULT_RTOL, "newmark": IMPLICIT_RTOL, "generalized-alpha": IMPLICIT_RTOL}
 #: The schemes, by the name a case file and the command line use (the settings each takes:
 #: :data:`cablesim.names.INTEGRATOR_SETTINGS`).
 SCHEMES: dict[str, Scheme] = {
@@ -152,11 +197,14 @@ def make(name: str | None, eom, omega_interest: float, given: dict | None = None
     """The integrator ``name`` (or the default scheme) with the ``given`` settings and defaults.
 
     With no name the settings that apply to the chosen scheme are used and the others dropped
-    (a case may give ``rtol`` for the default ``dopri5`` and ``dt`` for its stiff alternative).
+    (a case may give ``rtol`` for the default ``dopri5`` and ``dt`` for its stiff alternative,
+    which then takes the fixed step).
     """
     given = {k: v for k, v in (given or {}).items() if v is not None}
     if name is None:
         name = default_scheme(eom, omega_interest)
         applies = {k: v for k, v in given.items() if k in SCHEMES[name].keys}
-        return SCHEMES[name].build(eom, omega_interest, applies, stiff_default=name == "generalized-alpha")
+        if "dt" in applies:
+            applies = {k: v for k, v in applies.items() if k not in ("rtol", "atol")}
+        return SCHEMES[name].build(eom, omega_interest, applies)
     return SCHEMES[name].build(eom, omega_interest, given)

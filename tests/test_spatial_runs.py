@@ -170,3 +170,16 @@ def test_a_taut_cable_refuses_the_split_and_the_approximate_analysis():
         run_history(case_from_dict(taut_string(3, history={"omega": 12.0, "duration": 1.0},
                                                loads={"gravity": 0.0, "point": [{"node": 1, "FL": [0, 1.0, 0]}]})),
                     analysis="approximate")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["spatial-span", "stay-anchorage"])
+def test_the_shipped_spatial_examples_run(invoke_cli, tmp_path, name):
+    """The README's spatial and support-motion examples, shortened: the stay's was refused (no
+    forcing but its support) and its out-of-plane channel was refused on the command line."""
+    from pathlib import Path
+
+    case = Path(__file__).resolve().parents[1] / "configs" / f"{name}.yaml"
+    r = invoke_cli("history", case, "--duration", "2", "-o", tmp_path / "h.h5")
+    assert r.returncode == 0, r.stderr
+    assert "forcing w =" in r.stdout and (tmp_path / "h-across.png").is_file()

@@ -93,3 +93,15 @@ def plan_view(ax, points: np.ndarray, loads: np.ndarray | None, span: float, col
     ax.set_xlabel("$x$ (m): along the span")
     ax.set_ylabel("$w$ (m): across")
     ax.set_title("plan view (looking down; $w$ to the left of A$\\to$B)", fontsize="small")
+
+
+def end_view(ax, points: np.ndarray, color: str) -> None:
+    """Draw the end view (w across, v down) of a spatial cable's nodes and supports (rows of
+    ``points``, (n + 2, 3)), looking from support A along the span."""
+    ax.plot(points[:, 2], points[:, 1], "-o", color=color, lw=1.2, ms=3)
+    ax.plot(points[[0, -1], 2], points[[0, -1], 1], "^", color="k", ms=9)
+    ax.invert_yaxis()  # v points down
+    ax.invert_xaxis()  # looking from A towards B, w points to the left
+    ax.set_xlabel("$w$ (m): to the left")
+    ax.set_ylabel("$v$ (m): down")
+    ax.set_title("end view (from A)", fontsize="small")

@@ -37,6 +37,8 @@ def support_positions(model, t):
 @njit(inline="always")
 def support_velocities(model, t):
     """``(A'(t), B'(t))``, m/s."""
+    if not model.moving:  # no trigonometry in the time loop of supports at rest
+        return vscale(model.uA, 0.0), vscale(model.uB, 0.0)
     w = model.omega
     return (vscale(model.uA, w * math.cos(w * t + model.phA)), vscale(model.uB, w * math.cos(w * t + model.phB)))
 
@@ -44,6 +46,8 @@ def support_velocities(model, t):
 @njit(inline="always")
 def support_accelerations(model, t):
     """``(A''(t), B''(t))``, m/s^2."""
+    if not model.moving:
+        return vscale(model.uA, 0.0), vscale(model.uB, 0.0)
     w = model.omega
     return (vscale(model.uA, -w * w * math.sin(w * t + model.phA)),
             vscale(model.uB, -w * w * math.sin(w * t + model.phB)))

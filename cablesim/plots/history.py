@@ -342,8 +342,8 @@ def _plot_fft(result, chans, title, path, notes):
         axes[-1, 0].set_xlim(0.0, x_max)
     axes[-1, 0].set_xlabel("circular frequency $\\omega$ (rad/s)")
     legend_below(fig, axes[0, 0].get_legend_handles_labels()[0], ncol=4)
-    axes[0, 0].set_title(window, loc="right", fontsize=8, color="0.3", pad=2)
-    return _finish(fig, result, title, "amplitude spectra (Hann window)", path, notes)
+    # the window under the figure: beside a panel's own label it would overlap it when long
+    return _finish(fig, result, title, "amplitude spectra (Hann window)", path, [*notes, window] if window else notes)
 
 
 @styled

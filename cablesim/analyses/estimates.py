@@ -26,12 +26,15 @@ PROBE_FRACTION = 0.05
 
 
 def seconds_text(seconds: float) -> str:
-    """``"0.42 s"``, ``"3.5 min"``, ``"2.1 h"``."""
+    """``"0.42 s"``, ``"3.5 min"``, ``"2.1 h"``: two significant digits, never an exponent
+    (99.7 s is "100 s", not "1e+02 s")."""
+    def two(v: float) -> str:
+        return f"{v:.0f}" if v >= 10 else f"{v:.2g}"
     if seconds < 120:
-        return f"{seconds:.2g} s"
+        return f"{two(seconds)} s"
     if seconds < 7200:
-        return f"{seconds / 60:.2g} min"
-    return f"{seconds / 3600:.2g} h"
+        return f"{two(seconds / 60)} min"
+    return f"{two(seconds / 3600)} h"
 
 
 def wall_per_simulated_second(plan: HistoryPlan) -> float:

@@ -24,7 +24,7 @@ import h5py
 import numpy as np
 
 from ..errors import CablesimError
-from .hdf5 import atomic_h5, attr_text, put, stamp
+from .hdf5 import atomic_h5, attr_text, open_result, put, stamp
 
 
 def _strings(values) -> np.ndarray:
@@ -135,14 +135,7 @@ def read_backbone(path: str | Path) -> dict:
     """A backbone file as plain arrays: the datasets of ``/backbone``, its attributes, the
     ``resonances`` (dict of arrays) and ``modal`` (rad/s)."""
     path = Path(path)
-    try:
-        f = h5py.File(path, "r")
-    except OSError:
-        raise CablesimError(f"{path} is not an HDF5 file (or cannot be read).") from None
-    with f:
-        if "backbone" not in f:
-            raise CablesimError(f"{path} is not a backbone file (no /backbone group); give the output of "
-                                "cablesim backbone.")
+    with open_result(path, "backbone", "backbone", "cablesim backbone") as f:
         g = f["backbone"]
         out = {k: np.asarray(g[k][()]) for k in g if isinstance(g[k], h5py.Dataset)}
         for k in ("mode", "linear_omega", "amplitude_max"):

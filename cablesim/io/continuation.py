@@ -32,7 +32,7 @@ import numpy as np
 
 from ..errors import CablesimError
 from .charts import read_loci, write_loci
-from .hdf5 import atomic_h5, attr_text, put, stamp
+from .hdf5 import atomic_h5, attr_text, open_result, put, stamp
 
 #: Bifurcation kinds, in the order the files store their names.
 KINDS = ("fold", "period-doubling", "neimark-sacker", "branch-point", "pitchfork", "grazing")
@@ -109,14 +109,7 @@ def read_continuation(path: str | Path) -> dict:
         (:func:`~cablesim.io.charts.read_loci`, None without bifurcation curves).
     """
     path = Path(path)
-    try:
-        f = h5py.File(path, "r")
-    except OSError:
-        raise CablesimError(f"{path} is not an HDF5 file (or cannot be read).") from None
-    with f:
-        if "continuation" not in f:
-            raise CablesimError(f"{path} is not a continuation file (no /continuation group); give the "
-                                "output of cablesim continue.")
+    with open_result(path, "continuation", "continuation", "cablesim continue") as f:
         g = f["continuation"]
         out = {k: g.attrs[k] for k in ("start", "stop", "fixed")}
         out["parameter"] = attr_text(g.attrs["parameter"])

@@ -308,6 +308,19 @@ FAMILY_TEXT = {"static": "a static file", "history": "a time-history file", "swe
 DIRECTION_GROUPS = {"independent": [None], "up": ["up"], "down": ["down"], "both": ["up", "down"]}
 
 
+def open_result(path: Path, group: str, what: str, command: str) -> h5py.File:
+    """The HDF5 file ``path`` opened for reading, refused in one message unless it holds
+    ``/group`` (a ``what`` file, the output of ``command``)."""
+    try:
+        f = h5py.File(path, "r")
+    except OSError:
+        raise CablesimError(f"{path} is not an HDF5 file (or cannot be read).") from None
+    if group not in f:
+        f.close()
+        raise CablesimError(f"{path} is not a {what} file (no /{group} group); give the output of {command}.")
+    return f
+
+
 def attr_text(value) -> str:
     """An HDF5 attribute (bytes, 1-element array, ...) as str."""
     if isinstance(value, bytes):

@@ -53,19 +53,28 @@ def approximate_stiffness(model, P, warm, awk):
     :func:`cablesim.mechanics.flexibility.segment_factors`; returns ``OK`` or ``INNER_SOLVE``.
     The states x and u follow from :func:`natural_state` (outputs only).
     """
-    return stiffness_on_chord(model, P, warm, awk, chord(model))
+    return closure_and_factors(model.S, model.EA, model.tol, model.A, chord(model), P, warm, awk)
 
 
 @njit
 def stiffness_on_chord(model, P, warm, awk, c):
     """:func:`approximate_stiffness` for the chord ``c`` (the supports where they are now)."""
+    return closure_and_factors(model.S, model.EA, model.tol, model.A, c, P, warm, awk)
+
+
+@njit
+def closure_and_factors(S, EA, tol, A, c, P, warm, awk):
+    """:func:`approximate_stiffness` from the model's constants it needs (``S``, ``EA``, the
+    closure tolerance ``tol``, support ``A``, chord ``c``). The vector field calls this one: each
+    compiled call that takes the whole model costs about a tenth of a microsecond, a tenth of
+    the vector field of a 2-node cable."""
     for i in range(P.size):
         if not abs(P[i]) < 1e100:  # a blown-up state (or NaN): the closure's products would underflow
             return INNER_SOLVE
-    cl.cumulative_loads(P, awk.Q, model.A)
-    if cl.minimise(model.S, awk.Q, 0.0, c, warm, model.tol, 60) < 0:
+    cl.cumulative_loads(P, awk.Q, A)
+    if cl.minimise(S, awk.Q, 0.0, c, warm, tol, 60) < 0:
         return INNER_SOLVE
-    if not fx.segment_factors(model.S, model.EA, awk.Q, warm, awk.T, awk.fac, awk.gi, model.A):
+    if not fx.segment_factors(S, EA, awk.Q, warm, awk.T, awk.fac, awk.gi, A):
         return INNER_SOLVE
     return OK
 
@@ -125,12 +134,19 @@ def rate(model, t, s, warm, ds, wk, awk):
     if awk is None:
         for i in range(nd):
             y[i] = model.y0[i] + s[i]
-        if exact_force_and_rate(model, t, y, v, wk) >= 0 and model.slack == STOP:
+        if model.moving:
+            slack = exact_force_and_rate(model, t, y, v, wk)
+        else:  # fixed supports: called here, not through exact_force_and_rate, whose call
+            z = sg.zero_rate(model.A)  # with the whole model costs a third of a 2-node cable's rate
+            slack = asm.force_and_rate(y, v, model.S, model.EA, model.A, model.B, z, z, wk.taut, wk.P, wk.Kv)
+        if slack >= 0 and model.slack == STOP:
             return SLACK
-    else:
-        st = _approximate_Kv(model, t, s, warm, wk, awk)
+    else:  # K(P) y' with P from eq. 15 (written out here: see closure_and_factors)
+        resisting_from_eq15(model, t, s[nd : 2 * nd], s[2 * nd :], wk.P)
+        st = closure_and_factors(model.S, model.EA, model.tol, model.A, chord(model), wk.P, warm, awk)
         if st != OK:
             return st
+        fx.stiffness_product(awk.fac, awk.gi, v, wk.Kv, awk.scratch, model.A)
     wc = model.omega * np.cos(model.omega * t)
     Ca = wk.Cx
     Kv = wk.Kv
@@ -161,18 +177,6 @@ def consistent_acceleration(model, t, s, wk):
     damping_force(model, t, v, wk.Cx)
     for i in range(nd):
         s[2 * nd + i] = (F0[i] + FL[i] * sw - wk.P[i] - wk.Cx[i]) / m[i]
-
-
-@njit
-def _approximate_Kv(model, t, s, warm, wk, awk):
-    """``K(P) y'`` of the approximate analysis into ``wk.Kv``, with P from eq. 15."""
-    nd = model.mass.size
-    resisting_from_eq15(model, t, s[nd : 2 * nd], s[2 * nd :], wk.P)
-    st = approximate_stiffness(model, wk.P, warm, awk)
-    if st != OK:
-        return st
-    fx.stiffness_product(awk.fac, awk.gi, wk.v, wk.Kv, awk.scratch, model.A)
-    return OK
 
 
 @njit

@@ -280,6 +280,7 @@ def test_an_interrupted_backbone_keeps_its_orbits_and_never_replaces_a_complete_
     assert not d["complete"] and d["omega"].size == 4 and not is_complete_result(kept)
 
 
+@pytest.mark.slow  # the exact analysis' backbone tests above run in `make test`
 def test_backbone_in_the_approximate_analysis_starts_on_higher_modes():
     """Mode 2 in the approximate analysis (whose flow map's round-off stalled Newton's
     corrections at 1e-9, so that the backbone never started): it starts at the approximate

@@ -101,6 +101,7 @@ def test_explicit_directions_are_the_dense_jacobian(small):
     assert np.abs(ev.J_lam - dense.J_lam).max() <= 1e-12 * np.abs(dense.J_lam).max()
 
 
+@pytest.mark.slow  # the explicit directions' test covers the same contract in `make test`
 def test_radau_directions_are_the_derivative_of_its_map(small):
     """Radau IIA: ``J_u v`` and ``J_lam`` against central differences of its own flow map."""
     eom, sysm, scale, sol = small

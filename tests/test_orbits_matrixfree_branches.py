@@ -43,6 +43,7 @@ def assert_same_bifurcations(dense, free, state_tol):
         assert max(np.abs(a.multipliers - m).min() for m in b.multipliers) < 1e-8
 
 
+@pytest.mark.slow  # the period-doubling pair below runs in `make test`
 def test_fold_pair(paper):
     """The softening fold pair at twice the load (4 DOF, 8 states)."""
     case, static = paper

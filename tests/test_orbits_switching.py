@@ -116,6 +116,7 @@ def stiff():
     return case, static, continue_branches(eom, "omega", 1.58, 1.68)
 
 
+@pytest.mark.slow  # the paper example's switch (below, and tests/test_orbits_cable.py) in `make test`
 def test_stiff_cable_period_two_branch(stiff):
     case, static, d = stiff
     pds = sorted((b for b in d.of_kind("period-doubling") if b.branch == 0), key=lambda b: b.parameter)
@@ -132,6 +133,7 @@ def test_stiff_cable_period_two_branch(stiff):
     assert min(p.amplitude[1] for p in inner) > 5 * max(p.amplitude[1] for p in d.branches[0].points)
 
 
+@pytest.mark.slow  # the paper example's switch (below, and tests/test_orbits_cable.py) in `make test`
 def test_stiff_cable_brute_force_on_period_two_branch(stiff):
     case, static, d = stiff
     w = 1.63

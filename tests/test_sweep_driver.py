@@ -40,6 +40,7 @@ def test_a_sweep_keeping_two_modes_completes_and_agrees_with_every_mode(invoke_c
     np.testing.assert_allclose(_amplitudes(tmp_path / "few.h5"), _amplitudes(tmp_path / "every.h5"), rtol=1e-9)
 
 
+@pytest.mark.slow  # the two-modes sweep above keeps the sizing rule in `make test`
 def test_a_sweep_of_301_nodes_completes_and_agrees_with_every_mode(tmp_path):
     """Above 300 nodes only the lowest 100 modes are kept by default: every such sweep failed."""
     base = ["cable.nodes=301", "sweep={omega: [2.3], duration: 3.0, window: 1.5, channels: [node20.v, node150.v]}"]

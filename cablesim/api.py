@@ -28,6 +28,7 @@ from .analyses.static import StaticResult, run_static
 from .analyses.sweep import SweepResult, estimate_sweep, run_sweep
 from .case import Case, case_from_dict, example_text, parse_case
 from .case import load_case as _read_case_file
+from .case.placement import placements_text
 from .case.numbers import DAMPING_RATIO, DURATION, MODE, OMEGA, OUTPUT_STEP, PEAK_VELOCITY, check_flag
 from .case.files import check_step_flags, step_flag_overrides
 from .dynamics.integrators import Integrator
@@ -86,7 +87,7 @@ class StaticRun:
     def to_hdf5(self, path: str | Path, matrices: bool | None = None) -> Path:
         """Write the file ``cablesim static`` writes (``matrices``: see
         :func:`~cablesim.io.hdf5.write_static`)."""
-        return write_static(path, self.result, self.case.text, matrices=matrices)
+        return write_static(path, self.result, self.case.text, matrices=matrices, placements=self.case.placements)
 
     def plot(self, path: str | Path) -> Path:
         """Draw the cable under F0 as a PNG."""
@@ -381,7 +382,8 @@ def estimates(case: Case, analysis: str | None = None, integrator: str | None = 
 
 def effective_case_text(case: Case, analysis: str | None = None, integrator: str | None = None) -> str:
     """The case as it will run, every default filled in, as YAML: what ``cablesim check``
-    prints. Sections whose settings cablesim chooses per run are comments saying what it chooses."""
+    prints. Sections whose settings cablesim chooses per run are comments saying what it chooses,
+    and so are the placements of point loads given by position, with their snap distances."""
     chosen = chosen_integrator(case, analysis, integrator) if not case.integrator.model_dump(exclude_none=True) else None
     modes = case.modal.modes
     notes = {
@@ -390,7 +392,9 @@ def effective_case_text(case: Case, analysis: str | None = None, integrator: str
                                                  "every mode (the lowest 100 above 300 nodes)"),
         "outputs: {}": "# outputs: none given: every DOF, and the configurational/elastic split up to 100 nodes",
     }
-    return "\n".join(notes.get(line, line) for line in case.effective_yaml().rstrip("\n").splitlines()) + "\n"
+    placed = placements_text(case.placements)
+    lines = [notes.get(line, line) for line in case.effective_yaml().rstrip("\n").splitlines()]
+    return "\n".join(lines + ["# " + line for line in placed.splitlines()]) + "\n"
 
 
 def plot(results, output: str | Path | None = None, figure: str | Path | None = None,

@@ -246,7 +246,7 @@ def static(
     say_warnings(result.warnings)
     _echo(static_summary(case, result, full=full))
     _replace(out, "static")
-    write_static(out, result, case.text, matrices=matrices)
+    write_static(out, result, case.text, matrices=matrices, placements=case.placements)
     msg = f"\nWrote {out}"
     if plot:
         from .plots.cable import plot_cable

@@ -39,6 +39,7 @@ from .io.continuation import write_continuation
 from .io.hdf5 import write_history, write_static
 from .io.journal import SweepFile, fingerprint
 from .io.provenance import invocation
+from .io.results import ResultFile, load_result  # noqa: F401 (cablesim.load_result)
 from .io.sweeps import write_sweep
 from .orbits import OrbitPoint
 from .plots.cable import plot_cable

@@ -27,7 +27,7 @@ os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
 
 import typer
 
-from . import cli_charts
+from . import cli_charts, cli_results
 from .errors import CablesimError
 from .io.terminal import (ANALYSIS_OPT, CASE_ARG, DT_OPT, FORCE_OPT, INTEGRATOR_OPT, MODES_OPT, RTOL_OPT, SET_OPT, SLACK_OPTION,
                            SNAPSHOTS_OPT, STAMP_OPT, Analysis, CommandGroup, IntegratorName, LazyBar, SlackPolicy, StatusLine, compiling,
@@ -588,7 +588,7 @@ def stress(
         raise typer.Exit(1)
 
 
-cli_charts.register(app, user_errors)  # cablesim backbone
+for _m in (cli_charts, cli_results): _m.register(app, user_errors)  # noqa: E701 (backbone; export, rerun)
 
 
 def main():

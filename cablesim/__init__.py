@@ -49,7 +49,8 @@ The package, from the bottom layer up (a module imports only from layers below i
 - ``stress/`` -- numerical stability across parameter ranges (``cablesim stress``);
 - ``api`` and ``cli`` -- the Python API and the ``cablesim`` command (``cli_charts``: its
   design-chart commands, ``cablesim backbone`` and the charts of ``cablesim continue``;
-  ``cli_results``: ``cablesim export`` and ``cablesim rerun``).
+  ``cli_results``: ``cablesim export`` and ``cablesim rerun``; ``cli_figures``: ``--format``,
+  ``--width`` and ``--dpi`` on every command that draws).
 """
 
 from .version import __version__

@@ -47,6 +47,7 @@ from .plots.charts import plot_backbone, plot_stability_chart
 from .plots.continuation import plot_continuation
 from .plots.history import plot_history
 from .plots.redraw import redraw
+from .plots.style import figure_output
 from .plots.sweep import plot_sweep
 
 
@@ -399,7 +400,8 @@ def effective_case_text(case: Case, analysis: str | None = None, integrator: str
 
 
 def plot(results, output: str | Path | None = None, figure: str | Path | None = None,
-         stamp: str | None = None, snapshots: int | None = None) -> list[Path]:
+         stamp: str | None = None, snapshots: int | None = None, format: str | None = None,
+         width: float | None = None, dpi: int | None = None) -> list[Path]:
     """Redraw figures from stored result files, as ``cablesim plot`` does (nothing is
     recomputed): the ``figure:`` section of the stored case (or of ``figure``) as one PNG, or
     else each file's standard plots.
@@ -418,13 +420,20 @@ def plot(results, output: str | Path | None = None, figure: str | Path | None = 
     snapshots : int, optional
         Time histories: draw the cable at this many instants of each record instead
         (``<file>-snapshots.png``).
+    format : {"png", "pdf", "svg"}, optional
+        Figure format (default: the suffix of ``output``, else PNG); PDF embeds its fonts.
+    width : float, optional
+        Figure width, in (default 7; e.g. 3.5 for one journal column); the text keeps its sizes.
+    dpi : int, optional
+        Resolution of PNG figures (default 200).
 
     Returns
     -------
     list of Path
-        The PNGs written.
+        The figures written.
     """
-    return redraw(results, output, figure=figure, stamp=stamp, snapshots=snapshots)
+    with figure_output(format, width, dpi):
+        return redraw(results, output, figure=figure, stamp=stamp, snapshots=snapshots)
 
 
 #: The tiny runs :func:`compile_kernels` makes: every analysis, integrator and kind of run, so that

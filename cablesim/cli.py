@@ -27,7 +27,7 @@ os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
 
 import typer
 
-from . import cli_charts, cli_results
+from . import cli_charts, cli_figures, cli_results
 from .errors import CablesimError
 from .io.terminal import (ANALYSIS_OPT, CASE_ARG, DT_OPT, FORCE_OPT, INTEGRATOR_OPT, MODES_OPT, RTOL_OPT, SET_OPT, SLACK_OPTION,
                            SNAPSHOTS_OPT, STAMP_OPT, Analysis, CommandGroup, IntegratorName, LazyBar, SlackPolicy, StatusLine, compiling,
@@ -540,7 +540,7 @@ def plot(
 
     _begin(ctx)
     if output is not None:
-        check_output(output, inputs=[*results, figure], suffixes=(".png", ""))
+        check_output(output, inputs=[*results, figure], suffixes=(".png", ".pdf", ".svg", ""))
     paths = redraw(results, output, figure=figure, stamp=stamp, snapshots=snapshots)
     _echo("Wrote " + ", ".join(str(p) for p in paths))
 
@@ -588,7 +588,7 @@ def stress(
         raise typer.Exit(1)
 
 
-for _m in (cli_charts, cli_results): _m.register(app, user_errors)  # noqa: E701 (backbone; export, rerun)
+for _m in (cli_charts, cli_results, cli_figures): _m.register(app, user_errors)  # noqa: E701 (figures: last)
 
 
 def main():

@@ -109,3 +109,9 @@ def test_a_format_that_clashes_with_the_suffix_is_refused(invoke_cli, tmp_path):
     keep = (tmp_path / "s.h5",)
     assert_refused(invoke_cli("plot", "s.h5", "-o", "f.pdf", "--format", "svg"), tmp_path,
                    "--format svg and -o f.pdf name different formats", keep=keep)
+
+
+def test_a_replaced_result_takes_its_figures_in_every_format_with_it(invoke_cli, tmp_path):
+    assert invoke_cli("static", "-o", "s.h5", "--format", "svg")[0] == 0 and (tmp_path / "s.svg").is_file()
+    assert invoke_cli("static", "-o", "s.h5")[0] == 0
+    assert (tmp_path / "s.png").is_file() and not (tmp_path / "s.svg").exists()

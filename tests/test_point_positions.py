@@ -96,3 +96,22 @@ def test_static_states_the_snap_distance(invoke_cli, write_case, tmp_path):
 def test_a_position_beyond_the_span_is_refused_on_the_command_line(invoke_cli, write_case, tmp_path):
     path = write_case(TWO.replace("POINT", "{x: 101.0, F: [0.0, 50.0]}"))
     assert_refused(invoke_cli("static", str(path)), tmp_path, "loads.point[1].x", "beyond the span")
+
+
+def test_the_stored_case_states_its_placements_again(invoke_cli, tmp_path):
+    """The text stored with results has the shorthand expanded into explicit lists; it records
+    where the point loads went, so that a rerun states the placements and their snap distances."""
+    from conftest import REPO
+
+    case = load_case(REPO / REPO_HEAVY, ["cable.nodes=9"])[0]
+    again = parse_case(case.text)
+    assert again.placements == case.placements and again == case
+    assert parse_case(case.text, overrides=["damping.ratio=0.02"]).placements == ()  # changed: not claimed
+    (tmp_path / "heavy.yaml").write_text((REPO / REPO_HEAVY).read_text())
+    assert invoke_cli("static", "heavy.yaml", "--set", "cable.nodes=9", "-o", "s.h5", "--no-plot")[0] == 0
+    rerun = invoke_cli("rerun", "s.h5")
+    assert rerun[0] == 0 and "snap distance" in rerun[1]
+    with h5py.File(tmp_path / "s.h5") as f, h5py.File(tmp_path / "s-rerun.h5") as g:
+        for key in ("point_load_node", "point_load_snap", "point_load_x"):
+            assert np.array_equal(f["static"].attrs[key], g["static"].attrs[key])
+        assert np.array_equal(f["static/P"][()], g["static/P"][()])

@@ -68,6 +68,11 @@ class Case(StrictModel):
             return NotImplemented
         return self.__dict__ == other.__dict__ and (self._text, self._dim) == (other._text, other._dim)
 
+    def set_placements(self, placements) -> None:
+        """Record where the items of ``loads.point`` were placed, as read from a stored case text
+        whose lists are explicit (the readers of case files do)."""
+        self._placements = tuple(placements)
+
     def set_text(self, text: str) -> None:
         """Record the YAML text this case was read from (the readers of case files do)."""
         self._text = text

@@ -11,7 +11,8 @@ file's ``/case/point_loads`` table).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import json
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
@@ -101,3 +102,26 @@ def placements_text(placements, equilibrium=None, dim: int = 2) -> str:
         lines.append(f"  loads.point[{p.item}] at {p.given}: node {p.node} (s = {p.node_s:.6g}, x = {p.node_x:.6g} m), "
                      f"snap distance {p.snap:.4g} m{at}")
     return "\n".join(lines)
+
+
+#: Marks, in the case text stored with results (the shorthand expanded into explicit lists),
+#: where each item of ``loads.point`` was placed, so that a rerun states it again.
+PLACED_MARK = "# cablesim placed loads.point:"
+
+
+def placement_lines(placements) -> str:
+    """The lines that record ``placements`` in a stored case text ("" if none)."""
+    return "".join(f"{PLACED_MARK} {json.dumps(asdict(p))}\n" for p in placements)
+
+
+def read_placements(text: str) -> tuple[Placement, ...]:
+    """The placements a stored case text records (:func:`placement_lines`; none if it records
+    none, or records them in a form this version does not read)."""
+    out = []
+    for line in text.splitlines():
+        if line.startswith(PLACED_MARK):
+            try:
+                out.append(Placement(**json.loads(line[len(PLACED_MARK):])))
+            except (ValueError, TypeError):
+                return ()
+    return tuple(out)

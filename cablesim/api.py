@@ -12,6 +12,7 @@ writes (and :meth:`plot` its PNGs). Nothing here prints, exits or writes unless 
 
 from __future__ import annotations
 
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -79,8 +80,21 @@ def load_case(source: str | Path | dict | None = None, overrides: list[str] | No
     return case
 
 
+class LabelledArrays:
+    """``to_xarray()`` for a run: its file, as ``to_hdf5`` writes it, read back as an
+    ``xarray.Dataset`` (:meth:`cablesim.io.results.ResultFile.to_xarray`; needs xarray)."""
+
+    def to_xarray(self, group: str | None = None):
+        """The run's results as an ``xarray.Dataset`` with named axes, coordinates and units:
+        the same labels as ``cablesim.load_result(file).to_xarray(group)`` on its file."""
+        with tempfile.TemporaryDirectory() as folder:
+            ds = load_result(self.to_hdf5(Path(folder) / "run.h5")).to_xarray(group)
+        ds.attrs.pop("result_file", None)  # a file that no longer exists
+        return ds
+
+
 @dataclass(frozen=True)
-class StaticRun:
+class StaticRun(LabelledArrays):
     """A static analysis: ``result`` (:class:`~cablesim.analyses.static.StaticResult`)."""
 
     case: Case
@@ -97,7 +111,7 @@ class StaticRun:
 
 
 @dataclass(frozen=True)
-class HistoryRun:
+class HistoryRun(LabelledArrays):
     """A time history: ``history`` (:class:`~cablesim.dynamics.result.HistoryResult`), the
     ``static`` equilibrium it started from and the ``integrator`` used."""
 
@@ -117,7 +131,7 @@ class HistoryRun:
 
 
 @dataclass(frozen=True)
-class SweepRun:
+class SweepRun(LabelledArrays):
     """A frequency sweep: ``result`` (:class:`~cablesim.analyses.sweep.SweepResult`)."""
 
     case: Case
@@ -277,7 +291,7 @@ def sweep(
 
 
 @dataclass(frozen=True)
-class ContinuationRun:
+class ContinuationRun(LabelledArrays):
     """Periodic responses by continuation: ``result``
     (:class:`~cablesim.analyses.continuation.ContinuationResult`: branches with their Floquet
     multipliers and stability, and the bifurcations)."""
@@ -337,7 +351,7 @@ def continuation(
 
 
 @dataclass(frozen=True)
-class BackboneRun:
+class BackboneRun(LabelledArrays):
     """A backbone curve: ``result`` (:class:`~cablesim.analyses.charts.BackboneResult`: the
     free undamped orbits from a linear mode, frequency against amplitude per channel, their
     multipliers and the internal resonances met)."""

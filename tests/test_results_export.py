@@ -239,3 +239,15 @@ def test_readme_results_examples_run(tmp_path, monkeypatch, capsys):
     exec(compile(re.search(r"```python\n(.*?)```", section, re.S).group(1), "README.md", "exec"), {})
     out = capsys.readouterr().out
     assert "history (" in out and "('time', 'dof')" in out
+
+
+def test_a_run_of_the_api_gives_the_same_dataset_as_its_file(tmp_path):
+    xr = pytest.importorskip("xarray")
+    case = cablesim.load_case(None)
+    run = cablesim.history(case, duration=2.0)
+    ds = run.to_xarray()
+    assert isinstance(ds, xr.Dataset) and ds["z"].dims == ("time", "dof")
+    np.testing.assert_array_equal(ds["z"].values, run.history.z)
+    np.testing.assert_array_equal(ds["time"].values, run.history.t)
+    from_file = cablesim.load_result(run.to_hdf5(tmp_path / "h.h5")).to_xarray()
+    xr.testing.assert_equal(ds, from_file)  # values, axes and coordinates (attributes aside: the times differ)

@@ -12,6 +12,7 @@ files from the same axes.
 
 from __future__ import annotations
 
+import functools
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -102,9 +103,7 @@ class ResultFile:
     arrays : dict
         Every dataset, by its path in the file, as a :class:`StoredArray`.
     data : object
-        What the file's own reader returns: a ``HistoryResult`` (history, free vibration), a
-        ``StoredSweep`` (sweep), the dicts of ``read_continuation`` and ``read_backbone``; None for
-        a static file (its arrays are in ``arrays``).
+        What the file's own reader returns (:attr:`data`, read on first use).
     """
 
     path: Path
@@ -114,12 +113,20 @@ class ResultFile:
     attributes: dict
     group_attributes: dict
     arrays: dict
-    data: object = None
 
     def __repr__(self) -> str:
         line = attr_text(self.attributes.get("command_line", "")) or f"cablesim {self.command}"
         return (f"<ResultFile {str(self.path)!r}: {self.kind}, written by `{line}`; {len(self.arrays)} datasets in "
                 f"{', '.join(self.groups)}>")
+
+    @functools.cached_property
+    def data(self):
+        """What the file's own reader returns (read on first use): a ``HistoryResult`` (history,
+        free vibration), a ``StoredSweep`` (sweep), the dicts of ``read_continuation`` and
+        ``read_backbone``; None for a static file (its arrays are in :attr:`arrays`)."""
+        readers = {"history": read_history, "sweep": read_sweep, "continuation": read_continuation,
+                   "backbone": read_backbone}
+        return readers[self.kind](self.path) if self.kind in readers else None
 
     def __getitem__(self, path: str) -> np.ndarray:
         """The values of the dataset at ``path`` (``result["history/z"]``)."""
@@ -255,13 +262,6 @@ def _consistent(arrays: dict) -> dict:
     return out
 
 
-def _read_family(info):
-    """The object the file's own reader returns (None for a static file)."""
-    readers = {"history": read_history, "sweep": read_sweep, "continuation": read_continuation,
-               "backbone": read_backbone}
-    return readers[info.family](info.path) if info.family in readers else None
-
-
 def load_result(path: str | Path) -> ResultFile:
     """Read any cablesim result file (static, history, free vibration, sweep, continuation,
     backbone).
@@ -302,8 +302,7 @@ def load_result(path: str | Path) -> ResultFile:
             f.visititems(visit)
     except (OSError, KeyError, ValueError, TypeError) as exc:
         raise CablesimError(f"The result file {info.path} cannot be read ({exc}); rerun the command that wrote it.") from None
-    data = _read_family(info)
-    return ResultFile(info.path, info.command, info.family, info.case_text, root, groups, _consistent(arrays), data)
+    return ResultFile(info.path, info.command, info.family, info.case_text, root, groups, _consistent(arrays))
 
 
 def attribute_units(attrs: dict) -> dict:

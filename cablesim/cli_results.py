@@ -19,9 +19,24 @@ from .errors import CablesimError
 
 #: The commands whose files ``cablesim rerun`` reruns.
 RERUNNABLE = ("static", "history", "free-vibration", "sweep", "continue", "backbone")
-#: Parameters of the stored command that a rerun sets itself: the case (the stored text, which
-#: holds the --set overrides), the output, and a sweep's --resume (a rerun starts afresh).
-RESET = {"case_file": None, "overrides": [], "output": None, "resume": False}
+#: Parameters of the stored command that a rerun sets itself: the case (the stored text), the
+#: output, and a sweep's --resume (a rerun starts afresh).
+RESET = {"case_file": None, "output": None, "resume": False}
+
+
+def rerun_case_text(case_text: str) -> tuple[str, bool]:
+    """The case file a rerun runs, from the stored case text, and whether the stored command's
+    ``--set`` overrides are to be given again. A text with explicit lists (the shorthand
+    expanded) has every override applied: it runs as it is, without them. Otherwise the text
+    is the case file with the overrides the command applied (its --set and the flags that set
+    case values, such as a sweep's --omega) recorded after it: they are left out, and the
+    command, given its --set again, records them as they were."""
+    from .case.files import EXPANDED_MARK, OVERRIDES_MARK
+
+    if case_text.startswith(EXPANDED_MARK):
+        return case_text, False
+    kept = [line for line in case_text.splitlines(keepends=True) if not line.startswith(OVERRIDES_MARK)]
+    return "".join(kept), True
 
 
 class ExportFormat(str, Enum):
@@ -67,9 +82,10 @@ def rerun_output(original: Path) -> Path:
         k += 1
 
 
-def rerun_words(ctx, info, case_path: Path, out: Path) -> list[str]:
+def rerun_words(ctx, info, case_path: Path, out: Path, keep_sets: bool) -> list[str]:
     """The command line that reruns the stored one of ``info``
-    (:class:`~cablesim.io.hdf5.ResultInfo`) on the case file ``case_path``, writing ``out``."""
+    (:class:`~cablesim.io.hdf5.ResultInfo`) on the case file ``case_path``, writing ``out``
+    (with the stored ``--set`` overrides if ``keep_sets``)."""
     from .io.provenance import command_words
     from .io.results import stored_command_line
 
@@ -87,6 +103,8 @@ def rerun_words(ctx, info, case_path: Path, out: Path) -> list[str]:
         raise CablesimError(f"The command line stored in {info.path} ({line}) is not one this cablesim reads "
                             f"({exc}); rerun it by hand on its case.") from None
     stored.params.update({k: v for k, v in RESET.items() if k in stored.params})
+    if not keep_sets and "overrides" in stored.params:
+        stored.params["overrides"] = []
     stored.params.update(case_file=case_path, output=out)
     return command_words(stored)[1:]
 
@@ -108,12 +126,13 @@ def run_rerun(ctx, result_path: Path, output: Optional[Path]) -> None:
                             "-o, or leave -o out (the rerun then goes beside it, as NAME-rerun.h5).")
     check_output(out, inputs=[info.path])
     case_path = out.with_suffix(".case.yaml")
-    if case_path.exists() and case_path.read_text() != info.case_text:
+    text, keep_sets = rerun_case_text(info.case_text)
+    if case_path.exists() and case_path.read_text() != text:
         raise CablesimError(f"{case_path}, where the rerun keeps its case, exists with another case; give another "
                             "file with -o, or remove it.")
-    words = rerun_words(ctx, info, case_path, out)
+    words = rerun_words(ctx, info, case_path, out, keep_sets)
     case_path.parent.mkdir(parents=True, exist_ok=True)
-    case_path.write_text(info.case_text)
+    case_path.write_text(text)
     flags = [f"--{k}" for k in ("quiet", "verbose") if root.params.get(k)]
     note(f"rerunning {info.path} with its stored case ({case_path}): {shlex.join(['cablesim', *words])}")
     code = root.command.main(args=[*flags, *words], prog_name="cablesim", standalone_mode=False)

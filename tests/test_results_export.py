@@ -195,9 +195,9 @@ def test_rerun_writes_beside_the_original_and_its_data_equal_the_originals(files
     for path in set(a) - timing:
         assert same(a[path][0], b[path][0]), path
     with h5py.File(original) as f, h5py.File(again) as g:
-        assert g.attrs["command"] == f.attrs["command"]
+        assert g.attrs["command"] == f.attrs["command"] and g.attrs["case_yaml"] == f.attrs["case_yaml"]
         assert g.attrs["command_line"].startswith(f"cablesim {name} {again.with_suffix('.case.yaml')}")
-    assert cablesim.load_case(again.with_suffix(".case.yaml")) == cablesim.load_result(original).case
+    assert cablesim.load_result(again).case == cablesim.load_result(original).case
 
 
 def test_rerun_never_replaces_a_file(files, tmp_path, monkeypatch):
@@ -251,3 +251,9 @@ def test_a_run_of_the_api_gives_the_same_dataset_as_its_file(tmp_path):
     np.testing.assert_array_equal(ds["time"].values, run.history.t)
     from_file = cablesim.load_result(run.to_hdf5(tmp_path / "h.h5")).to_xarray()
     xr.testing.assert_equal(ds, from_file)  # values, axes and coordinates (attributes aside: the times differ)
+
+
+def test_rerun_refuses_a_file_without_a_command_line(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    path = cablesim.static(cablesim.load_case(None)).to_hdf5(tmp_path / "api.h5")  # the API records no command
+    assert_refused(cli("rerun", path), tmp_path, "records no command line", keep=(path,))

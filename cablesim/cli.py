@@ -527,7 +527,7 @@ def plot(
                                          help="HDF5 result files of any cablesim command, one type at a time (or "
                                          "continuations with a sweep or a backbone: drawn together)."),
     output: Optional[Path] = typer.Option(None, "-o", "--output", metavar="PNG",
-                                          help="PNG file (default: the first file with suffix .png)."),
+                                          help="Figure file: .png, .pdf or .svg (default: the first file with suffix .png)."),
     figure: Optional[Path] = typer.Option(None, "--figure", metavar="FIGURE.yaml",
                                           help="YAML file with a figure: section to draw instead of the stored case's."),
     stamp: Optional[str] = STAMP_OPT,

@@ -14,6 +14,8 @@ Python API (the command line's analyses; see :mod:`cablesim.api`)::
     sw = cablesim.sweep(case, jobs=2)              # SweepRun: .result, .to_hdf5(path)
     bb = cablesim.backbone(case, mode=1, amplitude=5.0)   # BackboneRun: free undamped orbits of mode 1
     cablesim.plot(["sweep.h5"], "sweep.png", stamp="preview: coarse grid")   # redraw stored results
+    r = cablesim.load_result("sweep.h5")           # any result file: r.arrays, r["sweep/amplitude"], r.data
+    ds = r.to_xarray()                             # an xarray.Dataset (omega x channel), if xarray is installed
 
 The package, from the bottom layer up (a module imports only from layers below it; checked by
 ``tests/test_architecture.py``):
@@ -41,17 +43,20 @@ The package, from the bottom layer up (a module imports only from layers below i
 - ``io/`` -- HDF5 writers and readers (``hdf5``, the only h5py), sweep journal, text summaries,
   output paths checked and locked (``paths``), default result names (``naming``), the record of
   each run (``provenance``), progress and the compile notice (``terminal``), the steps the
-  time-history commands share (``finish``);
+  time-history commands share (``finish``), any result file read as one object (``results``) and
+  exported as CSV files (``export``);
 - ``plots/`` -- every PNG (the only matplotlib);
 - ``stress/`` -- numerical stability across parameter ranges (``cablesim stress``);
 - ``api`` and ``cli`` -- the Python API and the ``cablesim`` command (``cli_charts``: its
-  design-chart commands, ``cablesim backbone`` and the charts of ``cablesim continue``).
+  design-chart commands, ``cablesim backbone`` and the charts of ``cablesim continue``;
+  ``cli_results``: ``cablesim export`` and ``cablesim rerun``; ``cli_figures``: ``--format``,
+  ``--width`` and ``--dpi`` on every command that draws).
 """
 
 from .version import __version__
 
 _API = ("load_case", "static", "history", "free_vibration", "sweep", "continuation", "backbone", "plot",
-        "compile_kernels", "StaticRun", "HistoryRun", "SweepRun", "ContinuationRun", "BackboneRun")
+        "compile_kernels", "load_result", "ResultFile", "StaticRun", "HistoryRun", "SweepRun", "ContinuationRun", "BackboneRun")
 
 __all__ = ["__version__", *_API]
 

@@ -12,6 +12,7 @@ writes (and :meth:`plot` its PNGs). Nothing here prints, exits or writes unless 
 
 from __future__ import annotations
 
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -28,6 +29,7 @@ from .analyses.static import StaticResult, run_static
 from .analyses.sweep import SweepResult, estimate_sweep, run_sweep
 from .case import Case, case_from_dict, example_text, parse_case
 from .case import load_case as _read_case_file
+from .case.placement import placements_text
 from .case.numbers import DAMPING_RATIO, DURATION, MODE, OMEGA, OUTPUT_STEP, PEAK_VELOCITY, check_flag
 from .case.files import check_step_flags, step_flag_overrides
 from .dynamics.integrators import Integrator
@@ -38,6 +40,7 @@ from .io.continuation import write_continuation
 from .io.hdf5 import write_history, write_static
 from .io.journal import SweepFile, fingerprint
 from .io.provenance import invocation
+from .io.results import ResultFile, load_result  # noqa: F401 (cablesim.load_result)
 from .io.sweeps import write_sweep
 from .orbits import OrbitPoint
 from .plots.cable import plot_cable
@@ -45,6 +48,7 @@ from .plots.charts import plot_backbone, plot_stability_chart
 from .plots.continuation import plot_continuation
 from .plots.history import plot_history
 from .plots.redraw import redraw
+from .plots.style import figure_output
 from .plots.sweep import plot_sweep
 
 
@@ -76,8 +80,21 @@ def load_case(source: str | Path | dict | None = None, overrides: list[str] | No
     return case
 
 
+class LabelledArrays:
+    """``to_xarray()`` for a run: its file, as ``to_hdf5`` writes it, read back as an
+    ``xarray.Dataset`` (:meth:`cablesim.io.results.ResultFile.to_xarray`; needs xarray)."""
+
+    def to_xarray(self, group: str | None = None):
+        """The run's results as an ``xarray.Dataset`` with named axes, coordinates and units:
+        the same labels as ``cablesim.load_result(file).to_xarray(group)`` on its file."""
+        with tempfile.TemporaryDirectory() as folder:
+            ds = load_result(self.to_hdf5(Path(folder) / "run.h5")).to_xarray(group)
+        ds.attrs.pop("result_file", None)  # a file that no longer exists
+        return ds
+
+
 @dataclass(frozen=True)
-class StaticRun:
+class StaticRun(LabelledArrays):
     """A static analysis: ``result`` (:class:`~cablesim.analyses.static.StaticResult`)."""
 
     case: Case
@@ -86,7 +103,7 @@ class StaticRun:
     def to_hdf5(self, path: str | Path, matrices: bool | None = None) -> Path:
         """Write the file ``cablesim static`` writes (``matrices``: see
         :func:`~cablesim.io.hdf5.write_static`)."""
-        return write_static(path, self.result, self.case.text, matrices=matrices)
+        return write_static(path, self.result, self.case.text, matrices=matrices, placements=self.case.placements)
 
     def plot(self, path: str | Path) -> Path:
         """Draw the cable under F0 as a PNG."""
@@ -94,7 +111,7 @@ class StaticRun:
 
 
 @dataclass(frozen=True)
-class HistoryRun:
+class HistoryRun(LabelledArrays):
     """A time history: ``history`` (:class:`~cablesim.dynamics.result.HistoryResult`), the
     ``static`` equilibrium it started from and the ``integrator`` used."""
 
@@ -114,7 +131,7 @@ class HistoryRun:
 
 
 @dataclass(frozen=True)
-class SweepRun:
+class SweepRun(LabelledArrays):
     """A frequency sweep: ``result`` (:class:`~cablesim.analyses.sweep.SweepResult`)."""
 
     case: Case
@@ -274,7 +291,7 @@ def sweep(
 
 
 @dataclass(frozen=True)
-class ContinuationRun:
+class ContinuationRun(LabelledArrays):
     """Periodic responses by continuation: ``result``
     (:class:`~cablesim.analyses.continuation.ContinuationResult`: branches with their Floquet
     multipliers and stability, and the bifurcations)."""
@@ -334,7 +351,7 @@ def continuation(
 
 
 @dataclass(frozen=True)
-class BackboneRun:
+class BackboneRun(LabelledArrays):
     """A backbone curve: ``result`` (:class:`~cablesim.analyses.charts.BackboneResult`: the
     free undamped orbits from a linear mode, frequency against amplitude per channel, their
     multipliers and the internal resonances met)."""
@@ -381,7 +398,8 @@ def estimates(case: Case, analysis: str | None = None, integrator: str | None = 
 
 def effective_case_text(case: Case, analysis: str | None = None, integrator: str | None = None) -> str:
     """The case as it will run, every default filled in, as YAML: what ``cablesim check``
-    prints. Sections whose settings cablesim chooses per run are comments saying what it chooses."""
+    prints. Sections whose settings cablesim chooses per run are comments saying what it chooses,
+    and so are the placements of point loads given by position, with their snap distances."""
     chosen = chosen_integrator(case, analysis, integrator) if not case.integrator.model_dump(exclude_none=True) else None
     modes = case.modal.modes
     notes = {
@@ -390,11 +408,14 @@ def effective_case_text(case: Case, analysis: str | None = None, integrator: str
                                                  "every mode (the lowest 100 above 300 nodes)"),
         "outputs: {}": "# outputs: none given: every DOF, and the configurational/elastic split up to 100 nodes",
     }
-    return "\n".join(notes.get(line, line) for line in case.effective_yaml().rstrip("\n").splitlines()) + "\n"
+    placed = placements_text(case.placements)
+    lines = [notes.get(line, line) for line in case.effective_yaml().rstrip("\n").splitlines()]
+    return "\n".join(lines + ["# " + line for line in placed.splitlines()]) + "\n"
 
 
 def plot(results, output: str | Path | None = None, figure: str | Path | None = None,
-         stamp: str | None = None, snapshots: int | None = None) -> list[Path]:
+         stamp: str | None = None, snapshots: int | None = None, format: str | None = None,
+         width: float | None = None, dpi: int | None = None) -> list[Path]:
     """Redraw figures from stored result files, as ``cablesim plot`` does (nothing is
     recomputed): the ``figure:`` section of the stored case (or of ``figure``) as one PNG, or
     else each file's standard plots.
@@ -413,13 +434,20 @@ def plot(results, output: str | Path | None = None, figure: str | Path | None = 
     snapshots : int, optional
         Time histories: draw the cable at this many instants of each record instead
         (``<file>-snapshots.png``).
+    format : {"png", "pdf", "svg"}, optional
+        Figure format (default: the suffix of ``output``, else PNG); PDF embeds its fonts.
+    width : float, optional
+        Figure width, in (default 7; e.g. 3.5 for one journal column); the text keeps its sizes.
+    dpi : int, optional
+        Resolution of PNG figures (default 200).
 
     Returns
     -------
     list of Path
-        The PNGs written.
+        The figures written.
     """
-    return redraw(results, output, figure=figure, stamp=stamp, snapshots=snapshots)
+    with figure_output(format, width, dpi):
+        return redraw(results, output, figure=figure, stamp=stamp, snapshots=snapshots)
 
 
 #: The tiny runs :func:`compile_kernels` makes: every analysis, integrator and kind of run, so that

@@ -27,7 +27,7 @@ os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
 
 import typer
 
-from . import cli_charts
+from . import cli_charts, cli_figures, cli_results
 from .errors import CablesimError
 from .io.terminal import (ANALYSIS_OPT, CASE_ARG, DT_OPT, FORCE_OPT, INTEGRATOR_OPT, MODES_OPT, RTOL_OPT, SET_OPT, SLACK_OPTION,
                            SNAPSHOTS_OPT, STAMP_OPT, Analysis, CommandGroup, IntegratorName, LazyBar, SlackPolicy, StatusLine, compiling,
@@ -246,7 +246,7 @@ def static(
     say_warnings(result.warnings)
     _echo(static_summary(case, result, full=full))
     _replace(out, "static")
-    write_static(out, result, case.text, matrices=matrices)
+    write_static(out, result, case.text, matrices=matrices, placements=case.placements)
     msg = f"\nWrote {out}"
     if plot:
         from .plots.cable import plot_cable
@@ -527,7 +527,7 @@ def plot(
                                          help="HDF5 result files of any cablesim command, one type at a time (or "
                                          "continuations with a sweep or a backbone: drawn together)."),
     output: Optional[Path] = typer.Option(None, "-o", "--output", metavar="PNG",
-                                          help="PNG file (default: the first file with suffix .png)."),
+                                          help="Figure file: .png, .pdf or .svg (default: the first file with suffix .png)."),
     figure: Optional[Path] = typer.Option(None, "--figure", metavar="FIGURE.yaml",
                                           help="YAML file with a figure: section to draw instead of the stored case's."),
     stamp: Optional[str] = STAMP_OPT,
@@ -540,7 +540,7 @@ def plot(
 
     _begin(ctx)
     if output is not None:
-        check_output(output, inputs=[*results, figure], suffixes=(".png", ""))
+        check_output(output, inputs=[*results, figure], suffixes=(".png", ".pdf", ".svg", ""))
     paths = redraw(results, output, figure=figure, stamp=stamp, snapshots=snapshots)
     _echo("Wrote " + ", ".join(str(p) for p in paths))
 
@@ -588,7 +588,7 @@ def stress(
         raise typer.Exit(1)
 
 
-cli_charts.register(app, user_errors)  # cablesim backbone
+for _m in (cli_charts, cli_results, cli_figures): _m.register(app, user_errors)  # noqa: E701 (figures: last)
 
 
 def main():

@@ -141,12 +141,12 @@ def test_dir_lists_the_api():
             "compile_kernels"} <= set(dir(cablesim))
 
 
-def test_a_pdf_output_is_refused_in_a_whole_sentence(invoke_cli, tmp_path):
+def test_a_jpeg_output_is_refused_in_a_whole_sentence(invoke_cli, tmp_path):
     static = invoke_cli("static", "--no-plot", "-o", "s.h5")
     assert static.returncode == 0
-    msg = assert_refused(invoke_cli("plot", "s.h5", "-o", "x.pdf"), tmp_path, keep=(tmp_path / "s.h5",))
-    assert "must end in .png (or have no suffix" in msg and ".pdf files are not written" in msg
-    assert "or ." not in msg
+    msg = assert_refused(invoke_cli("plot", "s.h5", "-o", "x.jpg"), tmp_path, keep=(tmp_path / "s.h5",))
+    assert "names a figure, so its name must end in .png, .pdf or .svg (or have no suffix" in msg
+    assert ".jpg files are not written" in msg and "-o x.png" in msg
 
 
 def test_the_license_is_a_spdx_string():

@@ -15,6 +15,7 @@ from ..errors import CablesimError
 from . import strict_yaml
 from .model import Case
 from .numbers import DURATION, RTOL, TIME_STEP, check_flag
+from .placement import placement_lines, read_placements
 from .sections import HINTS, FigureSpec
 
 EXAMPLE_RESOURCE = "paper-example.yaml"
@@ -236,6 +237,8 @@ def parse_case(text: str, source: str = "<case>", default_name: str = "case", ov
         case = Case.model_validate(data)
     except ValidationError as err:
         raise CablesimError(format_validation_error(err, source)) from None
+    if not case.placements and not overrides:  # a stored text's explicit lists: where its point loads went
+        case.set_placements(read_placements(text))
     if _uses_shorthand(data):
         case.set_text(_expanded_text(text, data, case, overrides))
     else:
@@ -280,7 +283,7 @@ def _expanded_text(text: str, data: dict, case: Case, overrides) -> str:
     full = {"name": data.get("name"), **data, **case.expanded()}
     # libyaml's emitter when present: the same text, 4x faster for thousands of nodes
     body = yaml.dump(full, Dumper=SAFE_DUMPER, sort_keys=False, default_flow_style=None, width=100)
-    return f"{EXPANDED_MARK}\n{original}{applied}{body}"
+    return f"{EXPANDED_MARK}\n{original}{applied}{placement_lines(case.placements)}{body}"
 
 
 def load_case(path: str | Path | None, overrides=None) -> tuple[Case, str]:

@@ -15,6 +15,7 @@ from ..errors import CablesimError
 from ..names import ANALYSES, SLACK_POLICIES
 from .charts import BackboneSpec
 from .integrator_spec import IntegratorSpec
+from .placement import Placement, place
 from .sections import (
     CableSpec,
     ContinuationSpec,
@@ -58,6 +59,19 @@ class Case(StrictModel):
     figure: FigureSpec | None = None
     _text: str = PrivateAttr(default="")
     _dim: int = PrivateAttr(default=2)
+    _placements: tuple = PrivateAttr(default=())
+
+    def __eq__(self, other) -> bool:
+        """Equal cases run alike: the same sections and text, whether a point load was written by
+        node or by position (:attr:`placements` says how it was written, not what runs)."""
+        if not isinstance(other, Case):
+            return NotImplemented
+        return self.__dict__ == other.__dict__ and (self._text, self._dim) == (other._text, other._dim)
+
+    def set_placements(self, placements) -> None:
+        """Record where the items of ``loads.point`` were placed, as read from a stored case text
+        whose lists are explicit (the readers of case files do)."""
+        self._placements = tuple(placements)
 
     def set_text(self, text: str) -> None:
         """Record the YAML text this case was read from (the readers of case files do)."""
@@ -77,6 +91,12 @@ class Case(StrictModel):
         if v is not None and len(v) > 100:
             raise ValueError(f"is {len(v)} characters long; keep it to 100 (it names the output folder)")
         return v
+
+    @property
+    def placements(self) -> tuple[Placement, ...]:
+        """Where each item of ``loads.point`` went: its node and, for one given by position
+        (``x`` or ``s``), the snap distance to that node (empty without ``loads.point``)."""
+        return self._placements
 
     @property
     def dim(self) -> int:
@@ -168,11 +188,9 @@ class Case(StrictModel):
                                  + (f" or 3n = {3 * n} (x, v, w, a spatial case)" if dim == 3 else ""))
         F0 = node_components(F0, n, dim)
         FL = None if FL is None else node_components(FL, n, dim)
-        for k, p in enumerate(ld.point or ()):
-            if p.node > n:
-                raise ValueError(f"`loads.point[{k + 1}].node` is {p.node}, but this cable has n = {n} interior "
-                                 f"nodes; count them from 1 at support A")
-            i = p.node - 1
+        self._placements = tuple(place(k + 1, p, c.S, c.L) for k, p in enumerate(ld.point or ()))
+        for p, where in zip(ld.point or (), self._placements):
+            i = where.node - 1
             masses[i] += p.mass or 0.0
             F0[dim * i:dim * i + len(p.F or ())] += p.F or ()
             if p.FL is not None:

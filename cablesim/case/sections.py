@@ -206,9 +206,17 @@ class CableSpec(StrictModel):
 
 
 class PointLoad(StrictModel):
-    """Loads and an extra mass at one interior node (an item of ``loads.point``)."""
+    """Loads and an extra mass at one interior node (an item of ``loads.point``).
 
-    node: integer(1, MAX_NODES) = Field(description="interior node, counted from 1 at support A")
+    The node is given by number (``node``), or by position, placed on the nearest node: ``x``,
+    the horizontal distance from support A along the span (m), or ``s``, the fraction of the
+    cable's natural length from support A. The case states where each one was placed
+    (:attr:`cablesim.case.Case.placements`).
+    """
+
+    node: integer(1, MAX_NODES) | None = Field(default=None, description="interior node, counted from 1 at support A")
+    x: real(0.0, 1e6, "m") | None = Field(default=None, description="horizontal distance from support A, m: the nearest node")
+    s: real(0.0, 1.0) | None = Field(default=None, description="fraction of the natural length from support A: the nearest node")
     F: tuple[Load, ...] | None = Field(default=None, description="sustained load (x, v) or (x, v, w), N")
     FL: tuple[Load, ...] | None = Field(default=None, description="peak harmonic load (x, v) or (x, v, w), N")
     mass: real(0.0, MASS_RANGE[1], "kg") | None = Field(default=None, description="extra lumped mass, kg")
@@ -222,6 +230,22 @@ class PointLoad(StrictModel):
                                  "(x, v, w) in N")
             in_range(v, *LOAD_RANGE, what="load")
         return v
+
+    @model_validator(mode="after")
+    def _one_position(self):
+        given = [key for key in ("node", "x", "s") if getattr(self, key) is not None]
+        if len(given) != 1:
+            raise ValueError(("gives " + " and ".join(given) if given else "gives no position")
+                             + "; give exactly one of node (interior node number, from 1 at support A), "
+                             "x (m along the span from support A) or s (fraction of the natural length)")
+        return self
+
+    @property
+    def position(self) -> str:
+        """How the node was given: ``"node 20"``, ``"x = 150 m"`` or ``"s = 0.5"``."""
+        if self.node is not None:
+            return f"node {self.node}"
+        return f"x = {self.x:g} m" if self.x is not None else f"s = {self.s:g}"
 
 
 class LoadsSpec(StrictModel):

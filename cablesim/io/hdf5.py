@@ -86,6 +86,7 @@ def atomic_h5(path: str | Path, mode: str = "w"):
 
 #: Units of the numeric group attributes (stored per group as the JSON attribute ``units``).
 ATTRIBUTE_UNITS = {
+    "point_load_snap": "m", "point_load_x": "m",
     "omega": "rad/s", "t_stop": "s", "duration": "s", "output_step": "s", "a0": "1/s", "a1": "s",
     "integrator_dt": "s", "integrator_dt_max": "s", "integrator_rtol": "1", "integrator_atol": "m",
     "integrator_rho_inf": "1", "omega_c": "J", "omega_e": "J", "sole_inextensible_omega": "rad/s",
@@ -135,7 +136,7 @@ def put(group: h5py.Group, name: str, data, units: str, description: str = "", a
     return ds
 
 
-def write_static(path: str | Path, result, case_text: str, matrices: bool | None = None) -> Path:
+def write_static(path: str | Path, result, case_text: str, matrices: bool | None = None, placements=()) -> Path:
     """Write a :class:`~cablesim.analyses.static.StaticResult` to HDF5.
 
     Layout: ``/static/inextensible/{x,T,B,D}``, ``/static/approximate/{x,u,y,T,B,D,f,N,K}``,
@@ -156,6 +157,12 @@ def write_static(path: str | Path, result, case_text: str, matrices: bool | None
         st = f.create_group("static")
         st.attrs["matrices_stored"] = dense
         put(st, "P", r.P, "N", "sustained loads F0 in DOF order")
+        if placements:
+            st.attrs["point_load_given"] = [p.given for p in placements]
+            st.attrs["point_load_node"] = np.array([p.node for p in placements], dtype=np.int64)
+            st.attrs["point_load_x"] = np.array([p.node_x for p in placements])
+            st.attrs["point_load_snap"] = np.array([p.snap for p in placements])
+            attribute_units(st)
         _write_static_models(st, r, dense)
         _write_static_modal(f, r)
     return path

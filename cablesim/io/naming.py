@@ -70,13 +70,14 @@ def figures(out: Path, kind: str) -> list[Path]:
 
 
 def remove_figures(out: Path, kind: str) -> list[Path]:
-    """Delete the figures an earlier result at ``out`` drew (a new result is about to take its
-    place); the paths removed."""
+    """Delete the figures an earlier result at ``out`` drew, in any format (PNG, PDF, SVG; a new
+    result is about to take its place); the paths removed."""
     gone = []
     for png in figures(out, kind):
-        if png.is_file():
-            png.unlink()
-            gone.append(png)
+        for path in (png, png.with_suffix(".pdf"), png.with_suffix(".svg")):
+            if path.is_file():
+                path.unlink()
+                gone.append(path)
     return gone
 
 

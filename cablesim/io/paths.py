@@ -130,10 +130,12 @@ def check_output(path, *, inputs=(), flag: str = "-o", suffixes=HDF5_SUFFIXES, c
     if not path.name or path.name in (".", ".."):
         raise _fail(flag, path, "names a folder, not a file", f"Give a file name, for example {flag} result{suffixes[0]}.")
     if path.suffix.lower() not in suffixes:
-        what = "an HDF5 result" if suffixes == HDF5_SUFFIXES else f"a {suffixes[0]} file"
-        extra = " (the plots are written beside it as PNG files)" if suffixes == HDF5_SUFFIXES else ""
         named = [x for x in suffixes if x]
-        ends = " or ".join(named) + (" (or have no suffix: a prefix for several files)" if "" in suffixes else "")
+        what = ("an HDF5 result" if suffixes == HDF5_SUFFIXES else f"a {named[0]} file" if len(named) == 1
+                else "a figure")
+        extra = " (the plots are written beside it as PNG files)" if suffixes == HDF5_SUFFIXES else ""
+        ends = (", ".join(named[:-1]) + " or " if len(named) > 1 else "") + named[-1]
+        ends += " (or have no suffix: a prefix for several files)" if "" in suffixes else ""
         other = f"; {path.suffix} files are not written" if path.suffix else ""
         raise _fail(flag, path, f"this option names {what}{extra}, so its name must end in {ends}{other}",
                     f"Give, for example, {flag} {path.with_suffix(suffixes[0])}.")

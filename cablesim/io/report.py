@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..analyses.records import spectrum_part
+from ..case.placement import placements_text
 from ..dynamics.extremes import peak_and_half_range
 from ..dynamics.spectra import spectrum_peaks
 from ..version import __version__
@@ -51,9 +52,10 @@ def static_summary(case, result, full: bool = False) -> str:
         f"cablesim {__version__}: static analysis of '{case.name}' ({result.analysis} analysis)",
         f"cable: n = {n} nodes, L = {_g(c.L)} m, H = {_g(c.H)} m (down), sum S = {_g(c.total_length)} m "
         f"({excess:+.4g} % of the chord {_g(c.chord_length)} m), EA = {c.EA:.4g} N",
-        "",
-        "Node coordinates under F0, m (vertical axis pointing down):",
     ]
+    placed = placements_text(case.placements, (result.exact or result.approximate).y, c.dim)
+    out += [placed] if placed else []
+    out += ["", "Node coordinates under F0, m (vertical axis pointing down):"]
     header = ["DOF", "F0 (kN)"]
     cols = []
     if result.inextensible is not None:

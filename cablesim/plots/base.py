@@ -9,6 +9,7 @@ defined in :mod:`cablesim.plots.style`.
 from __future__ import annotations
 
 import contextlib
+import math
 import sys
 import textwrap
 from pathlib import Path
@@ -18,7 +19,7 @@ import numpy as np
 from ..io.paths import part_path, remove_stale_parts, write_error
 from ..io.provenance import git_commit, invocation
 from ..version import __version__
-from .style import COLOURS, DPI, FIGURE_WIDTH, minmax_decimate
+from .style import COLOURS, DPI, FIGURE_FORMATS, FIGURE_WIDTH, figure_width, minmax_decimate, output_settings
 
 #: Samples kept per drawn line of a time history: two (the minimum and the maximum) per bucket.
 ENVELOPE_BUCKETS = 2000
@@ -75,10 +76,38 @@ def png_metadata(stamp: str | None = None) -> dict:
     return meta
 
 
-def save_atomic(fig, path: str | Path, dpi: int = DPI) -> Path:
-    """Save a figure through a temporary file so a failure never leaves a broken PNG; the PNG
-    carries :func:`png_metadata` and, inside :func:`stamp_figures`, the stamp."""
+def figure_metadata(fmt: str, stamp: str | None = None) -> dict:
+    """The provenance a saved figure carries, in the keys its format has: PNG text chunks
+    (:func:`png_metadata`); PDF ``Creator``, ``Subject`` (the command) and ``Keywords`` (the
+    git commit, the stamp); SVG ``Creator``, ``Description`` and ``Keywords``."""
+    meta = png_metadata(stamp)
+    if fmt == "png":
+        return meta
+    words = [f"git commit {meta['git commit']}", *([f"stamp: {stamp}"] if stamp else [])]
+    if fmt == "pdf":
+        return {"Creator": meta["Software"], "Subject": meta["Command"], "Keywords": "; ".join(words)}
+    return {"Creator": meta["Software"], "Description": meta["Command"], "Keywords": words}
+
+
+def figure_path(path: str | Path) -> tuple[Path, str]:
+    """Where a figure meant for ``path`` goes and its format: the suffix the ``format`` of
+    :func:`~cablesim.plots.style.figure_output` names, else ``path``'s own (png, pdf, svg),
+    else PNG."""
     path = Path(path)
+    fmt = output_settings()["format"]
+    if fmt:
+        return path.with_suffix("." + fmt), fmt
+    own = path.suffix.lower().lstrip(".")
+    return path, own if own in FIGURE_FORMATS else "png"
+
+
+def save_atomic(fig, path: str | Path, dpi: int | None = None) -> Path:
+    """Save a figure through a temporary file so a failure never leaves a broken file; it
+    carries :func:`figure_metadata` and, inside :func:`stamp_figures`, the stamp. The format and
+    resolution follow :func:`~cablesim.plots.style.figure_output` (PNG at :data:`DPI` by
+    default); the path returned has the format's suffix."""
+    path, fmt = figure_path(path)
+    dpi = dpi or output_settings()["dpi"] or DPI
     remove_stale_parts(path)
     tmp = part_path(path)
     stamp = _STAMP["text"]
@@ -88,7 +117,7 @@ def save_atomic(fig, path: str | Path, dpi: int = DPI) -> Path:
         path.parent.mkdir(parents=True, exist_ok=True)
         # a figure laid out by matplotlib keeps its width; one placed by hand is cropped to its content
         crop = None if fig.get_layout_engine() is not None else "tight"
-        fig.savefig(tmp, dpi=dpi, format="png", metadata=png_metadata(stamp), bbox_inches=crop)
+        fig.savefig(tmp, dpi=dpi, format=fmt, metadata=figure_metadata(fmt, stamp), bbox_inches=crop)
         tmp.replace(path)
     except OSError as exc:
         raise write_error(path, exc) from None
@@ -98,16 +127,17 @@ def save_atomic(fig, path: str | Path, dpi: int = DPI) -> Path:
     return path
 
 
-def figure_grid(nrows, ncols, row_height, *, sharex=False, sharey=False, extra_height=0.6, width=FIGURE_WIDTH,
+def figure_grid(nrows, ncols, row_height, *, sharex=False, sharey=False, extra_height=0.6, width=None,
                 height_ratios=None):
-    """Figure ``width`` wide (the journal width) with an ``nrows`` x ``ncols`` grid of axes,
+    """Figure ``width`` wide (default: the journal width, or the one of
+    :func:`~cablesim.plots.style.figure_output`) with an ``nrows`` x ``ncols`` grid of axes,
     laid out by matplotlib's constrained layout (titles, labels and outside legends fit).
 
     Two-panel rows stack rather than shrink: callers pass ``ncols`` = 1 and twice the rows.
     """
     plt = pyplot()
     fig, axes = plt.subplots(nrows, ncols, sharex=sharex, sharey=sharey, squeeze=False,
-                             figsize=(width, extra_height + nrows * row_height), layout="constrained",
+                             figsize=(width or figure_width(), extra_height + nrows * row_height), layout="constrained",
                              height_ratios=height_ratios)
     fig.get_layout_engine().set(w_pad=0.04, h_pad=0.04, wspace=0.03, hspace=0.03)
     return fig, axes
@@ -132,10 +162,17 @@ def wrap_text(text: str, width: int) -> list[str]:
     return [line.replace("\0", " ") for line in textwrap.wrap(guarded, width=width, break_long_words=False)]
 
 
+def legend_columns(ncol: int) -> int:
+    """Columns of a legend laid out for the journal width, in a figure of the width being drawn
+    (fewer in a narrower one, so that it stays within the figure)."""
+    return max(1, min(ncol, math.floor(ncol * figure_width() / FIGURE_WIDTH + 1e-9)))
+
+
 def legend_below(fig, handles, ncol: int = 2) -> None:
-    """One legend for the whole figure, below the axes (within the figure width)."""
+    """One legend for the whole figure, below the axes (within the figure width: ``ncol``
+    columns at the journal width, fewer in a narrower figure)."""
     if handles:
-        fig.legend(handles=handles, loc="outside lower center", ncol=ncol, frameon=False)
+        fig.legend(handles=handles, loc="outside lower center", ncol=legend_columns(ncol), frameon=False)
 
 
 def bottom_notes(fig, lines, warn: bool = False) -> None:

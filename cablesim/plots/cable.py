@@ -7,10 +7,10 @@ from pathlib import Path
 import numpy as np
 
 from ..cable import nodes_with_supports
-from .base import pyplot, save_atomic, title_line
+from .base import legend_columns, pyplot, save_atomic, title_line
 from .snapshots import label_nodes
 from .spatial import end_view, plan_view
-from .style import COLOURS, FIGURE_WIDTH, lowest_modes_text, styled
+from .style import COLOURS, figure_width, lowest_modes_text, styled
 
 #: Above this many nodes the loads are drawn as one quiver rather than an arrow per node.
 ARROW_NODES = 40
@@ -34,11 +34,11 @@ def plot_cable(result, path: str | Path, title: str) -> Path:
     cable = result.cable
     spatial = cable.dim == 3
     if spatial:  # elevation above the plan and end views
-        fig = plt.figure(figsize=(FIGURE_WIDTH, 7.6), layout="constrained")
+        fig = plt.figure(figsize=(figure_width(), 7.6), layout="constrained")
         grid = fig.add_gridspec(2, 2, height_ratios=(2.0, 1.1), width_ratios=(2.2, 1.0))
         ax, ax_plan, ax_end = fig.add_subplot(grid[0, :]), fig.add_subplot(grid[1, 0]), fig.add_subplot(grid[1, 1])
     else:
-        fig, ax = plt.subplots(figsize=(FIGURE_WIDTH, 4.8), layout="constrained")
+        fig, ax = plt.subplots(figsize=(figure_width(), 4.8), layout="constrained")
     loads = SERIES_LOADS
     y = result.y0
     pts = nodes_with_supports(cable, y)[:, :2]  # a spatial cable: its elevation (x, v)
@@ -100,7 +100,7 @@ def plot_cable(result, path: str | Path, title: str) -> Path:
         ax.set_title("elevation", fontsize="small")
         plan_view(ax_plan, nodes_with_supports(cable, y), result.P.reshape(-1, 3), span, COLOURS["response"])
         end_view(ax_end, nodes_with_supports(cable, y), COLOURS["response"])
-    fig.legend(loc="outside lower center", ncol=2, frameon=False)
+    fig.legend(loc="outside lower center", ncol=legend_columns(2), frameon=False)
     title_line(fig, f"{title}: static equilibrium under $F_0$",
                f"n = {cable.n_nodes} nodes, L = {cable.L:g} m, H = {cable.H:g} m, EA = {cable.EA:.3g} N; "
                f"lowest frequencies {lowest_modes_text(cable, y, result.modes)}")

@@ -34,7 +34,7 @@ from ..channels import (
 
 from ..errors import CablesimError
 from ..io.hdf5 import FAMILY_TEXT, ResultInfo, inspect_result, read_history
-from .base import FIGURE_WIDTH, bottom_notes, envelope_plot, pyplot, save_atomic, steady_start, two_tone, wrap_text
+from .base import bottom_notes, figure_width, envelope_plot, pyplot, save_atomic, steady_start, two_tone, wrap_text
 from .fdr import draw_fdr
 from .history import (channel_spectrum, draw_modal_lines, label_peaks, resolved_peaks, spectrum_range, time_text,
                       window_text)
@@ -210,7 +210,7 @@ def _draw_history_figure(fig_spec, infos, hists, captions, png: Path, title: str
     plans = [_plan(fig_spec, info, h) for info, h in zip(infos, hists)]
     height, sub_rows, sub_cols = _figure_size(kind, n, plans, hists)
     plt = pyplot()
-    fig = plt.figure(figsize=(FIGURE_WIDTH, height), layout="constrained")
+    fig = plt.figure(figsize=(figure_width(), height), layout="constrained")
     fig.get_layout_engine().set(w_pad=0.04, h_pad=0.04, wspace=0.03, hspace=0.03)
     subs = fig.subfigures(sub_rows, sub_cols, squeeze=False).ravel()
     roles: dict = {}  # panels compared across files share their scales
@@ -218,7 +218,7 @@ def _draw_history_figure(fig_spec, infos, hists, captions, png: Path, title: str
     for sf, h, cap, plan in zip(subs, hists, captions, plans):
         stopped = not h.completed
         if stopped:  # wrapped to the column width
-            cap += "\n" + textwrap.fill(f"run stopped early: {h.message}", width=int(13 * FIGURE_WIDTH / sub_cols))
+            cap += "\n" + textwrap.fill(f"run stopped early: {h.message}", width=int(13 * figure_width() / sub_cols))
         if cap:
             sf.suptitle(cap.strip(), fontsize=9, color=COLOURS["failure"] if stopped else "black", fontweight="bold")
         if kind == "waveform":

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..io.hdf5 import attr_text
 from ..io.sweeps import read_sweep, select_channels
-from .base import FIGURE_WIDTH, bottom_notes, legend_below, pyplot, save_atomic, title_line
+from .base import bottom_notes, figure_width, legend_below, pyplot, save_atomic, title_line
 from .style import COLOURS, SERIES, grid_step, symbols, to_resolution
 from .sweep import DIRECTION_STYLE, channel_label, draw_curve, marker_handles, point_markers, sweep_conditions
 
@@ -87,7 +87,7 @@ def draw_fdr(fig_spec, infos, png: Path, title: str) -> Path:
     modal = _modal_lines(sweeps, names, colors, x_lo, x_hi)
 
     plt = pyplot()
-    fig = plt.figure(figsize=(FIGURE_WIDTH, 1.6 + 2.1 * len(chans)), layout="constrained")
+    fig = plt.figure(figsize=(figure_width(), 1.6 + 2.1 * len(chans)), layout="constrained")
     axes = fig.subplots(len(chans), 1, sharex=True, squeeze=False)[:, 0]
     markers = np.zeros(4, dtype=bool)  # not steady, subharmonic, stopped early, went slack
     marked = all(point_markers(sw.omega.size) for sw in sweeps)

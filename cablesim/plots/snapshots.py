@@ -16,7 +16,7 @@ import numpy as np
 from ..cable import Cable, nodes_with_supports
 from ..errors import CablesimError
 from .base import pyplot, save_atomic, title_line
-from .style import COLOURS, FIGURE_WIDTH, styled
+from .style import COLOURS, figure_width, styled
 
 #: Largest number of node labels on a cable drawing (more would overlap).
 MAX_NODE_LABELS = 12
@@ -125,7 +125,7 @@ def snapshot_figure(hist, cable: Cable, title: str, count: int = 6):
             f"Snapshots of the cable need every DOF, but this history kept only {len(hist.dof_numbers)} of "
             f"{n_dof} (outputs.channels); rerun it without outputs.channels.", field="snapshots")
     plt = pyplot()
-    fig, (shape_ax, disp_ax) = plt.subplots(2, 1, figsize=(FIGURE_WIDTH, 6.6), layout="constrained",
+    fig, (shape_ax, disp_ax) = plt.subplots(2, 1, figsize=(figure_width(), 6.6), layout="constrained",
                                             gridspec_kw=dict(height_ratios=(3, 2)))
     base = nodes_with_supports(cable, hist.y0)[:, :2]  # a spatial cable: its elevation (x, v)
     shape_ax.plot(base[:, 0], base[:, 1], "--", color=COLOURS["reference"], lw=1.2, label="static equilibrium $y_0$")

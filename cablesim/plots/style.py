@@ -11,6 +11,7 @@ spelling of user-given titles and captions). Numbers are printed to their resolu
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import math
 import re
@@ -43,7 +44,41 @@ RC = {
     "lines.linewidth": 1.0,
     "legend.framealpha": 0.9,
     "savefig.dpi": DPI,
+    "pdf.fonttype": 42,  # TrueType fonts embedded whole in PDF (journals refuse Type 3)
+    "ps.fonttype": 42,
 }
+
+#: The formats figures are saved in (``--format``, or the output's suffix).
+FIGURE_FORMATS = ("png", "pdf", "svg")
+#: Range of ``--width`` (in): narrower, 8 pt text no longer fits the panels; wider is a poster.
+WIDTH_RANGE = (3.0, 14.0)
+#: Range of ``--dpi``.
+DPI_RANGE = (50, 1200)
+#: The settings of :func:`figure_output` in force (None: the defaults).
+_OUTPUT = {"format": None, "width": None, "dpi": None}
+
+
+@contextlib.contextmanager
+def figure_output(format: str | None = None, width: float | None = None, dpi: int | None = None):
+    """Context in which every figure is drawn ``width`` inches wide (default
+    :data:`FIGURE_WIDTH`; the text keeps its sizes) and saved as ``format`` (``png``, ``pdf``,
+    ``svg``; default: the output's suffix, else PNG) at ``dpi`` (default :data:`DPI`)."""
+    before = dict(_OUTPUT)
+    _OUTPUT.update(format=format, width=width, dpi=dpi)
+    try:
+        yield
+    finally:
+        _OUTPUT.update(before)
+
+
+def figure_width() -> float:
+    """The width of the figures being drawn, in (:func:`figure_output`)."""
+    return float(_OUTPUT["width"] or FIGURE_WIDTH)
+
+
+def output_settings() -> dict:
+    """``{"format", "width", "dpi"}`` of :func:`figure_output` in force (None where not set)."""
+    return dict(_OUTPUT)
 
 #: One colour per meaning, in every plot.
 COLOURS = {

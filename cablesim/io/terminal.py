@@ -192,7 +192,14 @@ class CompileNotice:
 
     def _say(self) -> None:
         name = jit.compiling_now()
-        if self.said or (name is None and self.seconds() < self.delay):
+        if self.said:
+            return
+        remaining = self.delay - self.seconds()
+        if remaining > 0.0:  # compiling (or loading from the cache) has not lasted the delay yet
+            if name is not None:  # look again once it could have; otherwise the next compile re-arms
+                self.timer = threading.Timer(max(0.05, remaining), self._say)
+                self.timer.daemon = True
+                self.timer.start()
             return
         self.said = True
         name = name or "the kernels"

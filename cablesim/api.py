@@ -44,6 +44,7 @@ from .plots.cable import plot_cable
 from .plots.charts import plot_backbone, plot_stability_chart
 from .plots.continuation import plot_continuation
 from .plots.history import plot_history
+from .plots.modes import DEFAULT_MODES_DRAWN, draw_modes, save_figure
 from .plots.redraw import redraw
 from .plots.sweep import plot_sweep
 
@@ -91,6 +92,14 @@ class StaticRun:
     def plot(self, path: str | Path) -> Path:
         """Draw the cable under F0 as a PNG."""
         return plot_cable(self.result, path, self.case.name)
+
+    def plot_modes(self, path: str | Path | None = None, count: int = DEFAULT_MODES_DRAWN):
+        """The lowest ``count`` mode shapes on the cable, as ``cablesim static`` draws them
+        (``NAME-modes.png``): the matplotlib ``Figure``, also saved as a PNG at ``path`` if given."""
+        fig = draw_modes(self.result, self.case.name, count)
+        if path is not None:
+            save_figure(fig, path)
+        return fig
 
 
 @dataclass(frozen=True)

@@ -66,6 +66,8 @@ def figures(out: Path, kind: str) -> list[Path]:
         return [Path(f"{prefix}-{k}.png") for k in HISTORY_FIGURES]
     if kind == "continuation":  # and the stability chart of its bifurcation curves
         return [out.with_suffix(".png"), out.with_name(out.stem + "-chart.png")]
+    if kind == "static":  # and its mode shapes
+        return [out.with_suffix(".png"), out.with_name(out.stem + "-modes.png")]
     return [out.with_suffix(".png")]
 
 

@@ -40,6 +40,7 @@ from .io.journal import SweepFile, fingerprint
 from .io.provenance import invocation
 from .io.sweeps import write_sweep
 from .orbits import OrbitPoint
+from .plots.animation import DEFAULT_FPS, DEFAULT_FRAMES, animate_file, animate_history, save_animation
 from .plots.cable import plot_cable
 from .plots.charts import plot_backbone, plot_stability_chart
 from .plots.continuation import plot_continuation
@@ -429,6 +430,40 @@ def plot(results, output: str | Path | None = None, figure: str | Path | None = 
         The PNGs written.
     """
     return redraw(results, output, figure=figure, stamp=stamp, snapshots=snapshots)
+
+
+def animate(source, output: str | Path | None = None, *, frames: int = DEFAULT_FRAMES, fps: float = DEFAULT_FPS,
+            start: float | None = None, stop: float | None = None):
+    """The cable moving, as ``cablesim animate`` draws it: a time history at true scale, with
+    the static shape, the envelope of the motion, a time marker and the tensions in colour.
+
+    Parameters
+    ----------
+    source : str, Path or HistoryRun
+        A file of ``cablesim history`` or ``free-vibration``, or the run itself.
+    output : str or Path, optional
+        Also write it: ``.gif`` (pillow), or ``.mp4`` where ffmpeg is installed.
+    frames : int
+        Number of frames, 2 to 600 (fewer when the window holds fewer saved instants).
+    fps : float
+        Frames per second, 1 to 50.
+    start, stop : float, optional
+        The window, s (default: one steady period of a periodic forced response; else 20 frames
+        per period of interest, from the start of a free vibration or at the end of the record).
+
+    Returns
+    -------
+    matplotlib.animation.FuncAnimation
+        With ``frame_times`` (s), ``fps``, ``frame_plan`` and ``summary`` (the frames, the frame
+        rate, the length and the window in words).
+    """
+    if isinstance(source, HistoryRun):
+        anim = animate_history(source.history, source.case.to_cable(), source.case.name, frames, fps, start, stop)
+    else:
+        anim = animate_file(source, frames, fps, start, stop)
+    if output is not None:
+        save_animation(anim, output)
+    return anim
 
 
 #: The tiny runs :func:`compile_kernels` makes: every analysis, integrator and kind of run, so that

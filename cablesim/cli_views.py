@@ -7,7 +7,12 @@ module imports its machinery only when a command runs, so that ``cablesim --help
 
 from __future__ import annotations
 
+import shlex
+import sys
 from pathlib import Path
+from typing import Optional
+
+import typer
 
 
 def static_figures(modes_drawn: int):
@@ -31,7 +36,72 @@ def draw_static(result, out: Path, name: str, modes_drawn: int) -> str:
     return " and ".join(str(p) for p in written)
 
 
+def _begin(ctx) -> tuple:
+    """Record the invocation (for the figures' metadata); ``(echo, note)`` honouring --quiet."""
+    from .io.provenance import command_words, plain, set_invocation
+
+    quiet = bool(ctx.find_root().params.get("quiet"))
+    set_invocation(shlex.join(command_words(ctx)), {k: plain(v) for k, v in ctx.params.items()})
+
+    def echo(text: str) -> None:
+        if not quiet:
+            typer.echo(text)
+
+    def note(text: str) -> None:
+        if not quiet:
+            sys.stderr.write(text + "\n")
+
+    return echo, note
+
+
+def default_animation(result: Path) -> Path:
+    """Where ``cablesim animate RESULT.h5`` writes without -o: ``RESULT-animation.gif`` beside it."""
+    return result.with_name(result.stem + "-animation.gif")
+
+
+def run_animate(ctx, result: Path, output, frames: int, fps: float, start, stop) -> None:
+    """``cablesim animate`` (see :func:`register`)."""
+    from .errors import CablesimError
+    from .io.paths import check_output
+    from .plots.animation import ANIMATION_SUFFIXES, animate_file, check_frames, ffmpeg_available, save_animation
+
+    echo, note = _begin(ctx)
+    check_frames(frames, fps)
+    out = Path(output) if output is not None else default_animation(result)
+    check_output(out, inputs=[result], suffixes=ANIMATION_SUFFIXES)
+    if out.suffix.lower() == ".mp4" and not ffmpeg_available():
+        raise CablesimError(f"-o {out}: MP4 files need ffmpeg, which is not installed here; install it "
+                            f"(apt-get install ffmpeg) or write a GIF: -o {out.with_suffix('.gif')}.", field="output")
+    anim = animate_file(result, frames, fps, start, stop)
+    if out.is_file():
+        note(f"note: replacing the animation {out}; give -o to keep it")
+    save_animation(anim, out)
+    echo(f"Wrote {out}: {anim.summary}")
+
+
 def register(app, user_errors) -> None:
     """Add ``cablesim animate`` and ``cablesim report`` to the application ``app``
     (``user_errors`` turns a :class:`~cablesim.errors.CablesimError` into a one-paragraph
     message and exit status 2)."""
+
+    @app.command()
+    @user_errors
+    def animate(
+        ctx: typer.Context,
+        result: Path = typer.Argument(..., metavar="RESULT.h5", show_default=False,
+                                      help="A file of cablesim history or free-vibration."),
+        output: Optional[Path] = typer.Option(None, "-o", "--output", metavar="GIF|MP4",
+                                              help="Animation file, .gif, or .mp4 where ffmpeg is installed "
+                                              "(default: RESULT-animation.gif beside the file)."),
+        frames: int = typer.Option(120, "--frames", min=2, max=600, help="Number of frames, 2 to 600 (fewer when "
+                                   "the window holds fewer saved instants)."),
+        fps: float = typer.Option(20.0, "--fps", min=1.0, max=50.0, help="Frames per second, 1 to 50."),
+        start: Optional[float] = typer.Option(None, "--start", metavar="S", help="Start of the window, s (default: "
+                                              "one steady period, else 20 frames per period; see the README)."),
+        stop: Optional[float] = typer.Option(None, "--stop", metavar="S", help="End of the window, s."),
+    ):
+        """The cable moving, as an animated GIF (or MP4): a time history at true scale with the
+        static shape, the envelope of the motion, a time marker and the tensions in colour; one
+        steady period of a periodic response, looping. The frames, the frame rate and the
+        length are stated."""
+        run_animate(ctx, result, output, frames, fps, start, stop)

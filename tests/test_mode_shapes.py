@@ -97,3 +97,14 @@ def test_plot_redraws_the_mode_figure_from_the_file(tmp_path):
     h5 = run.to_hdf5(tmp_path / "s.h5")
     written = cablesim.plot([h5])
     assert Path(tmp_path / "s-modes.png") in [Path(p) for p in written]
+
+
+@pytest.mark.parametrize("overrides, count", [([], 4), (["spatial=true"], 6)])
+def test_no_text_of_the_mode_figure_overlaps(overrides, count):
+    from helpers_figures import text_problems
+
+    from cablesim.plots.style import journal_style
+
+    fig = cablesim.static(cablesim.load_case(None, overrides)).plot_modes(count=count)
+    with journal_style():
+        assert text_problems(fig) == []

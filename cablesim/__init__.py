@@ -51,7 +51,7 @@ The package, from the bottom layer up (a module imports only from layers below i
 
 from .version import __version__
 
-_API = ("load_case", "static", "history", "free_vibration", "sweep", "continuation", "backbone", "plot", "animate",
+_API = ("load_case", "static", "history", "free_vibration", "sweep", "continuation", "backbone", "plot", "animate", "report",
         "compile_kernels", "StaticRun", "HistoryRun", "SweepRun", "ContinuationRun", "BackboneRun")
 
 __all__ = ["__version__", *_API]

@@ -47,6 +47,7 @@ from .plots.continuation import plot_continuation
 from .plots.history import plot_history
 from .plots.modes import DEFAULT_MODES_DRAWN, draw_modes, save_figure
 from .plots.redraw import redraw
+from .plots.run_report import write_run_report
 from .plots.sweep import plot_sweep
 
 
@@ -464,6 +465,13 @@ def animate(source, output: str | Path | None = None, *, frames: int = DEFAULT_F
     if output is not None:
         save_animation(anim, output)
     return anim
+
+
+def report(results, output: str | Path) -> Path:
+    """Write one self-contained HTML page of the result files ``results``, as ``cablesim
+    report`` does: per file how it was run, the case, tables of results, every figure (those
+    beside the file, else drawn from it) and the warnings. Returns the page's path."""
+    return write_run_report([Path(p) for p in results], output)
 
 
 #: The tiny runs :func:`compile_kernels` makes: every analysis, integrator and kind of run, so that

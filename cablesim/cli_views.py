@@ -54,20 +54,16 @@ def _begin(ctx) -> tuple:
     return echo, note
 
 
-def default_animation(result: Path) -> Path:
-    """Where ``cablesim animate RESULT.h5`` writes without -o: ``RESULT-animation.gif`` beside it."""
-    return result.with_name(result.stem + "-animation.gif")
-
-
 def run_animate(ctx, result: Path, output, frames: int, fps: float, start, stop) -> None:
     """``cablesim animate`` (see :func:`register`)."""
     from .errors import CablesimError
+    from .io.naming import animation_file
     from .io.paths import check_output
     from .plots.animation import ANIMATION_SUFFIXES, animate_file, check_frames, ffmpeg_available, save_animation
 
     echo, note = _begin(ctx)
     check_frames(frames, fps)
-    out = Path(output) if output is not None else default_animation(result)
+    out = Path(output) if output is not None else animation_file(result)
     check_output(out, inputs=[result], suffixes=ANIMATION_SUFFIXES)
     if out.suffix.lower() == ".mp4" and not ffmpeg_available():
         raise CablesimError(f"-o {out}: MP4 files need ffmpeg, which is not installed here; install it "
@@ -77,6 +73,21 @@ def run_animate(ctx, result: Path, output, frames: int, fps: float, start, stop)
         note(f"note: replacing the animation {out}; give -o to keep it")
     save_animation(anim, out)
     echo(f"Wrote {out}: {anim.summary}")
+
+
+def run_report(ctx, results: list[Path], output) -> None:
+    """``cablesim report`` (see :func:`register`)."""
+    from .io.naming import report_file
+    from .io.paths import check_output
+    from .plots.run_report import write_run_report
+
+    echo, note = _begin(ctx)
+    out = Path(output) if output is not None else report_file(results[0])
+    check_output(out, inputs=results, suffixes=(".html", ".htm"))
+    if out.is_file():
+        note(f"note: replacing the report {out}; give -o to keep it")
+    write_run_report(results, out)
+    echo(f"Wrote {out} ({out.stat().st_size / 1e6:.3g} MB, self-contained: open it in any browser)")
 
 
 def register(app, user_errors) -> None:
@@ -105,3 +116,17 @@ def register(app, user_errors) -> None:
         steady period of a periodic response, looping. The frames, the frame rate and the
         length are stated."""
         run_animate(ctx, result, output, frames, fps, start, stop)
+
+    @app.command()
+    @user_errors
+    def report(
+        ctx: typer.Context,
+        results: list[Path] = typer.Argument(..., metavar="RESULT.h5", show_default=False,
+                                             help="Result files of any cablesim command (one section each)."),
+        output: Optional[Path] = typer.Option(None, "-o", "--output", metavar="HTML",
+                                              help="The page (default: FIRST-report.html beside the first file)."),
+    ):
+        """One self-contained HTML page of a run (or several): the case, how it was run (command,
+        versions, commit), tables of results (tensions and reactions, modes, peaks,
+        bifurcations), every figure embedded, and the warnings. No network needed to read it."""
+        run_report(ctx, results, output)

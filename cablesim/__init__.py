@@ -14,6 +14,9 @@ Python API (the command line's analyses; see :mod:`cablesim.api`)::
     sw = cablesim.sweep(case, jobs=2)              # SweepRun: .result, .to_hdf5(path)
     bb = cablesim.backbone(case, mode=1, amplitude=5.0)   # BackboneRun: free undamped orbits of mode 1
     cablesim.plot(["sweep.h5"], "sweep.png", stamp="preview: coarse grid")   # redraw stored results
+    st.plot_modes("modes.png", count=4)           # the lowest mode shapes: a matplotlib Figure
+    cablesim.animate("history.h5", "history.gif")  # the cable moving: a matplotlib FuncAnimation
+    cablesim.report(["static.h5", "history.h5"], "report.html")   # one self-contained HTML page
 
 The package, from the bottom layer up (a module imports only from layers below it; checked by
 ``tests/test_architecture.py``):

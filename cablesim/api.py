@@ -434,14 +434,18 @@ def plot(results, output: str | Path | None = None, figure: str | Path | None = 
 
 
 def animate(source, output: str | Path | None = None, *, frames: int = DEFAULT_FRAMES, fps: float = DEFAULT_FPS,
-            start: float | None = None, stop: float | None = None):
+            start: float | None = None, stop: float | None = None, branch: str | None = None,
+            omega: float | None = None):
     """The cable moving, as ``cablesim animate`` draws it: a time history at true scale, with
     the static shape, the envelope of the motion, a time marker and the tensions in colour.
 
     Parameters
     ----------
     source : str, Path or HistoryRun
-        A file of ``cablesim history`` or ``free-vibration``, or the run itself.
+        A file of ``cablesim history`` or ``free-vibration``, or the run itself; or a file of
+        ``cablesim continue``, whose orbit (``branch``, default the first, nearest ``omega``,
+        default the largest response) is integrated over two periods from its stored state and
+        animated over the second (exact analysis).
     output : str or Path, optional
         Also write it: ``.gif`` (pillow), or ``.mp4`` where ffmpeg is installed.
     frames : int
@@ -461,7 +465,7 @@ def animate(source, output: str | Path | None = None, *, frames: int = DEFAULT_F
     if isinstance(source, HistoryRun):
         anim = animate_history(source.history, source.case.to_cable(), source.case.name, frames, fps, start, stop)
     else:
-        anim = animate_file(source, frames, fps, start, stop)
+        anim = animate_file(source, frames, fps, start, stop, branch, omega)
     if output is not None:
         save_animation(anim, output)
     return anim

@@ -54,7 +54,7 @@ def _begin(ctx) -> tuple:
     return echo, note
 
 
-def run_animate(ctx, result: Path, output, frames: int, fps: float, start, stop) -> None:
+def run_animate(ctx, result: Path, output, frames: int, fps: float, start, stop, branch=None, omega=None) -> None:
     """``cablesim animate`` (see :func:`register`)."""
     from .errors import CablesimError
     from .io.naming import animation_file
@@ -68,7 +68,7 @@ def run_animate(ctx, result: Path, output, frames: int, fps: float, start, stop)
     if out.suffix.lower() == ".mp4" and not ffmpeg_available():
         raise CablesimError(f"-o {out}: MP4 files need ffmpeg, which is not installed here; install it "
                             f"(apt-get install ffmpeg) or write a GIF: -o {out.with_suffix('.gif')}.", field="output")
-    anim = animate_file(result, frames, fps, start, stop)
+    anim = animate_file(result, frames, fps, start, stop, branch, omega)
     if out.is_file():
         note(f"note: replacing the animation {out}; give -o to keep it")
     save_animation(anim, out)
@@ -100,7 +100,7 @@ def register(app, user_errors) -> None:
     def animate(
         ctx: typer.Context,
         result: Path = typer.Argument(..., metavar="RESULT.h5", show_default=False,
-                                      help="A file of cablesim history or free-vibration."),
+                                      help="A file of cablesim history, free-vibration or continue."),
         output: Optional[Path] = typer.Option(None, "-o", "--output", metavar="GIF|MP4",
                                               help="Animation file, .gif, or .mp4 where ffmpeg is installed "
                                               "(default: RESULT-animation.gif beside the file)."),
@@ -110,12 +110,16 @@ def register(app, user_errors) -> None:
         start: Optional[float] = typer.Option(None, "--start", metavar="S", help="Start of the window, s (default: "
                                               "one steady period, else 20 frames per period; see the README)."),
         stop: Optional[float] = typer.Option(None, "--stop", metavar="S", help="End of the window, s."),
+        branch: Optional[str] = typer.Option(None, "--branch", metavar="NAME", help="A continuation file: the branch "
+                                             "(default: the first, b0-p1)."),
+        omega: Optional[float] = typer.Option(None, "--omega", metavar="W", help="A continuation file: the orbit "
+                                              "nearest this forcing frequency, rad/s (default: the largest response)."),
     ):
-        """The cable moving, as an animated GIF (or MP4): a time history at true scale with the
-        static shape, the envelope of the motion, a time marker and the tensions in colour; one
-        steady period of a periodic response, looping. The frames, the frame rate and the
-        length are stated."""
-        run_animate(ctx, result, output, frames, fps, start, stop)
+        """The cable moving, as an animated GIF (or MP4): a time history, or one orbit of a
+        continuation, at true scale with the static shape, the envelope of the motion, a time
+        marker and the tensions in colour; one steady period of a periodic response, looping.
+        The frames, the frame rate and the length are stated."""
+        run_animate(ctx, result, output, frames, fps, start, stop, branch, omega)
 
     @app.command()
     @user_errors

@@ -131,3 +131,37 @@ def test_mp4_where_ffmpeg_is_installed(histories, tmp_path):
     _, h, _ = histories
     cablesim.animate(h, tmp_path / "a.mp4", frames=10)
     assert (tmp_path / "a.mp4").stat().st_size > 1000
+
+
+@pytest.fixture(scope="module")
+def continuation(tmp_path_factory):
+    """A short continuation of the paper example's response near its 1/2 subharmonic."""
+    root = tmp_path_factory.mktemp("orbit")
+    case = cablesim.load_case(None, ["continuation={omega: {start: 5.0, stop: 5.04}, channels: [z2, z4]}"])
+    return cablesim.continuation(case).to_hdf5(root / "cont.h5")
+
+
+def test_an_orbit_of_a_continuation_loops_over_its_period(continuation, invoke_cli, tmp_path):
+    with h5py.File(continuation, "r") as f:
+        names = sorted(f["continuation/branches"], key=lambda b: int(f["continuation/branches"][b].attrs["index"]))
+        g = f["continuation/branches"][names[0]]
+        omega, state, amp, period = g["omega"][()], g["state"][()], g["amplitude"][()], int(g.attrs["period"])
+    k = int(np.argmax(amp[:, 0]))  # the default orbit: the largest response
+    anim = cablesim.animate(continuation, frames=30)
+    T = period * 2 * math.pi / omega[k]
+    assert anim.frame_plan.periodic and "one period of the orbit" in anim.summary
+    assert anim.frame_plan.stop - anim.frame_plan.start == pytest.approx(T, rel=1e-9)
+    assert anim.frame_times[0] == pytest.approx(T, rel=1e-6)  # phase 0 of the second period
+    nodes = anim.draw_frame(0)[1]
+    y = np.column_stack(nodes.get_data()).ravel()
+    y0 = cablesim.static(cablesim.load_case()).result.y0
+    n = y0.size
+    # after one period the orbit is back at the state the file stores (z at phase 0)
+    np.testing.assert_allclose(y - y0, state[k, :n], atol=1e-4 * np.abs(state[k, :n]).max())
+    res = invoke_cli("animate", continuation, "-o", "o.gif", "--frames", "12", "--branch", names[0],
+                     "--omega", f"{omega[0]:.6g}")
+    assert res.returncode == 0, res.stdout + res.stderr
+    with Image.open(tmp_path / "o.gif") as im:
+        assert im.n_frames == 12
+    assert_refused(invoke_cli("animate", continuation, "-o", "x.gif", "--branch", "nope"), tmp_path,
+                   "--branch nope", names[0], keep=(tmp_path / "o.gif",))

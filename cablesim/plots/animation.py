@@ -22,9 +22,11 @@ from pathlib import Path
 
 import numpy as np
 
+from ..analyses.dynamic import plan_orbit
 from ..cable import Cable, nodes_with_supports
 from ..case import parse_case
 from ..errors import CablesimError
+from ..io.continuation import read_continuation
 from ..io.hdf5 import FAMILY_TEXT, inspect_result, read_history
 from ..io.paths import part_path, remove_stale_parts, write_error
 from .base import pyplot, title_line
@@ -90,7 +92,7 @@ def _window(t: np.ndarray, start, stop) -> tuple[float, float]:
 
 
 def plan_frames(t, z, omega: float | None, modal_omega, frames: int = DEFAULT_FRAMES,
-                start: float | None = None, stop: float | None = None) -> FramePlan:
+                start: float | None = None, stop: float | None = None, period: float | None = None) -> FramePlan:
     """Choose the saved instants of a history an animation of ``frames`` frames draws.
 
     Parameters
@@ -107,6 +109,9 @@ def plan_frames(t, z, omega: float | None, modal_omega, frames: int = DEFAULT_FR
         Frames wanted; fewer when the window holds fewer saved instants.
     start, stop : float, optional
         The window, s (default: see the module's docstring).
+    period : float, optional
+        The record's last ``period`` s are known to be one period of the motion (an orbit):
+        the frames loop over them.
 
     Returns
     -------
@@ -115,12 +120,15 @@ def plan_frames(t, z, omega: float | None, modal_omega, frames: int = DEFAULT_FR
     t = np.asarray(t, dtype=float)
     if t.size < 2:
         raise CablesimError("The history holds a single instant; there is nothing to animate.")
-    period = None if start is not None or stop is not None else steady_period(t, np.asarray(z, dtype=float), omega)
+    known = period is not None
+    if period is None and start is None and stop is None:
+        period = steady_period(t, np.asarray(z, dtype=float), omega)
     if period is not None:
         a, b = t[-1] - period, t[-1]
         targets = a + period * np.arange(frames) / frames  # the end is the start again
-        p = round(period * omega / (2 * np.pi))
-        what = f"one steady period of the response ({period:.4g} s, {p} forcing period{'s' if p > 1 else ''}), looping"
+        p = round(period * omega / (2 * np.pi)) if omega else 1
+        what = (f"one {'period of the orbit' if known else 'steady period of the response'} ({period:.4g} s, {p} "
+                f"forcing period{'s' if p > 1 else ''}), looping")
     else:
         if start is None and stop is None:
             w = omega if omega else float(np.asarray(modal_omega, dtype=float)[0]) if np.size(modal_omega) else 0.0
@@ -183,7 +191,7 @@ def _strip(strip, t: np.ndarray, z: np.ndarray, idx: np.ndarray, col: int):
 
 @styled
 def animate_history(hist, cable: Cable, title: str, frames: int = DEFAULT_FRAMES, fps: float = DEFAULT_FPS,
-                    start: float | None = None, stop: float | None = None):
+                    start: float | None = None, stop: float | None = None, period: float | None = None):
     """The animation of a time history (not saved: :func:`save_animation` writes it).
 
     Parameters
@@ -200,6 +208,8 @@ def animate_history(hist, cable: Cable, title: str, frames: int = DEFAULT_FRAMES
         Frames per second, within :data:`FPS_RANGE`.
     start, stop : float, optional
         The window, s (default: one steady period, else see :func:`plan_frames`).
+    period : float, optional
+        The record ends with one period of this length, s (an orbit's): the frames loop over it.
 
     Returns
     -------
@@ -218,7 +228,7 @@ def animate_history(hist, cable: Cable, title: str, frames: int = DEFAULT_FRAMES
                             "outputs.channels.", field="outputs.channels")
     if list(hist.dof_numbers) != every:
         hist = hist.keep(every)
-    plan = plan_frames(hist.t, hist.z, hist.omega, hist.modal_omega, frames, start, stop)
+    plan = plan_frames(hist.t, hist.z, hist.omega, hist.modal_omega, frames, start, stop, period)
     idx, t, z, T = plan.indices, np.asarray(hist.t, dtype=float), np.asarray(hist.z, dtype=float), np.asarray(hist.T)
     y0 = np.asarray(hist.y0, dtype=float)
     plt = pyplot()
@@ -265,7 +275,7 @@ def animate_history(hist, cable: Cable, title: str, frames: int = DEFAULT_FRAMES
         marker.set_xdata([t[i], t[i]])
         text = f"t = {to_resolution(t[i], step)} s"
         if plan.periodic and hist.omega:
-            text += f"\nforcing phase {((hist.omega * t[i]) / (2 * np.pi)) % 1.0:.2f} of 2π"
+            text += f"\nforcing phase {((hist.omega * t[i]) / (2 * np.pi)) % 1.0:.2f} × 2π"
         clock.set_text(text)
         return (cable_lines, nodes, marker, clock) + ((end_line,) if end_line is not None else ())
 
@@ -280,25 +290,62 @@ def animate_history(hist, cable: Cable, title: str, frames: int = DEFAULT_FRAMES
 
 
 def animate_file(path: str | Path, frames: int = DEFAULT_FRAMES, fps: float = DEFAULT_FPS,
-                 start: float | None = None, stop: float | None = None):
+                 start: float | None = None, stop: float | None = None, branch: str | None = None,
+                 omega: float | None = None):
     """:func:`animate_history` of the time history stored in ``path`` (a file of ``cablesim
-    history`` or ``free-vibration``), with the cable and name of the case stored in it.
+    history`` or ``free-vibration``), with the cable and name of the case stored in it; or of
+    one orbit of a continuation file (:func:`orbit_history`: ``branch`` and ``omega`` choose it).
 
     Raises
     ------
     CablesimError
-        If the file is not a time history (a continuation's orbit: run ``cablesim history`` at its
-        frequency), or as :func:`animate_history`.
+        If the file is neither, or as :func:`animate_history`.
     """
     check_frames(frames, fps)
     info = inspect_result(path)
+    case = parse_case(info.case_text, source=f"(the case stored in {info.path})", default_name=info.path.stem)
+    if info.family == "continuation":
+        hist, title, period = orbit_history(info.path, case, branch, omega)
+        return animate_history(hist, case.to_cable(), title, frames, fps, period=period)
     if info.family != "history":
         raise CablesimError(
             f"{info.path} is {FAMILY_TEXT[info.family]}; cablesim animate draws a time history (a file of cablesim "
-            "history or free-vibration). For a periodic response of a sweep or continuation, run cablesim history "
-            "at its frequency and animate that file: it loops over one steady period.", field="result")
-    case = parse_case(info.case_text, source=f"(the case stored in {info.path})", default_name=info.path.stem)
+            "history or free-vibration) or an orbit of a continuation (a file of cablesim continue).", field="result")
+    if branch is not None or omega is not None:
+        raise CablesimError("--branch and --omega choose an orbit of a continuation file; a time history is "
+                            "animated over --start to --stop.", field="branch")
     return animate_history(read_history(info.path), case.to_cable(), case.name, frames, fps, start, stop)
+
+
+def pick_orbit(branches: list[dict], branch: str | None, omega: float | None) -> tuple[dict, int]:
+    """The branch named ``branch`` (default: the first) and its orbit nearest to ``omega``
+    (default: the orbit of the largest amplitude in the first channel)."""
+    names = [b["name"] for b in branches]
+    if not branches:
+        raise CablesimError("The continuation file holds no branch; there is no orbit to animate.", field="branch")
+    if branch is not None and branch not in names:
+        raise CablesimError(f"--branch {branch}: the continuation file has the branches {', '.join(names)}; "
+                            "give one of them.", field="branch")
+    b = branches[names.index(branch) if branch is not None else 0]
+    w = np.asarray(b["omega"], dtype=float)
+    if omega is not None and not (math.isfinite(omega) and w.min() * 0.99 <= omega <= w.max() * 1.01):
+        raise CablesimError(f"--omega {omega:g}: branch {b['name']} runs from {w.min():.6g} to {w.max():.6g} rad/s; "
+                            "give a forcing frequency on it.", field="omega")
+    k = int(np.argmin(np.abs(w - omega))) if omega is not None else int(np.argmax(np.asarray(b["amplitude"])[:, 0]))
+    return b, k
+
+
+def orbit_history(path: Path, case, branch: str | None = None, omega: float | None = None):
+    """Two periods of one orbit of a continuation file, integrated from its stored state:
+    ``(history, title, orbit period in s)``; the animation then loops over the second one."""
+    res = read_continuation(path)
+    b, k = pick_orbit(res["branches"], branch, omega)
+    w, gamma = float(b["omega"][k]), float(b["gamma"][k])
+    hist = plan_orbit(case, w, gamma, b["state"][k], b["period"], analysis=res["analysis"]).run()[1]
+    stability = "stable" if bool(b["stable"][k]) else "unstable"
+    title = (f"{case.name}: orbit {k + 1} of branch {b['name']} (period {b['period']}, {stability}), "
+             f"ω = {w:.6g} rad/s, γ = {gamma:g}")
+    return hist, title, b["period"] * 2.0 * np.pi / w
 
 
 def ffmpeg_available() -> bool:

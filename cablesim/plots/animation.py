@@ -24,6 +24,7 @@ import numpy as np
 
 from ..analyses.dynamic import plan_orbit
 from ..cable import Cable, nodes_with_supports
+from ..channels import channel_description
 from ..case import parse_case
 from ..errors import CablesimError
 from ..io.continuation import read_continuation
@@ -41,6 +42,8 @@ FRAMES_RANGE, FPS_RANGE = (2, 600), (1, 50)
 FRAMES_PER_PERIOD = 20
 #: Resolution of the frames (dots per inch; 7 in wide: 700 pixels).
 ANIMATION_DPI = 100
+#: Up to this many nodes each node is marked (more would hide the tension colours).
+MARKED_NODES = 40
 #: Suffixes of the files written.
 ANIMATION_SUFFIXES = (".gif", ".mp4")
 
@@ -244,7 +247,8 @@ def animate_history(hist, cable: Cable, title: str, frames: int = DEFAULT_FRAMES
     norm = plt.Normalize(float(T[idx].min()) / div, float(max(T[idx].max(), T[idx].min() * (1 + 1e-9) + 1e-9)) / div)
     cable_lines = LineCollection(_segments(shapes[0], [0, 1]), cmap="viridis", norm=norm, lw=2.4, zorder=3)
     ax.add_collection(cable_lines)
-    nodes = ax.plot(shapes[0, 1:-1, 0], shapes[0, 1:-1, 1], "o", color="k", ms=2.5, zorder=4)[0]
+    nodes = ax.plot(shapes[0, 1:-1, 0], shapes[0, 1:-1, 1], "o", color="k", ms=2.5 if cable.n_nodes <= MARKED_NODES else 0,
+                    zorder=4)[0]
     fig.colorbar(cable_lines, ax=[ax] + ([end] if end is not None else []), label=f"segment tension $T$ ({unit})",
                  shrink=0.9, pad=0.01)
     ax.update_datalim(shapes[:, :, :2].reshape(-1, 2))
@@ -255,7 +259,9 @@ def animate_history(hist, cable: Cable, title: str, frames: int = DEFAULT_FRAMES
     ax.set_ylabel("vertical (m), down")
     ax.legend(loc="lower left", fontsize=7.5, framealpha=0.9)
     end_line = None if end is None else _end_view(end, base, shapes)
-    marker = _strip(strip, t, z, idx, _moving_most(hist, cable, idx))
+    col = _moving_most(hist, cable, idx)
+    marker = _strip(strip, t, z, idx, col)
+    strip.set_title(f"$z_{{{col + 1}}}$: {channel_description(col, cable.dim)}, the DOF that moves most", fontsize=8.5)
     step = float(np.median(np.diff(t))) if t.size > 1 else 1.0
     clock = ax.text(0.99, 0.97, "", transform=ax.transAxes, ha="right", va="top", fontsize=9,
                     bbox=dict(boxstyle="round,pad=0.2", fc="white", ec="0.6", lw=0.6))

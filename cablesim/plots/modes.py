@@ -30,6 +30,8 @@ DEFAULT_MODES_DRAWN = 4
 MAX_MODES_DRAWN = 20
 #: Largest nodal displacement of a drawn shape, as a fraction of the span.
 SHAPE_FRACTION = 0.08
+#: Up to this many nodes each node is marked on the shapes.
+MARKED_NODES = 40
 #: Height of one row of panels, in.
 ROW_HEIGHT = 2.1
 
@@ -86,7 +88,8 @@ def _panel(ax, result, k: int) -> None:
     for sign, gid, style in ((-1.0, f"mode {k + 1} opposite", dict(lw=0.8, alpha=0.45)),
                              (1.0, f"mode {k + 1}", dict(lw=1.6))):
         pts = nodes_with_supports(cable, y0 + sign * a * phi)
-        ax.plot(pts[:, 0], pts[:, col], "-o", color=COLOURS["response"], ms=2.5, gid=gid,
+        ax.plot(pts[:, 0], pts[:, col], "-o" if cable.n_nodes <= MARKED_NODES else "-", color=COLOURS["response"],
+                ms=2.5, gid=gid,
                 label="mode shape (scaled), its two extremes" if sign > 0 else None, **style)
     ax.plot(rest[[0, -1], 0], rest[[0, -1], col], "^", color="k", ms=7, zorder=4)
     if not plan:

@@ -216,3 +216,12 @@ def test_a_headless_browser_renders_the_page_with_every_figure(runs, tmp_path):
     _chromium("--window-size=390,2000", f"--screenshot={phone}", url, cwd=tmp_path)
     with Image.open(phone) as im:
         assert (np.asarray(im.convert("L"), dtype=float) < 200).mean() > 0.01
+
+
+def test_a_static_strain_warning_is_in_the_report(tmp_path):
+    case = cablesim.load_case(None, ["cable.E=8.0e9"])  # EA = 4e7 N: the paper's loads stretch it beyond 5 %
+    run = cablesim.static(case)
+    assert run.result.warnings
+    page = cablesim.report([run.to_hdf5(tmp_path / "s.h5")], tmp_path / "s.html").read_text()
+    warnings = page.split('id="f1-warnings"', 1)[1].split("</div>", 1)[0]
+    assert "static strain T/EA of segment" in warnings

@@ -15,6 +15,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
+from ..analyses.static import strain_warnings
 from ..case import parse_case
 from ..channels import channel_description
 from .continuation import read_continuation
@@ -167,7 +168,7 @@ def static_tables(f, case) -> tuple[list[Table], list[str]]:
     for k in shown_rows(pts.shape[0]):
         coords.rows.append([text(k + 1), *(num(c) for c in pts[k])])
     coords.note = _clip_note(pts.shape[0], "nodes")
-    return [tens, reac, coords, modes_table(f)], []
+    return [tens, reac, coords, modes_table(f)], [w[0].upper() + w[1:] for w in strain_warnings(cable, T)]
 
 
 def modes_table(f) -> Table:

@@ -19,7 +19,7 @@ from ..analyses.static import strain_warnings
 from ..case import parse_case
 from ..channels import channel_description
 from .continuation import read_continuation
-from .hdf5 import FAMILY_TEXT, attr_text, inspect_result
+from .hdf5 import attr_text, inspect_result
 from .sweeps import read_sweep, sweep_summary_rows
 
 #: Rows a table shows at most (a heavy cable's nodes): the first and last half of these.
@@ -130,7 +130,7 @@ def _family_tables(f, info, case) -> tuple[list[Table], list[str]]:
         return sweep_tables(info.path)
     if info.family == "continuation":
         return continuation_tables(info.path)
-    return [], [f"{FAMILY_TEXT[info.family].capitalize()}: its data are listed below and drawn in its figure."]
+    return [], []  # a backbone: its datasets are listed and its figure shown
 
 
 # ----------------------------------------------------------------------------------------------

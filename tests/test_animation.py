@@ -5,6 +5,8 @@ response loops over one steady period, and the bounds are enforced."""
 from __future__ import annotations
 
 import math
+import shutil
+import subprocess
 
 import h5py
 import numpy as np
@@ -120,17 +122,27 @@ def test_a_static_file_is_refused_and_the_api_checks_bounds(invoke_cli, tmp_path
         cablesim.animate(tmp_path / "s.h5", frames=FRAMES_RANGE[1] + 1)
 
 
-@pytest.mark.skipif(ffmpeg_available(), reason="ffmpeg is installed here: MP4 files are written")
-def test_mp4_without_ffmpeg_is_refused(invoke_cli, histories, tmp_path):
+def test_mp4_without_ffmpeg_is_refused(invoke_cli, histories, tmp_path, monkeypatch):
+    import cablesim.plots.animation as animation
+
+    monkeypatch.setattr(animation, "ffmpeg_available", lambda: False)  # as on a machine without it
     _, h, _ = histories
     assert_refused(invoke_cli("animate", h, "-o", "a.mp4"), tmp_path, "ffmpeg", "a.gif")
+    with pytest.raises(cablesim.api.CablesimError, match="ffmpeg"):
+        cablesim.animate(h, tmp_path / "b.mp4", frames=4)
+    assert not (tmp_path / "b.mp4").exists()
 
 
 @pytest.mark.skipif(not ffmpeg_available(), reason="ffmpeg is not installed (apt-get install ffmpeg)")
 def test_mp4_where_ffmpeg_is_installed(histories, tmp_path):
     _, h, _ = histories
-    cablesim.animate(h, tmp_path / "a.mp4", frames=10)
+    cablesim.animate(h, tmp_path / "a.mp4", frames=10, fps=5)
     assert (tmp_path / "a.mp4").stat().st_size > 1000
+    if shutil.which("ffprobe"):
+        probe = subprocess.run(["ffprobe", "-v", "error", "-count_frames", "-select_streams", "v:0", "-show_entries",
+                                "stream=nb_read_frames,r_frame_rate,width", "-of", "csv=p=0", str(tmp_path / "a.mp4")],
+                               capture_output=True, text=True, timeout=60).stdout.strip()
+        assert probe.split(",") == ["700", "5/1", "10"], probe
 
 
 @pytest.fixture(scope="module")

@@ -216,6 +216,11 @@ def test_a_headless_browser_renders_the_page_with_every_figure(runs, tmp_path):
     _chromium("--window-size=390,2000", f"--screenshot={phone}", url, cwd=tmp_path)
     with Image.open(phone) as im:
         assert (np.asarray(im.convert("L"), dtype=float) < 200).mean() > 0.01
+    # in print: each result file starts a page
+    pdf = tmp_path / "report.pdf"
+    _chromium("--no-pdf-header-footer", f"--print-to-pdf={pdf}", url, cwd=tmp_path)
+    data = pdf.read_bytes()
+    assert data.startswith(b"%PDF") and len(re.findall(rb"/Type\s*/Page[^s]", data)) >= len(runs[1])
 
 
 def test_a_static_strain_warning_is_in_the_report(tmp_path):

@@ -177,3 +177,11 @@ def test_an_orbit_of_a_continuation_loops_over_its_period(continuation, invoke_c
         assert im.n_frames == 12
     assert_refused(invoke_cli("animate", continuation, "-o", "x.gif", "--branch", "nope"), tmp_path,
                    "--branch nope", names[0], keep=(tmp_path / "o.gif",))
+
+
+def test_a_history_of_some_channels_is_refused(invoke_cli, tmp_path):
+    res = invoke_cli("history", "--set", "outputs.channels=[z2]", "--set", "history.channels=[z2]", "--duration", "2",
+                     "-o", "some.h5", "--no-plot")
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert_refused(invoke_cli("animate", "some.h5"), tmp_path, "every DOF", "outputs.channels",
+                   keep=(tmp_path / "some.h5",))

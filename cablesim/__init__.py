@@ -16,6 +16,9 @@ Python API (the command line's analyses; see :mod:`cablesim.api`)::
     cablesim.plot(["sweep.h5"], "sweep.png", stamp="preview: coarse grid")   # redraw stored results
     r = cablesim.load_result("sweep.h5")           # any result file: r.arrays, r["sweep/amplitude"], r.data
     ds = r.to_xarray()                             # an xarray.Dataset (omega x channel), if xarray is installed
+    st.plot_modes("modes.png", count=4)           # the lowest mode shapes: a matplotlib Figure
+    cablesim.animate("history.h5", "history.gif")  # the cable moving: a matplotlib FuncAnimation
+    cablesim.report(["static.h5", "history.h5"], "report.html")   # one self-contained HTML page
 
 The package, from the bottom layer up (a module imports only from layers below it; checked by
 ``tests/test_architecture.py``):
@@ -50,12 +53,13 @@ The package, from the bottom layer up (a module imports only from layers below i
 - ``api`` and ``cli`` -- the Python API and the ``cablesim`` command (``cli_charts``: its
   design-chart commands, ``cablesim backbone`` and the charts of ``cablesim continue``;
   ``cli_results``: ``cablesim export`` and ``cablesim rerun``; ``cli_figures``: ``--format``,
-  ``--width`` and ``--dpi`` on every command that draws).
+  ``--width`` and ``--dpi`` on every command that draws; ``cli_views``: the commands that show
+  results, ``cablesim animate`` and ``cablesim report``).
 """
 
 from .version import __version__
 
-_API = ("load_case", "static", "history", "free_vibration", "sweep", "continuation", "backbone", "plot",
+_API = ("load_case", "static", "history", "free_vibration", "sweep", "continuation", "backbone", "plot", "animate", "report",
         "compile_kernels", "load_result", "ResultFile", "StaticRun", "HistoryRun", "SweepRun", "ContinuationRun", "BackboneRun")
 
 __all__ = ["__version__", *_API]

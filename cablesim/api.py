@@ -43,12 +43,15 @@ from .io.provenance import invocation
 from .io.results import ResultFile, load_result  # noqa: F401 (cablesim.load_result)
 from .io.sweeps import write_sweep
 from .orbits import OrbitPoint
+from .plots.animation import DEFAULT_FPS, DEFAULT_FRAMES, animate_file, animate_history, save_animation
 from .plots.cable import plot_cable
 from .plots.charts import plot_backbone, plot_stability_chart
 from .plots.continuation import plot_continuation
 from .plots.history import plot_history
+from .plots.modes import DEFAULT_MODES_DRAWN, draw_modes, save_figure
 from .plots.redraw import redraw
 from .plots.style import figure_output
+from .plots.run_report import write_run_report
 from .plots.sweep import plot_sweep
 
 
@@ -108,6 +111,14 @@ class StaticRun(LabelledArrays):
     def plot(self, path: str | Path) -> Path:
         """Draw the cable under F0 as a PNG."""
         return plot_cable(self.result, path, self.case.name)
+
+    def plot_modes(self, path: str | Path | None = None, count: int = DEFAULT_MODES_DRAWN):
+        """The lowest ``count`` mode shapes on the cable, as ``cablesim static`` draws them
+        (``NAME-modes.png``): the matplotlib ``Figure``, also saved as a PNG at ``path`` if given."""
+        fig = draw_modes(self.result, self.case.name, count)
+        if path is not None:
+            save_figure(fig, path)
+        return fig
 
 
 @dataclass(frozen=True)
@@ -448,6 +459,51 @@ def plot(results, output: str | Path | None = None, figure: str | Path | None = 
     """
     with figure_output(format, width, dpi):
         return redraw(results, output, figure=figure, stamp=stamp, snapshots=snapshots)
+
+
+def animate(source, output: str | Path | None = None, *, frames: int = DEFAULT_FRAMES, fps: float = DEFAULT_FPS,
+            start: float | None = None, stop: float | None = None, branch: str | None = None,
+            omega: float | None = None):
+    """The cable moving, as ``cablesim animate`` draws it: a time history at true scale, with
+    the static shape, the envelope of the motion, a time marker and the tensions in colour.
+
+    Parameters
+    ----------
+    source : str, Path or HistoryRun
+        A file of ``cablesim history`` or ``free-vibration``, or the run itself; or a file of
+        ``cablesim continue``, whose orbit (``branch``, default the first, nearest ``omega``,
+        default the largest response) is integrated over two periods from its stored state and
+        animated over the second (exact analysis).
+    output : str or Path, optional
+        Also write it: ``.gif`` (pillow), or ``.mp4`` where ffmpeg is installed.
+    frames : int
+        Number of frames, 2 to 600 (fewer when the window holds fewer saved instants).
+    fps : float
+        Frames per second, 1 to 50.
+    start, stop : float, optional
+        The window, s (default: one steady period of a periodic forced response; else 20 frames
+        per period of interest, from the start of a free vibration or at the end of the record).
+
+    Returns
+    -------
+    matplotlib.animation.FuncAnimation
+        With ``frame_times`` (s), ``fps``, ``frame_plan`` and ``summary`` (the frames, the frame
+        rate, the length and the window in words).
+    """
+    if isinstance(source, HistoryRun):
+        anim = animate_history(source.history, source.case.to_cable(), source.case.name, frames, fps, start, stop)
+    else:
+        anim = animate_file(source, frames, fps, start, stop, branch, omega)
+    if output is not None:
+        save_animation(anim, output)
+    return anim
+
+
+def report(results, output: str | Path) -> Path:
+    """Write one self-contained HTML page of the result files ``results``, as ``cablesim
+    report`` does: per file how it was run, the case, tables of results, every figure (those
+    beside the file, else drawn from it) and the warnings. Returns the page's path."""
+    return write_run_report([Path(p) for p in results], output)
 
 
 #: The tiny runs :func:`compile_kernels` makes: every analysis, integrator and kind of run, so that

@@ -27,9 +27,9 @@ os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
 
 import typer
 
-from . import cli_charts, cli_figures, cli_results
+from . import cli_charts, cli_figures, cli_results, cli_views
 from .errors import CablesimError
-from .io.terminal import (ANALYSIS_OPT, CASE_ARG, DT_OPT, FORCE_OPT, INTEGRATOR_OPT, MODES_OPT, RTOL_OPT, SET_OPT, SLACK_OPTION,
+from .io.terminal import (ANALYSIS_OPT, CASE_ARG, DT_OPT, FORCE_OPT, INTEGRATOR_OPT, MODES_DRAWN_OPT, MODES_OPT, RTOL_OPT, SET_OPT, SLACK_OPTION,
                            SNAPSHOTS_OPT, STAMP_OPT, Analysis, CommandGroup, IntegratorName, LazyBar, SlackPolicy, StatusLine, compiling,
                            say_error, say_warnings)
 from .version import __version__
@@ -227,6 +227,7 @@ def static(
     matrices: Optional[bool] = typer.Option(None, "--matrices/--no-matrices", help="Store the dense 2n x 2n matrices (default: up to n = 200 nodes)."),
     all_models: Optional[bool] = typer.Option(None, "--all-models/--chosen-model", help="Compute the inextensible and approximate models too (default: up to n = 300 nodes)."),
     modes: Optional[int] = MODES_OPT,
+    modes_drawn: int = MODES_DRAWN_OPT,
 ):
     """Static equilibrium under F0 (inextensible, approximate and exact), modes and damping."""
     from .case import load_case
@@ -235,7 +236,7 @@ def static(
     case = load_case(case_file, [*(overrides or ()), *([f"modal.modes={modes}"] if modes else [])])[0]
     stem = "static" + (f"-{analysis.value}" if analysis else "")
     out = output if output is not None else Path("runs") / case.name / f"{stem}.h5"
-    _check_outputs(out, case_file, (lambda o: [o.with_suffix(".png")]) if plot else [])
+    _check_outputs(out, case_file, cli_views.static_figures(modes_drawn) if plot else [])
     _effective(ctx, output=out)
     # Only the static machinery, and only now that the input is known to be good.
     from .analyses.static import run_static
@@ -249,9 +250,7 @@ def static(
     write_static(out, result, case.text, matrices=matrices, placements=case.placements)
     msg = f"\nWrote {out}"
     if plot:
-        from .plots.cable import plot_cable
-
-        msg += f" and {plot_cable(result, out.with_suffix('.png'), case.name)}"
+        msg += " and " + cli_views.draw_static(result, out, case.name, modes_drawn)
     _echo(msg)
 
 
@@ -588,7 +587,7 @@ def stress(
         raise typer.Exit(1)
 
 
-for _m in (cli_charts, cli_results, cli_figures): _m.register(app, user_errors)  # noqa: E701 (figures: last)
+for _m in (cli_charts, cli_results, cli_views, cli_figures): _m.register(app, user_errors)  # noqa: E701 (figures: last)
 
 
 def main():

@@ -190,7 +190,9 @@ def test_default_run_succeeds_and_writes_under_runs(default_run):
     h5 = cwd / "runs" / "paper-example" / "static.h5"
     assert h5.is_file()
     assert_png(h5.with_suffix(".png"))
-    assert output_files(cwd) == [h5, h5.with_suffix(".png")]  # nothing else, no .part left
+    modes = h5.with_name("static-modes.png")  # the lowest mode shapes
+    assert_png(modes)
+    assert output_files(cwd) == [modes, h5, h5.with_suffix(".png")]  # nothing else, no .part left
 
 
 def test_default_run_summary_is_readable(default_run):
@@ -317,7 +319,7 @@ def test_name_from_stem_and_output_relative_to_cwd(invoke_cli, tmp_path, paper_c
     rc, out, err, exc = invoke_cli("static", "cases/my-cable.yaml")
     assert rc == 0, (err, exc)
     h5 = tmp_path / "runs" / "my-cable" / "static.h5"
-    assert output_files(tmp_path) == [h5, h5.with_suffix(".png")]
+    assert output_files(tmp_path) == [h5.with_name("static-modes.png"), h5, h5.with_suffix(".png")]
     assert_png(h5.with_suffix(".png"))
     assert not (case_file.parent / "runs").exists()
     assert "static analysis of 'my-cable'" in out

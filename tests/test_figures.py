@@ -333,7 +333,7 @@ def test_every_figure_is_journal_width_with_readable_text(work, results, monkeyp
         redraw([with_figure(results, "full.h5", work / f"{kind}.h5", figure),
                 with_figure(results, "w25.h5", work / f"{kind}-b.h5", None)])
     redraw([with_figure(results, "full.h5", work / "snap.h5", None)], snapshots=4)
-    assert len(seen) == 5 + 1 + 1 + len(KINDS) + 1
+    assert len(seen) == 5 + 1 + 2 + len(KINDS) + 1  # static: the cable and its mode shapes
     for width, smallest, texts in seen:
         assert width == 7.0 and smallest >= 8.0
         outside_math = [re.sub(r"\$[^$]*\$", "", t) for t in texts]

@@ -268,3 +268,52 @@ def run_free_vibration(
     """
     return plan_free_vibration(case, mode, peak_velocity, damping_ratio, duration, output_step, analysis,
                                integrator, split).run(progress)
+
+
+#: Saved instants per forcing period of an orbit's history (the animation's frames come from them).
+ORBIT_SAMPLES = 120
+
+
+def plan_orbit(case: Case, omega: float, gamma: float, state: np.ndarray, period: int, periods: int = 2,
+               analysis: str | None = None, samples: int = ORBIT_SAMPLES) -> HistoryPlan:
+    """A forced response started on a periodic orbit of a continuation, without integrating.
+
+    Parameters
+    ----------
+    case : Case
+        The case the continuation ran (its ``loads.FL`` scaled by ``gamma``).
+    omega : float
+        Forcing frequency of the orbit, rad/s.
+    gamma : float
+        Scale of the harmonic loads of the orbit.
+    state : ndarray
+        ``(z, y')`` at forcing phase 0 (m, m/s), as the continuation file stores it.
+    period : int
+        The orbit's period in forcing periods.
+    periods : int
+        Orbit periods to integrate (two: the animation checks the second repeats the first).
+    analysis : str, optional
+        Must be the exact analysis (the approximate one starts only from its equilibrium).
+    samples : int
+        Saved instants per forcing period.
+
+    Returns
+    -------
+    HistoryPlan
+    """
+    static = run_static(case, analysis, all_models=False)
+    if static.analysis != "exact":
+        raise CablesimError("An orbit of the approximate analysis cannot be started away from its equilibrium; "
+                            "continue in the exact analysis (--analysis exact) to animate its orbits, or animate "
+                            "a history at the orbit's frequency.", field="analysis")
+    eom = build_equations(case, static, omega=omega, load_scale=gamma)
+    n = eom.n_dof
+    state = np.asarray(state, dtype=float)
+    if state.size < 2 * n:
+        raise CablesimError(f"The orbit's state holds {state.size} values, but this cable has 2 x {n}; the "
+                            "continuation file does not belong to its stored case.", field="continuation")
+    s0 = eom.initial_state(z0=state[:n], v0=state[n:2 * n])
+    check_initial_state(s0, "the orbit's state")
+    duration = periods * period * 2.0 * np.pi / omega
+    integ = make_integrator(case.integrator, eom, max(omega, float(static.modes.omega[0])))
+    return HistoryPlan("history", static, eom, integ, omega, duration, 2.0 * np.pi / omega / samples, s0, False)

@@ -509,7 +509,8 @@ def _check_history_shapes(path, data: dict, zc, ze) -> None:
 
 
 def read_static_drawing(path: Path, case):
-    """What :func:`cablesim.plots.cable.plot_cable` needs, from a static file (no solving)."""
+    """What :func:`cablesim.plots.cable.plot_cable` and :func:`cablesim.plots.modes.draw_modes` need,
+    from a static file (no solving)."""
 
     with h5py.File(path, "r") as f:
         analysis = attr_text(f.attrs.get("analysis", f["modal"].attrs.get("analysis", "exact") if "modal" in f else "exact"))
@@ -528,10 +529,12 @@ def read_static_drawing(path: Path, case):
         inext = None
         if "inextensible" in st and "x" in st["inextensible"]:
             inext = SimpleNamespace(x=np.asarray(st["inextensible/x"][()], dtype=float))
-        # the lowest shapes, which the drawing names (symmetric, antisymmetric)
-        shapes = np.asarray(f["modal/shapes"][:, :4], dtype=float) if "modal/shapes" in f else None
+        # the lowest shapes, which the drawings name (symmetric, antisymmetric) and draw
+        shapes = np.asarray(f["modal/shapes"][:, :20], dtype=float) if "modal/shapes" in f else None
+        kinds = tuple(attr_text(k) for k in f["modal/kind"][()]) if "modal/kind" in f else ()
+        ratios = np.asarray(f["modal/damping_ratio"][()], dtype=float) if "modal/damping_ratio" in f else np.zeros(0)
     return SimpleNamespace(cable=case.to_cable(), analysis=analysis, P=P, y0=y0, T0=T0, inextensible=inext,
-                           modes=SimpleNamespace(omega=omega, shapes=shapes))
+                           modes=SimpleNamespace(omega=omega, shapes=shapes, kinds=kinds), damping_ratios=ratios)
 
 
 

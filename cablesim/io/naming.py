@@ -66,6 +66,8 @@ def figures(out: Path, kind: str) -> list[Path]:
         return [Path(f"{prefix}-{k}.png") for k in HISTORY_FIGURES]
     if kind == "continuation":  # and the stability chart of its bifurcation curves
         return [out.with_suffix(".png"), out.with_name(out.stem + "-chart.png")]
+    if kind == "static":  # and its mode shapes
+        return [out.with_suffix(".png"), out.with_name(out.stem + "-modes.png")]
     return [out.with_suffix(".png")]
 
 
@@ -92,3 +94,17 @@ def replacing_note(out: Path, describe) -> str | None:
         return None
     return (f"replacing {out}, {what}; give -o to keep it (the default names differ by the command's "
             "frequency, duration, mode, analysis and integrator flags)")
+
+
+def animation_file(out: Path) -> Path:
+    """Where ``cablesim animate`` writes the animation of the result ``out`` by default
+    (``NAME-animation.gif`` beside it)."""
+    out = Path(out)
+    return out.with_name(out.stem + "-animation.gif")
+
+
+def report_file(out: Path) -> Path:
+    """Where ``cablesim report`` writes the page of the result ``out`` by default
+    (``NAME-report.html`` beside it)."""
+    out = Path(out)
+    return out.with_name(out.stem + "-report.html")

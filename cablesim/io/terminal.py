@@ -261,6 +261,8 @@ FORCE_OPT = typer.Option(False, "--force", help="Run even when the cost estimate
                          "steps, a sweep 1e9, or 4 GB of memory).")
 MODES_OPT = typer.Option(None, "--modes", min=1, metavar="K", help="Compute only the lowest K modes and the highest "
                          "frequency (sets modal.modes; default: every mode up to n = 300 nodes, else the lowest 100).")
+MODES_DRAWN_OPT = typer.Option(4, "--modes-drawn", min=0, max=20, metavar="K", help="Draw the lowest K mode shapes "
+                               "beside the cable (<name>-modes.png; 0: none).")
 SNAPSHOTS_OPT = typer.Option(None, "--snapshots", min=1, max=24, metavar="K", help="Time histories: draw the cable "
                              "at K instants spread over the record instead (<file>-snapshots.png).")
 STAMP_OPT = typer.Option(None, "--stamp", metavar="TEXT", help="Text drawn in a corner of every figure and kept "

@@ -25,6 +25,7 @@ from .charts import plot_backbone, plot_stability_chart
 from .composite import draw_figure
 from .continuation import plot_continuation
 from .history import plot_history
+from .modes import modes_drawable, modes_png, plot_modes
 from .snapshots import plot_snapshots
 from .sweep import plot_sweep
 
@@ -138,7 +139,8 @@ def _standard(info: ResultInfo, output: Path | None) -> list[Path]:
     if info.family == "static":
         result = read_static_drawing(info.path, case)
         png = output if output is not None else info.path.with_suffix(".png")
-        return [plot_cable(result, png, case.name)]
+        return [plot_cable(result, png, case.name), *([plot_modes(result, modes_png(png), case.name)]
+                                                      if modes_drawable(result) else [])]
     if info.family == "continuation":
         png = output if output is not None else info.path.with_suffix(".png")
         out = [plot_continuation(info.path, png)]

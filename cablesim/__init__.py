@@ -54,13 +54,14 @@ The package, from the bottom layer up (a module imports only from layers below i
   design-chart commands, ``cablesim backbone`` and the charts of ``cablesim continue``;
   ``cli_results``: ``cablesim export`` and ``cablesim rerun``; ``cli_figures``: ``--format``,
   ``--width`` and ``--dpi`` on every command that draws; ``cli_views``: the commands that show
-  results, ``cablesim animate`` and ``cablesim report``).
+  results, ``cablesim animate`` and ``cablesim report``; ``warmup``: ``cablesim compile``'s
+  tiny runs).
 """
 
 from .version import __version__
 
 _API = ("load_case", "static", "history", "free_vibration", "sweep", "continuation", "backbone", "plot", "animate", "report",
-        "compile_kernels", "load_result", "ResultFile", "StaticRun", "HistoryRun", "SweepRun", "ContinuationRun", "BackboneRun")
+        "export_csv", "rerun", "compile_kernels", "load_result", "ResultFile", "StaticRun", "HistoryRun", "SweepRun", "ContinuationRun", "BackboneRun")
 
 __all__ = ["__version__", *_API]
 
@@ -72,6 +73,10 @@ def __dir__() -> list[str]:
 
 def __getattr__(name: str):
     # The API pulls in numba and scipy; load it on first use so `import cablesim` stays light.
+    if name == "compile_kernels":
+        from .warmup import compile_kernels
+
+        return compile_kernels
     if name in _API:
         from . import api
 

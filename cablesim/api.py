@@ -12,12 +12,13 @@ writes (and :meth:`plot` its PNGs). Nothing here prints, exits or writes unless 
 
 from __future__ import annotations
 
+import subprocess
+import sys
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from . import jit
 from .analyses.charts import BackboneResult, run_backbone
 from .analyses.continuation import ContinuationResult, run_continuation
 from .analyses.cost import Cost
@@ -27,7 +28,7 @@ from .analyses.pool import check_jobs
 from .analyses.dynamic import HistoryPlan, plan_free_vibration, plan_history
 from .analyses.static import StaticResult, run_static
 from .analyses.sweep import SweepResult, estimate_sweep, run_sweep
-from .case import Case, case_from_dict, example_text, parse_case
+from .case import Case, case_from_dict
 from .case import load_case as _read_case_file
 from .case.placement import placements_text
 from .case.numbers import DAMPING_RATIO, DURATION, MODE, OMEGA, OUTPUT_STEP, PEAK_VELOCITY, check_flag
@@ -40,6 +41,8 @@ from .io.continuation import write_continuation
 from .io.hdf5 import write_history, write_static
 from .io.journal import SweepFile, fingerprint
 from .io.provenance import invocation
+from .io.export import export_csv as _export_csv
+from .io.naming import rerun_output as _rerun_output
 from .io.results import ResultFile, load_result  # noqa: F401 (cablesim.load_result)
 from .io.sweeps import write_sweep
 from .orbits import OrbitPoint
@@ -506,82 +509,53 @@ def report(results, output: str | Path) -> Path:
     return write_run_report([Path(p) for p in results], output)
 
 
-#: The tiny runs :func:`compile_kernels` makes: every analysis, integrator and kind of run, so that
-#: each compiled kernel is compiled (or loaded) once.
-_SMALL = ["sweep.omega=[2.0, 5.0]", "sweep.duration=40.0", "sweep.window=10.0", "sweep.refine=false",
-          "continuation={omega: {start: 2.40, stop: 2.42}, channels: [z2]}"]
-_SLACKENING = ["loads.FL=[-0.3e6, 1.1e6, -0.9e6, 6.0e6]"]  # a segment goes slack within seconds
-_HEAVY = ["cable.nodes=60", "history.duration=1.0"]
-
-
-def _written(run: "StaticRun") -> None:
-    """Write a static result to a scratch file: the writer asks for ``B = dT/dP``, a kernel of
-    its own."""
-    with tempfile.TemporaryDirectory() as scratch:
-        run.to_hdf5(Path(scratch) / "static.h5")
-
-
-def _warm_up_runs() -> list[tuple[str, Callable[[], object]]]:
-    base = load_case(None, _SMALL)
-    heavy = parse_case(example_text("heavy-span"), source="(the shipped heavy-span case)", default_name="heavy-span",
-                       overrides=_HEAVY)
-    runs: list[tuple[str, Callable[[], object]]] = [
-        ("statics", lambda: [_written(static(base, a, all_models=True)) for a in ("exact", "approximate")]),
-    ]
-    for analysis in ("exact", "approximate"):
-        for integ in ("dopri5", "rk4", "newmark", "generalized-alpha"):
-            runs.append((f"history: {analysis} analysis, {integ}",
-                         lambda a=analysis, i=integ: history(base, omega=2.4, duration=3.0, analysis=a, integrator=i)))
-        runs.append((f"free vibration: {analysis} analysis",
-                     lambda a=analysis: free_vibration(base, mode=3, peak_velocity=1.0, duration=1.0, analysis=a)))
-    slack = load_case(None, [*_SMALL, *_SLACKENING])
-    for integ in ("dopri5", "rk4", "newmark", "generalized-alpha"):
-        runs.append((f"history through slack segments: {integ}",
-                     lambda i=integ: history(slack, omega=2.45, duration=6.0, integrator=i)))
-    fixed = [*_SMALL, "integrator={name: generalized-alpha, dt: 0.01}"]  # the implicit fixed-step loop
-    for analysis in ("exact", "approximate"):
-        runs.append((f"history: {analysis} analysis, generalized-alpha at a fixed step",
-                     lambda a=analysis: history(load_case(None, fixed), omega=2.4, duration=1.0, analysis=a)))
-    runs.append(("history through slack segments: generalized-alpha at a fixed step",
-                 lambda: history(load_case(None, [*fixed, *_SLACKENING]), omega=2.45, duration=6.0)))
-    z0 = load_case(None, [*_SMALL, "free_vibration={z0: [0.01, 0.01, 0.0, 0.0], duration: 0.5}"])
-    runs += [
-        ("free vibration from a displacement", lambda: free_vibration(z0)),
-        ("heavy cable: exact analysis", lambda: history(heavy)),
-        ("heavy cable: approximate analysis", lambda: history(heavy, duration=0.2, analysis="approximate")),
-        ("sweep: shooting and Floquet multipliers", lambda: sweep(base, jobs=1)),
-        ("sweep: integration alone, up and down", lambda: sweep(load_case(None, [
-            *_SMALL, "sweep.accelerate=false", "sweep.direction=both"]), jobs=1)),
-        ("continuation: exact analysis", lambda: continuation(base)),
-        ("continuation: approximate analysis", lambda: continuation(base, "approximate")),
-    ]
-    return runs
-
-
-def compile_kernels(progress: Callable[[int, int, str], None] | None = None) -> float:
-    """Compile every compiled kernel now (or load it from numba's on-disk cache), so that no
-    later run spends time compiling: what ``cablesim compile`` and ``make install`` do.
-
-    Runs tiny cases through the public analyses (every analysis, integrator, slack handling,
-    free vibration, a heavy cable, sweeps and continuation); numba compiles each kernel the
-    first time it runs and caches it for every later process on this machine.
+def export_csv(result: str | Path, folder: str | Path | None = None) -> list[Path]:
+    """Write every dataset of a result file as a tidy CSV file, as ``cablesim export`` does.
 
     Parameters
     ----------
-    progress : callable, optional
-        Called as ``progress(done, total, what)`` before each run.
+    result : str or Path
+        HDF5 result file of any command.
+    folder : str or Path, optional
+        Where the files go (default ``RESULT-csv`` beside the file); an earlier export there is
+        replaced, any other existing folder refused.
 
     Returns
     -------
-    float
-        Seconds spent compiling (0 when every kernel was in the cache).
+    list of Path
+        One CSV file per dataset (a row per value, a column per axis, units in the header),
+        then ``index.csv`` and ``attributes.csv``.
     """
-    before = jit.compile_seconds()
-    runs = _warm_up_runs()
-    for k, (what, run) in enumerate(runs):
-        if progress is not None:
-            progress(k, len(runs), what)
-        run()
-    if progress is not None:
-        progress(len(runs), len(runs), "done")
-    return jit.compile_seconds() - before
+    stored = load_result(result)
+    return _export_csv(stored, stored.path.with_name(stored.path.stem + "-csv") if folder is None else folder)
+
+
+def rerun(result: str | Path, output: str | Path | None = None) -> ResultFile:
+    """Rerun a result file's stored case with its stored command line, as ``cablesim rerun``
+    does (in a child process: the command line is what the file records), and read the new file.
+
+    Parameters
+    ----------
+    result : str or Path
+        HDF5 result file written by the command line (a file written through this API records
+        no command line and is refused).
+    output : str or Path, optional
+        The new file (default ``RESULT-rerun.h5`` beside it); never the original.
+
+    Returns
+    -------
+    ResultFile
+        The rerun's file (:func:`load_result`).
+
+    Raises
+    ------
+    CablesimError
+        With the command's own message, if it refused or failed.
+    """
+    out = Path(output) if output is not None else _rerun_output(Path(result))
+    args = [sys.executable, "-m", "cablesim.cli", "--quiet", "rerun", str(result), "-o", str(out)]
+    done = subprocess.run(args, capture_output=True, text=True)
+    if done.returncode != 0:
+        said = " ".join(done.stderr.split()).removeprefix("error: ")  # the command's paragraph, unwrapped
+        raise CablesimError(said or f"cablesim rerun {result} exited with status {done.returncode}")
+    return load_result(out)

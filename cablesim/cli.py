@@ -178,10 +178,10 @@ def example(
 def compile_():
     """Compile the numerical kernels now, once for this machine (numba caches them), so that no
     later run waits for them; `make install` does it. Kernels already cached only load."""
-    from . import api, jit
+    from . import jit, warmup
 
     _note(f"compiling the numerical kernels into {jit.cache_dir()} (a few minutes the first time) ...")
-    seconds = api.compile_kernels(lambda k, n, what: _note(f"  [{k + 1}/{n}] {what}") if k < n else None)
+    seconds = warmup.compile_kernels(lambda k, n, what: _note(f"  [{k + 1}/{n}] {what}") if k < n else None)
     _echo(f"compiled {jit.kernels_compiled()} kernels in {seconds:.0f} s" if seconds else "every kernel was already compiled")
 
 

@@ -71,17 +71,6 @@ def run_export(ctx, result_path: Path, fmt: ExportFormat, output: Optional[Path]
          f"{INDEX} lists them with their units, attributes.csv holds the file's attributes.")
 
 
-def rerun_output(original: Path) -> Path:
-    """Where a rerun of ``original`` goes by default: ``NAME-rerun.h5`` beside it (``-rerun2``, ...
-    if that exists), never over a file."""
-    k = 1
-    while True:
-        out = original.with_name(f"{original.stem}-rerun{'' if k == 1 else k}{original.suffix}")
-        if not out.exists() and not out.with_suffix(".case.yaml").exists():
-            return out
-        k += 1
-
-
 def rerun_words(ctx, info, case_path: Path, out: Path, keep_sets: bool) -> list[str]:
     """The command line that reruns the stored one of ``info``
     (:class:`~cablesim.io.hdf5.ResultInfo`) on the case file ``case_path``, writing ``out``
@@ -112,6 +101,7 @@ def rerun_words(ctx, info, case_path: Path, out: Path, keep_sets: bool) -> list[
 def run_rerun(ctx, result_path: Path, output: Optional[Path]) -> None:
     """``cablesim rerun`` (see :func:`register`)."""
     from .io.hdf5 import inspect_result
+    from .io.naming import rerun_output
     from .io.paths import check_output
 
     root = ctx.find_root()

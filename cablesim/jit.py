@@ -126,9 +126,48 @@ def _compile(func, signature, options):
     previous = config.CACHE_DIR
     config.CACHE_DIR = str(cache_dir())
     try:
-        return numba.njit(*signature, **options)(func)
+        dispatcher = numba.njit(*signature, **options)(func)
+        if options.get("cache"):
+            dispatcher._cache = _stable_cache_class()(dispatcher.py_func)
+        return dispatcher
     finally:
         config.CACHE_DIR = previous
+
+
+def _function_key(func) -> str:
+    """What identifies a compiled function passed as an argument, across processes: its
+    qualified name, bytecode and source file's size and time."""
+    try:
+        st = os.stat(inspect.getsourcefile(func) or "")
+        stamp = f"{st.st_size}:{st.st_mtime_ns}"
+    except (OSError, TypeError):
+        stamp = "?"
+    code = hashlib.sha256(func.__code__.co_code).hexdigest()[:16]
+    return f"{func.__module__}.{func.__qualname__}:{code}:{stamp}"
+
+
+@functools.lru_cache(maxsize=None)
+def _stable_cache_class():
+    """numba's on-disk cache with a key that survives the process for kernels taking a compiled
+    function as an argument (the orbits' flow takes the vector field).
+
+    numba keys a cached specialisation on its argument types, and the type of a compiled
+    function holds the function object itself, which is pickled with a random identity of its
+    process: such a kernel missed the cache in every process (compiled again, its index growing
+    by one entry a run), and an index entry whose function had been collected could not be
+    written again (``ReferenceError: underlying object has vanished``). Here such a type enters
+    the key as the function's name, bytecode and source stamp (:func:`_function_key`).
+    """
+    from numba.core import types
+    from numba.core.caching import FunctionCache
+
+    class StableFunctionCache(FunctionCache):
+        def _index_key(self, sig, codegen):
+            stable = tuple(f"compiled function {_function_key(t.dispatcher.py_func)}"
+                           if isinstance(t, types.Dispatcher) else t for t in sig)
+            return super()._index_key(stable, codegen)
+
+    return StableFunctionCache
 
 
 # ----------------------------------------------------------------------------------------------

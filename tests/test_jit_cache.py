@@ -135,3 +135,54 @@ def test_compiled_functions_are_cached_in_the_keyed_folder(tmp_path):
     assert folder.name == f"kernels-{jit.source_hash()}"
     assert any(folder.rglob("banded.is_band-*.nbi"))
     assert not any((ROOT / "mechanics").rglob("banded.is_band-*.nbi"))
+
+
+_FLOW_PROBE = """
+from cablesim import api
+from cablesim.analyses.setup import build_equations
+from cablesim.analyses.static import run_static
+from cablesim.orbits.kernels import flow_segment
+from cablesim.orbits.shooting import Shooting
+from cablesim.orbits.systems import cable_system
+import numpy as np
+case = api.load_case(None)
+eom = build_equations(case, run_static(case, all_models=False), omega=2.4)
+Shooting(cable_system(eom), period=1).segment(0, np.zeros(2 * eom.n_dof), 2.4)
+print("MISSES", sum(flow_segment.stats.cache_misses.values()), "HITS", sum(flow_segment.stats.cache_hits.values()))
+"""
+
+
+def test_a_kernel_taking_the_vector_field_is_loaded_from_the_cache_by_a_later_process():
+    """The orbits' flow takes the vector field (a compiled function) as an argument: keyed on the
+    function object's identity in its process, it missed the cache and compiled again in every
+    process (about a second and a half of every `cablesim continue`)."""
+    runs = [subprocess.run([sys.executable, "-c", _FLOW_PROBE], capture_output=True, text=True, timeout=900)
+            for _ in range(2)]
+    assert all(r.returncode == 0 for r in runs), runs[-1].stderr[-2000:]
+    assert "MISSES 0 HITS 1" in runs[1].stdout, runs[1].stdout
+
+
+def test_the_cache_key_of_a_compiled_function_argument_outlives_the_function():
+    """An index entry whose vector field had been collected could not be written again:
+    `ReferenceError: underlying object has vanished` in the middle of a sweep."""
+    import gc
+    import pickle
+
+    import numba
+    from numba.core import types
+    from numba.core.registry import cpu_target
+
+    def make():
+        @numba.njit
+        def field(x):
+            return 2.0 * x
+        return field
+
+    field = make()
+    sig = (types.Dispatcher(field), types.float64)
+    cache = jit._stable_cache_class()(make)  # (a cache for any function with a source file)
+    key = cache._index_key(sig, cpu_target.target_context.codegen())
+    del field, sig
+    gc.collect()
+    assert "compiled function" in str(key[0][0]) and "make.<locals>.field" in str(key[0][0])
+    pickle.dumps(key)  # raised ReferenceError while the key held the function's type

@@ -257,3 +257,18 @@ def test_rerun_refuses_a_file_without_a_command_line(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     path = cablesim.static(cablesim.load_case(None)).to_hdf5(tmp_path / "api.h5")  # the API records no command
     assert_refused(cli("rerun", path), tmp_path, "records no command line", keep=(path,))
+
+
+def test_the_api_exports_and_reruns_like_the_command_line(files, tmp_path):
+    original = files["history"]
+    written = cablesim.export_csv(original, tmp_path / "api-csv")
+    assert {p.name for p in written} >= {"history_z.csv", "index.csv", "attributes.csv"}
+    header, columns = _read_csv(tmp_path / "api-csv" / "history_z.csv")
+    z = stored(original)["history/z"][0]
+    assert header[-1] == "z (m)" and same(_parse(columns[-1], z).reshape(z.shape), z)
+    again = cablesim.rerun(original, tmp_path / "api-rerun.h5")
+    assert again.path == tmp_path / "api-rerun.h5" and again.kind == "history"
+    a, b = stored(original), stored(again.path)
+    assert set(a) == set(b) and all(same(a[k][0], b[k][0]) for k in a)
+    with pytest.raises(cablesim.errors.CablesimError, match="never replaces"):
+        cablesim.rerun(original, original)

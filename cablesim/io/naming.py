@@ -108,3 +108,14 @@ def report_file(out: Path) -> Path:
     (``NAME-report.html`` beside it)."""
     out = Path(out)
     return out.with_name(out.stem + "-report.html")
+
+
+def rerun_output(original: Path) -> Path:
+    """Where a rerun of ``original`` goes by default: ``NAME-rerun.h5`` beside it (``-rerun2``, ...
+    if that exists), never over a file."""
+    k = 1
+    while True:
+        out = original.with_name(f"{original.stem}-rerun{'' if k == 1 else k}{original.suffix}")
+        if not out.exists() and not out.with_suffix(".case.yaml").exists():
+            return out
+        k += 1

@@ -84,10 +84,24 @@ class FlowCall:
 
     def __call__(self, *args):
         if self._entry is None:
-            sig = tuple(numba.typeof(a) for a in args)
-            flow_segment.compile(sig)
-            self._entry = flow_segment.overloads[sig].entry_point
+            self._entry = entry_point(flow_segment, args)
         return self._entry(*args)
+
+
+#: Entry points by kernel and argument types, for :func:`entry_point`.
+_ENTRIES: dict = {}
+
+
+def entry_point(kernel, args):
+    """The compiled entry point of ``kernel`` for the types of ``args`` (compiled, or loaded
+    from the cache, on first use). Taken from what ``compile`` returns: a specialisation loaded
+    from the cache is filed under the argument types it was compiled with, whose compiled
+    functions (the vector field) are copies rebuilt from the cache (:mod:`cablesim.jit`)."""
+    sig = tuple(numba.typeof(a) for a in args)
+    key = (kernel, sig)
+    if key not in _ENTRIES:
+        _ENTRIES[key] = kernel.compile(sig)
+    return _ENTRIES[key]
 
 
 @njit

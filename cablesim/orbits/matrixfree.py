@@ -33,7 +33,6 @@ from __future__ import annotations
 from collections import deque
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 
 from . import directional as dk
@@ -74,9 +73,7 @@ class _Entry:
 
     def __call__(self, *args):
         if self._entry is None:
-            sig = tuple(numba.typeof(a) for a in args)
-            self.kernel.compile(sig)
-            self._entry = self.kernel.overloads[sig].entry_point
+            self._entry = ok.entry_point(self.kernel, args)
         return self._entry(*args)
 
 

@@ -45,7 +45,8 @@ The package, from the bottom layer up (a module imports only from layers below i
 - ``plots/`` -- every PNG (the only matplotlib);
 - ``stress/`` -- numerical stability across parameter ranges (``cablesim stress``);
 - ``api`` and ``cli`` -- the Python API and the ``cablesim`` command (``cli_charts``: its
-  design-chart commands, ``cablesim backbone`` and the charts of ``cablesim continue``).
+  design-chart commands, ``cablesim backbone`` and the charts of ``cablesim continue``;
+  ``cli_guard``: the checks of ``cablesim continue``'s inputs before it computes, and its run).
 """
 
 from .version import __version__

@@ -27,10 +27,10 @@ os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
 
 import typer
 
-from . import cli_charts
+from . import cli_charts, cli_guard
 from .errors import CablesimError
 from .io.terminal import (ANALYSIS_OPT, CASE_ARG, DT_OPT, FORCE_OPT, INTEGRATOR_OPT, MODES_OPT, RTOL_OPT, SET_OPT, SLACK_OPTION,
-                           SNAPSHOTS_OPT, STAMP_OPT, Analysis, CommandGroup, IntegratorName, LazyBar, SlackPolicy, StatusLine, compiling,
+                           SNAPSHOTS_OPT, STAMP_OPT, Analysis, CommandGroup, IntegratorName, LazyBar, SlackPolicy, compiling,
                            say_error, say_warnings)
 from .version import __version__
 
@@ -492,31 +492,19 @@ def continue_(
     """Every periodic response over the continuation: range, stable and unstable, with Floquet
     multipliers and the bifurcations (folds, period doublings, Neimark-Sacker) where responses
     appear, vanish or jump."""
-    import time
-
     from .case import load_case
 
     _begin(ctx)
     case = load_case(case_file, overrides)[0]
     out = output if output is not None else Path("runs") / case.name / (
         "continuation" + (f"-{analysis.value}" if analysis else "") + ".h5")
-    if overlay is not None and not overlay.is_file():
-        raise CablesimError(f"--overlay {overlay}: no such sweep file; give the output of cablesim sweep.")
-    _check_outputs(out, case_file, (lambda o: [o.with_suffix(".png"), *cli_charts.chart_pngs(case, o)]) if plot else [])
-    _effective(ctx, output=out)
-    from . import api
-    from .io.report import continuation_summary
-    from .plots.continuation import plot_continuation
+    from .io.paths import check_output
 
-    t0 = time.perf_counter()
-    with compiling(_note) as notice, StatusLine(quiet=_OUT["quiet"]) as status:
-        run = cli_charts.interruptible(lambda: api.continuation(case, analysis.value if analysis else None, progress=cli_charts.branch_status(
-            status), loci_progress=cli_charts.loci_status(status)), case, out, "the response and the curves traced")
-    _replace(out, "continuation")
-    run.to_hdf5(out)
-    _echo(continuation_summary(case, run.result, time.perf_counter() - t0 - notice.seconds()) + cli_charts.loci_text(run.result))
-    drawn = f" and {plot_continuation(out, out.with_suffix('.png'), overlay=overlay)}" if plot else ""
-    _echo(f"\nWrote {out}" + drawn + (cli_charts.chart_text(out, run.result) if plot else ""))
+    check_output(out, inputs=cli_guard.continue_inputs(case_file, overlay),
+                 companions=(lambda o: [o.with_suffix(".png"), *cli_charts.chart_pngs(case, o)]) if plot else [])
+    say_warnings(cli_guard.check_overlay(overlay, case))
+    _effective(ctx, output=out)
+    cli_guard.run_continue(case, out, analysis.value if analysis else None, overlay, plot, _note, _echo, _OUT["quiet"])
 
 
 @app.command()

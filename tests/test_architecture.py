@@ -31,10 +31,10 @@ LAYERS = {
     "stress": 9,
     "api": 10,
     "cli": 11,
-    "cli_charts": 10.5,
+    "cli_charts": 10.5, "cli_guard": 10.7,
 }
 #: Modules that import their machinery inside functions on purpose (start-up time).
-LAZY_ENTRY_POINTS = {"cablesim", "cablesim.cli", "cablesim.cli_charts"}
+LAZY_ENTRY_POINTS = {"cablesim", "cablesim.cli", "cablesim.cli_charts", "cablesim.cli_guard"}
 MAX_MODULE_LINES = 600
 MAX_FUNCTION_LINES = 80
 

@@ -283,6 +283,12 @@ def _expanded_text(text: str, data: dict, case: Case, overrides) -> str:
     return f"{EXPANDED_MARK}\n{original}{applied}{body}"
 
 
+def name_from_stem(stem: str) -> str:
+    """A valid case name (a letter or digit first, then letters, digits, '.', '_', '-') made from
+    a file's stem: ``"my run"`` -> ``"my-run"``."""
+    return re.sub(r"[^A-Za-z0-9._-]", "-", stem).lstrip("._-") or "case"
+
+
 def load_case(path: str | Path | None, overrides=None) -> tuple[Case, str]:
     """Read a case file, or the embedded paper example if ``path`` is None.
 
@@ -302,9 +308,7 @@ def load_case(path: str | Path | None, overrides=None) -> tuple[Case, str]:
         return case, case.text
     p = Path(path)
     text = read_text_file(p, "Case file", MAX_CASE_BYTES)
-    # A valid case name starts with a letter or digit; derive one from the file stem.
-    stem = re.sub(r"[^A-Za-z0-9._-]", "-", p.stem).lstrip("._-") or "case"
-    case = parse_case(text, source=str(p), default_name=stem, overrides=overrides, record_name=True)
+    case = parse_case(text, source=str(p), default_name=name_from_stem(p.stem), overrides=overrides, record_name=True)
     return case, case.text
 
 

@@ -67,11 +67,16 @@ def finish_history(run, out: Path, plot: bool, channels, wall: float, full: bool
     if not hist.completed and is_complete_result(out):
         target = beside(out)  # never replace a complete result with an incomplete one
     replace_result(target, "history", note)
-    run.to_hdf5(target)
-    draw = plot and hist.t.size > 1 and hist.status is not Status.INTERRUPTED
+    with interrupts.Deferred() as held:  # a signal while the file is written comes after it
+        run.to_hdf5(target)
+    draw = plot and hist.t.size > 1 and hist.status is not Status.INTERRUPTED and not held.hit
     pngs = run.plot(target.with_suffix(""), channels=channels) if draw else []
     echo(history_summary(case, hist, run.integrator, wall, full=full))
     echo(f"\nWrote {target}" + (" and " + ", ".join(str(p) for p in pngs) if pngs else ""))
+    if held.hit and hist.completed:
+        say_error(f"interrupted ({interrupts.signal_name()}) while {target} was written; it was written whole, "
+                  f"with the complete run. No figures were drawn (`cablesim plot {target}` draws them).")
+        raise typer.Exit(interrupts.exit_status())
     if not hist.completed:
         kept = f" The complete result {out} was kept; this run's results are in {target}." if target != out else ""
         drawn = "" if draw or not plot else f" No figures were drawn (`cablesim plot {target}` draws them)."

@@ -41,7 +41,7 @@ from ..dynamics.status import Status
 from ..errors import CablesimError
 from ..version import __version__
 from . import provenance
-from .paths import part_path, remove_stale_parts, write_error
+from .paths import discard, part_path, remove_stale_parts, write_error
 
 
 #: Arrays of at least this many values are written gzip-compressed.
@@ -77,11 +77,24 @@ def atomic_h5(path: str | Path, mode: str = "w"):
             yield f
         os.replace(tmp, path)
     except OSError as exc:
-        tmp.unlink(missing_ok=True)
+        discard(tmp)
         raise write_error(path, exc) from None
+    except RuntimeError as exc:
+        discard(tmp)
+        if not _raised_by_h5py(exc):
+            raise
+        raise write_error(path, exc) from None  # h5py on a full disk: "Can't decrement id ref count", flush errors
     except BaseException:
-        tmp.unlink(missing_ok=True)
+        discard(tmp)
         raise
+
+
+def _raised_by_h5py(exc: BaseException) -> bool:
+    """Whether the innermost frame of ``exc``'s traceback is in h5py (a file system error, not a bug)."""
+    tb = exc.__traceback__
+    while tb is not None and tb.tb_next is not None:
+        tb = tb.tb_next
+    return tb is not None and "h5py" in Path(tb.tb_frame.f_code.co_filename).parts
 
 
 #: Units of the numeric group attributes (stored per group as the JSON attribute ``units``).
@@ -364,6 +377,8 @@ def is_complete_result(path) -> bool:
             for group in ("backbone", "continuation/loci"):  # cablesim.io.charts
                 if group in f:
                     return bool(f[group].attrs.get("complete", False))
+            if "continuation" in f:  # written before the attribute existed: complete
+                return bool(f["continuation"].attrs.get("complete", True))
             return True
     except (OSError, KeyError, ValueError):
         return False

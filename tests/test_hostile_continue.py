@@ -1,0 +1,232 @@
+"""A user trying to break the newer commands (``continue``, ``plot``, ``check --set``, charts,
+resumes, slack histories), written from the README: every refusal is one paragraph with exit
+status 2 and no traceback, nothing computed is lost, and nothing is computed for an input that
+is refused.
+
+The cases are tiny (a one-node cable, short ranges), so that each test takes a few seconds.
+File-system faults use a real tmpfs where this machine allows mounting one (skipped elsewhere).
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import subprocess
+import uuid
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from helpers_cli import assert_refused, flat
+
+#: A one-node cable whose continuation over 2-3 rad/s takes about half a second.
+ONE_NODE = """\
+name: one
+cable: {L: 10.0, H: 0.0, S: [5.2, 5.2], EA: 1.0e6, masses: [100.0]}
+loads: {F0: [0.0, 2000.0], FL: [0.0, 100.0]}
+damping: {ratio: 0.02, modes: [1, 2]}
+history: {omega: 3.0, duration: 5.0, channels: [z2]}
+continuation: {omega: {start: 2.0, stop: 3.0}, channels: [z1, z2]}
+sweep: {omega: [2.2, 2.8], duration: 60.0, window: 20.0, channels: [z1, z2]}
+"""
+
+
+@pytest.fixture(scope="module")
+def results(tmp_path_factory):
+    """A sweep, a continuation and a history of the one-node cable, written once."""
+    import cablesim
+
+    root = tmp_path_factory.mktemp("results")
+    (root / "one.yaml").write_text(ONE_NODE)
+    case = cablesim.load_case(root / "one.yaml")
+    files = {"case": root / "one.yaml", "sweep": root / "sweep.h5", "continuation": root / "cont.h5",
+             "history": root / "hist.h5"}
+    cablesim.sweep(case, jobs=1).to_hdf5(files["sweep"])
+    cablesim.continuation(case).to_hdf5(files["continuation"])
+    cablesim.history(case, omega=3.0, duration=2.0).to_hdf5(files["history"])
+    return files
+
+
+@pytest.fixture
+def here(results, tmp_path):
+    """Copies of the results in the test's folder (the command line runs there)."""
+    return {k: Path(shutil.copy(p, tmp_path / p.name)) for k, p in results.items()}
+
+
+@pytest.fixture
+def no_compute(monkeypatch):
+    """Fail the test if a continuation is started."""
+    import cablesim.api
+
+    def computed(*a, **k):
+        raise AssertionError("the continuation ran before the input was refused")
+
+    monkeypatch.setattr(cablesim.api, "run_continuation", computed)
+
+
+def _mount(where: Path, options: str) -> None:
+    where.mkdir(exist_ok=True)
+    try:
+        res = subprocess.run(["mount", "-t", "tmpfs", "-o", options, "tmpfs", str(where)], capture_output=True,
+                             timeout=10)
+    except (OSError, subprocess.SubprocessError) as exc:
+        pytest.skip(f"cannot mount a tmpfs here ({exc})")
+    if res.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here ({res.stderr.decode().strip()})")
+
+
+@pytest.fixture
+def tmpfs(tmp_path):
+    """``mount(name, size, read_only=False, fill=None)``: a small tmpfs under tmp_path (skipped where
+    mounting is not allowed), unmounted afterwards; ``fill`` files are copied in before a
+    read-only remount."""
+    mounted = []
+
+    def mount(name: str, size: str = "1m", read_only: bool = False, fill=()) -> Path:
+        where = tmp_path / name
+        _mount(where, f"size={size}")
+        mounted.append(where)
+        for p in fill:
+            shutil.copy(p, where / Path(p).name)
+        if read_only:
+            subprocess.run(["mount", "-o", "remount,ro", str(where)], check=True, timeout=10)
+        return where
+
+    yield mount
+    for where in mounted:
+        subprocess.run(["umount", "-l", str(where)], capture_output=True, timeout=10)
+
+
+# ----------------------------------------------------------------------------------------------
+# 1. Inputs before compute
+# ----------------------------------------------------------------------------------------------
+def test_continue_refuses_an_output_that_is_its_overlay(invoke_cli, here, tmp_path, no_compute):
+    before = here["sweep"].read_bytes()
+    msg = assert_refused(invoke_cli("continue", here["case"], "-o", here["sweep"], "--overlay", here["sweep"]),
+                         tmp_path, "is this run's input", keep=tuple(here.values()))
+    assert "sweep.h5" in msg
+    assert here["sweep"].read_bytes() == before
+
+
+def test_continue_refuses_a_png_beside_the_output_that_is_its_overlay(invoke_cli, here, tmp_path, no_compute):
+    png = tmp_path / "fig.png"
+    shutil.copy(here["sweep"], png)  # an overlay under the name the plot would take
+    assert_refused(invoke_cli("continue", here["case"], "-o", "fig.h5", "--overlay", png), tmp_path,
+                   "is this run's input", keep=(*here.values(), png))
+
+
+def _truncated(here, tmp_path):
+    p = tmp_path / "truncated.h5"
+    p.write_bytes(here["sweep"].read_bytes()[:3000])
+    return p
+
+
+def _text(here, tmp_path):
+    p = tmp_path / "notes.h5"
+    p.write_text("omega amplitude\n2.2 0.001\n")
+    return p
+
+
+def _other_cable(here, tmp_path):
+    p = tmp_path / "other-cable.h5"
+    shutil.copy(here["sweep"], p)
+    with h5py.File(p, "a") as f:
+        text = f.attrs["case_yaml"]
+        text = text.decode() if isinstance(text, bytes) else str(text)
+        assert "EA: 1.0e6" in text
+        f.attrs["case_yaml"] = text.replace("EA: 1.0e6", "EA: 3.0e6")
+    return p
+
+
+@pytest.mark.parametrize("make, needle", [
+    (_text, "not an HDF5 file"),
+    (_truncated, "not an HDF5 file"),
+    (lambda here, tmp: here["history"], "time-history file, not a sweep file"),
+    (lambda here, tmp: here["continuation"], "continuation file, not a sweep file"),
+    (_other_cable, "a sweep of another cable"),
+], ids=["text", "truncated", "history", "continuation", "other-cable"])
+def test_a_bad_overlay_is_refused_before_the_continuation_runs(invoke_cli, here, tmp_path, no_compute, make, needle):
+    overlay = make(here, tmp_path)
+    keep = tuple(p for p in (*here.values(), overlay) if p.exists())
+    msg = assert_refused(invoke_cli("continue", here["case"], "-o", "c.h5", "--overlay", overlay), tmp_path,
+                         needle, "--overlay", keep=keep)
+    assert "Nothing was computed" in msg
+
+
+def test_an_overlay_with_other_loads_is_drawn_with_a_warning_said_first(invoke_cli, here, tmp_path, monkeypatch):
+    overlay = tmp_path / "other-loads.h5"
+    shutil.copy(here["sweep"], overlay)
+    with h5py.File(overlay, "a") as f:
+        text = f.attrs["case_yaml"]
+        text = text.decode() if isinstance(text, bytes) else str(text)
+        f.attrs["case_yaml"] = text.replace("FL: [0.0, 100.0]", "FL: [0.0, 150.0]")
+    import cablesim.cli_guard
+
+    said = []
+    real = cablesim.cli_guard.run_continue
+    monkeypatch.setattr(cablesim.cli_guard, "run_continue",
+                        lambda *a, **k: said.append(True) or real(*a, **k))
+    res = invoke_cli("continue", here["case"], "-o", "c.h5", "--overlay", overlay)
+    assert res.returncode == 0, res.stderr
+    assert "other loads" in flat(res.stderr) and said
+    assert (tmp_path / "c.png").is_file()
+
+
+def test_plot_stamp_with_math_notation_is_drawn_as_written(invoke_cli, here, tmp_path):
+    from PIL import Image
+
+    res = invoke_cli("plot", here["continuation"], "-o", "stamped.png", "--stamp", r"$\undefinedmacro$ {x}")
+    assert res.returncode == 0, (res.stderr, res.exception)
+    assert Image.open(tmp_path / "stamped.png").text["Stamp"] == r"$\undefinedmacro$ {x}"
+
+
+def test_plot_into_a_read_only_folder_is_one_message(invoke_cli, here, tmp_path, tmpfs):
+    ro = tmpfs("ro", read_only=True, fill=[here["continuation"]])
+    res = invoke_cli("plot", ro / here["continuation"].name)
+    assert res.returncode == 2 and isinstance(res.exception, SystemExit), (res.stderr, res.exception)
+    assert "Traceback" not in res.stderr and "Read-only file system" in flat(res.stderr)
+    assert_refused(invoke_cli("plot", here["continuation"], "-o", ro / "x.png"), tmp_path / "none",
+                   "cannot be written", "read-only")
+
+
+def _forge(here, tmp_path, edit) -> Path:
+    p = tmp_path / "forged.h5"
+    shutil.copy(here["continuation"], p)
+    with h5py.File(p, "a") as f:
+        edit(f)
+    return p
+
+
+def _first_branch(f):
+    return f["continuation/branches"][next(iter(f["continuation/branches"]))]
+
+
+@pytest.mark.parametrize("edit", [
+    lambda f: _first_branch(f).__delitem__("amplitude"),
+    lambda f: f["continuation"].attrs.__delitem__("parameter"),
+    lambda f: f["continuation"].__delitem__("bifurcations"),
+    lambda f: (_first_branch(f).__delitem__("stable"), _first_branch(f).create_dataset("stable", data=[1, 0])),
+], ids=["no-amplitude", "no-parameter", "no-bifurcations", "short-stable"])
+def test_a_forged_continuation_file_is_refused_in_one_paragraph(invoke_cli, here, tmp_path, edit):
+    forged = _forge(here, tmp_path, edit)
+    assert_refused(invoke_cli("plot", forged), tmp_path, "forged.h5", "not a continuation file as cablesim",
+                   keep=(*here.values(), forged))
+
+
+def test_a_result_named_with_a_space_and_no_case_name_is_redrawn(invoke_cli, here, tmp_path):
+    import yaml
+
+    import cablesim
+
+    data = yaml.load(ONE_NODE, Loader=yaml.SafeLoader)
+    data.pop("name")
+    data["cable"]["EA"] = 1.0e6
+    case = cablesim.load_case(data)
+    target = tmp_path / "my run.h5"
+    cablesim.history(case, omega=3.0, duration=2.0).to_hdf5(target)
+    res = invoke_cli("plot", target)
+    assert res.returncode == 0, res.stderr
+    assert (tmp_path / "my run-waveforms.png").is_file()

@@ -306,7 +306,7 @@ def history(
         planned = api.plan_history_run(case, omega, dur, output_step, analysis.value if analysis else None,
                                        integrator.value if integrator else None)
         say_warnings(planned.plan.static.warnings)
-        guard(planned.cost(), force, "Shorten --duration, raise --output-step or integrator.dt", out, _note)
+        guard(planned.cost(), force, "Shorten --duration, raise --output-step or integrator.dt", out, _note, 5 * plot)
         _effective(ctx, output=out, omega=w, duration=dur, output_step=planned.plan.output_step,
                    integrator={"name": planned.plan.integrator.name, **planned.plan.integrator.settings()})
         run, wall = simulate(planned, dur, notice, quiet=_OUT["quiet"])
@@ -364,7 +364,7 @@ def free_vibration(
                                               analysis.value if analysis else None,
                                               integrator.value if integrator else None)
         say_warnings(planned.plan.static.warnings)
-        guard(planned.cost(), force, "Shorten --duration, raise --output-step or integrator.dt", out, _note)
+        guard(planned.cost(), force, "Shorten --duration, raise --output-step or integrator.dt", out, _note, 5 * plot)
         _effective(ctx, output=out, mode=k, peak_velocity=v, duration=planned.plan.duration,
                    output_step=planned.plan.output_step,
                    integrator={"name": planned.plan.integrator.name, **planned.plan.integrator.settings()})
@@ -433,7 +433,7 @@ def sweep(
         _replace(out, None)  # the note now; the old figure goes once this sweep is complete
     with compiling(_note) as notice:
         guard(api.sweep_cost(case, an, integ), force, "Use fewer points (sweep.omega), a shorter sweep.duration "
-              "or a larger integrator.dt", out, _note)
+              "or a larger integrator.dt", out, _note, 1 * plot)
         _effective(ctx, output=out)
         _run_sweep(ctx, case, out, jobs, resume, an, integ, None if backend == Backend.loky else "dask", scheduler, plot,
                    notice)
@@ -500,8 +500,9 @@ def continue_(
         "continuation" + (f"-{analysis.value}" if analysis else "") + ".h5")
     from .io.paths import check_output
 
-    check_output(out, inputs=cli_guard.continue_inputs(case_file, overlay),
-                 companions=(lambda o: [o.with_suffix(".png"), *cli_charts.chart_pngs(case, o)]) if plot else [])
+    pngs = (lambda o: [o.with_suffix(".png"), *cli_charts.chart_pngs(case, o)]) if plot else (lambda o: [])
+    check_output(out, inputs=cli_guard.continue_inputs(case_file, overlay), companions=pngs,
+                 need_bytes=cli_guard.continue_room(len(pngs(out))))
     say_warnings(cli_guard.check_overlay(overlay, case))
     _effective(ctx, output=out)
     cli_guard.run_continue(case, out, analysis.value if analysis else None, overlay, plot, _note, _echo, _OUT["quiet"])

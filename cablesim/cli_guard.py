@@ -27,6 +27,17 @@ def continue_inputs(case_file, overlay) -> list:
     return [p for p in (case_file, overlay) if p is not None]
 
 
+#: Room allowed for a continuation file, bytes (the paper example's: 130 kB).
+CONTINUATION_BYTES = 300e3
+
+
+def continue_room(figures: int) -> float:
+    """The room ``cablesim continue`` needs on disk: its file and ``figures`` PNGs, bytes."""
+    from .io.finish import PNG_BYTES
+
+    return CONTINUATION_BYTES + PNG_BYTES * figures
+
+
 def _sections(case) -> dict:
     """The sections of a case compared between a continuation and its overlay (plain data)."""
     data = case.model_dump(mode="json", exclude_none=True)

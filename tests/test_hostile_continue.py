@@ -230,3 +230,119 @@ def test_a_result_named_with_a_space_and_no_case_name_is_redrawn(invoke_cli, her
     res = invoke_cli("plot", target)
     assert res.returncode == 0, res.stderr
     assert (tmp_path / "my run-waveforms.png").is_file()
+
+
+# ----------------------------------------------------------------------------------------------
+# 2. Keeping results
+# ----------------------------------------------------------------------------------------------
+def _signal_after(monkeypatch, orbits: int, signum: int) -> list:
+    """Send ``signum`` to this process when the continuation reports its ``orbits``-th orbit; the
+    orbits reported are recorded in the returned list."""
+    import cablesim.cli_charts
+
+    seen: list = []
+
+    def status(line):
+        def progress(p):
+            seen.append(p)
+            if len(seen) == orbits:
+                os.kill(os.getpid(), signum)
+        return progress
+
+    monkeypatch.setattr(cablesim.cli_charts, "branch_status", status)
+    return seen
+
+
+@pytest.mark.parametrize("signum, code, name", [(signal.SIGINT, 130, "Ctrl-C"), (signal.SIGTERM, 143, "SIGTERM")])
+def test_a_signal_during_continue_keeps_the_orbits_computed(invoke_cli, here, tmp_path, monkeypatch, signum, code,
+                                                             name):
+    seen = _signal_after(monkeypatch, 4, signum)
+    res = invoke_cli("continue", here["case"], "-o", "c.h5")
+    assert res.returncode == code, (res.stderr, res.exception)
+    assert "Traceback" not in res.stderr
+    with h5py.File(tmp_path / "c.h5") as f:
+        assert not f["continuation"].attrs["complete"]
+        branches = f["continuation/branches"]
+        kept = sum(branches[b]["omega"].size for b in branches)
+        ends = [str(branches[b].attrs["end"]) for b in branches]
+    assert kept >= 4 and kept == len(seen)  # every orbit reported is in the file
+    assert "interrupted" in ends[-1]
+    msg = flat(res.stderr)
+    assert name in msg and f"the {kept} periodic orbits" in msg and "c.h5" in msg and "incomplete" in msg
+    assert invoke_cli("plot", "c.h5").returncode == 0
+    assert (tmp_path / "c.png").is_file()
+
+
+def test_an_interrupted_continue_never_replaces_a_complete_result(invoke_cli, here, tmp_path, monkeypatch):
+    before = here["continuation"].read_bytes()
+    _signal_after(monkeypatch, 3, signal.SIGINT)
+    res = invoke_cli("continue", here["case"], "-o", here["continuation"])
+    assert res.returncode == 130, res.stderr
+    assert here["continuation"].read_bytes() == before
+    partial = here["continuation"].with_name("cont.partial.h5")
+    with h5py.File(partial) as f:
+        assert not f["continuation"].attrs["complete"]
+    assert "untouched" in flat(res.stderr)
+
+
+def test_a_signal_while_a_slack_history_is_evaluated_keeps_it(invoke_cli, write_case, tmp_path, monkeypatch):
+    """The instants of a history with slack episodes take seconds to evaluate after the time loop:
+    a second Ctrl-C there lost the whole run."""
+    import cablesim.dynamics.simulate as sim
+
+    case = write_case(ONE_NODE.replace("FL: [0.0, 100.0]", "FL: [0.0, 30000.0]"))
+    real = sim._slack_record
+
+    def late_signal(*a, **k):
+        os.kill(os.getpid(), signal.SIGINT)
+        return real(*a, **k)
+
+    monkeypatch.setattr(sim, "_slack_record", late_signal)
+    res = invoke_cli("history", case, "--omega", "3.0", "--duration", "5", "-o", "h.h5")
+    assert res.returncode == 130, (res.stderr, res.exception)
+    assert "Traceback" not in res.stderr
+    with h5py.File(tmp_path / "h.h5") as f:
+        assert f["history"].attrs["completed"]
+        assert f["history/events/t"].size > 0  # it went slack
+        assert f["history/t"][-1] == pytest.approx(5.0)
+    assert "holds the whole run" in flat(res.stderr)
+    assert not list(tmp_path.glob("*.png"))  # an interrupted command draws nothing
+
+
+def test_a_full_disk_while_the_continuation_is_written_is_one_message(invoke_cli, here, tmp_path, tmpfs, monkeypatch):
+    import cablesim.cli_guard
+
+    full = tmpfs("full", size="20k")
+    monkeypatch.setattr(cablesim.cli_guard, "continue_room", lambda figures: 0.0)  # the disk fills meanwhile
+    res = invoke_cli("continue", here["case"], "-o", full / "c.h5", "--no-plot")
+    assert res.returncode == 2 and isinstance(res.exception, SystemExit), (res.stderr, res.exception)
+    msg = flat(res.stderr)
+    assert "Traceback" not in res.stderr and msg.startswith("error: Could not write")
+    assert "disk" in msg and "\n\n" not in res.stderr.strip()
+    assert list(full.iterdir()) == []
+
+
+def test_the_atomic_writer_turns_an_hdf5_flush_error_into_a_message(tmp_path, tmpfs):
+    from cablesim.errors import CablesimError
+    from cablesim.io.hdf5 import atomic_h5
+
+    full = tmpfs("tiny", size="16k")
+    with pytest.raises(CablesimError, match="Could not write") as err:
+        with atomic_h5(full / "x.h5") as f:
+            f.create_dataset("x", data=np.random.default_rng(0).random(4000))
+    assert "Free some space" in str(err.value)
+    assert list(full.iterdir()) == []
+
+
+def test_the_room_check_counts_the_figures_of_a_history(invoke_cli, write_case, tmp_path, tmpfs):
+    case = write_case(ONE_NODE)
+    small = tmpfs("small", size="400k")
+    assert_refused(invoke_cli("history", case, "--omega", "3.0", "--duration", "20", "-o", small / "h.h5"),
+                   small, "MB free", "another disk")
+    ok = invoke_cli("history", case, "--omega", "3.0", "--duration", "20", "--no-plot", "-o", small / "h.h5")
+    assert ok.returncode == 0, ok.stderr  # without the figures it fits
+
+
+def test_continue_checks_its_room_first(invoke_cli, here, tmp_path, tmpfs, no_compute):
+    small = tmpfs("small", size="100k")
+    assert_refused(invoke_cli("continue", here["case"], "-o", small / "c.h5"), small, "MB free")

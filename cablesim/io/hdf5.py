@@ -25,9 +25,9 @@ says explicitly that they mark missing values.
 from __future__ import annotations
 
 import datetime
+import io
 import json
 import os
-import shutil
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -55,6 +55,11 @@ MATRIX_DOF = 400
 def atomic_h5(path: str | Path, mode: str = "w"):
     """Open ``path`` for writing via a temporary file renamed into place on success.
 
+    The HDF5 file is built in memory and written to ``NAME.part`` in one piece by the operating
+    system's own calls, then renamed into place: a full disk is then a plain OSError (ENOSPC),
+    where the HDF5 library, running out of room while it writes a file, only prints the failure
+    on closing (or crashes) and leaves a truncated file.
+
     Parameters
     ----------
     path : str or Path
@@ -71,10 +76,13 @@ def atomic_h5(path: str | Path, mode: str = "w"):
     tmp = part_path(path)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        if mode == "a" and path.exists():
-            shutil.copyfile(path, tmp)
-        with h5py.File(tmp, "a" if mode == "a" else "w") as f:
+        image = io.BytesIO(path.read_bytes() if mode == "a" and path.exists() else b"")
+        with h5py.File(image, "a" if image.getbuffer().nbytes else "w") as f:
             yield f
+        with open(tmp, "wb") as out:
+            out.write(image.getbuffer())
+            out.flush()
+            os.fsync(out.fileno())
         os.replace(tmp, path)
     except OSError as exc:
         discard(tmp)
@@ -83,7 +91,7 @@ def atomic_h5(path: str | Path, mode: str = "w"):
         discard(tmp)
         if not _raised_by_h5py(exc):
             raise
-        raise write_error(path, exc) from None  # h5py on a full disk: "Can't decrement id ref count", flush errors
+        raise write_error(path, exc) from None  # an HDF5 library failure while the file was built
     except BaseException:
         discard(tmp)
         raise

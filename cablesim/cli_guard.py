@@ -110,13 +110,17 @@ def empty_continuation(result, case) -> CablesimError | None:
     if result.branches:
         return None
     spec = case.continuation
-    why = getattr(result, "start_failure", "") or "the first orbit could not be computed"
-    return CablesimError(
-        f"The continuation found no periodic orbit: {why}. Nothing was written. Try a range starting where the "
-        f"response is small (continuation.{spec.parameter}.start farther from resonance), a smaller load factor "
-        "(continuation.gamma) or smaller harmonic loads (loads.FL), more shooting segments "
-        "(continuation.segments), or start_from: history; `cablesim history` shows whether a segment goes slack "
-        "there.", field="continuation")
+    why = result.start_failure or "the first orbit could not be computed"
+    start = f"continuation.{spec.parameter}.start"
+    if result.start_cause == "SLACK":  # orbits with slack intervals are not followed
+        fix = (f"Orbits with slack segments are not followed: give smaller harmonic loads (loads.FL) or load factor "
+               f"(continuation.gamma), or a {start} where the response is small (away from resonance); "
+               "`cablesim history` integrates through slack episodes")
+    else:
+        fix = (f"Try a {start} where the response is small (away from resonance), more shooting segments "
+               "(continuation.segments) or start_from: history")
+    return CablesimError(f"The continuation found no periodic orbit: {why}. Nothing was written. {fix}.",
+                         field="continuation")
 
 
 def kept_text(result) -> str:

@@ -346,3 +346,84 @@ def test_the_room_check_counts_the_figures_of_a_history(invoke_cli, write_case, 
 def test_continue_checks_its_room_first(invoke_cli, here, tmp_path, tmpfs, no_compute):
     small = tmpfs("small", size="100k")
     assert_refused(invoke_cli("continue", here["case"], "-o", small / "c.h5"), small, "MB free")
+
+
+# ----------------------------------------------------------------------------------------------
+# 3. Flags: results that mean nothing are said to, in the message and in the file
+# ----------------------------------------------------------------------------------------------
+def test_an_empty_continuation_says_why_and_fails(invoke_cli, write_case, tmp_path):
+    """Loads that make the cable slack from the first orbit: no silent exit 0 with "0 branch(es)"."""
+    case = write_case(ONE_NODE.replace("FL: [0.0, 100.0]", "FL: [0.0, 30000.0]"))
+    msg = assert_refused(invoke_cli("continue", case, "-o", "c.h5"), tmp_path, "found no periodic orbit",
+                         "slack", "loads.FL", keep=(case,))
+    assert "0 branch" not in msg
+
+
+def _stored_warnings(path) -> list:
+    import json
+
+    with h5py.File(path) as f:
+        return json.loads(f["history"].attrs["warnings"])
+
+
+def test_strains_beyond_the_model_are_warned_and_stored(invoke_cli, write_case, tmp_path):
+    from helpers_cli import EXAMPLE
+
+    case = write_case(EXAMPLE)
+    res = invoke_cli("history", case, "--omega", "2.4", "--duration", "5", "--no-plot", "-o", "h.h5",
+                     "--set", "loads.FL=[0.0, 1.0e9, 0.0, 1.0e9]")
+    assert res.returncode == 0, res.stderr
+    assert "warning: the strain T/EA" in flat(res.stderr) and "small strains" in flat(res.stderr)
+    stored = _stored_warnings(tmp_path / "h.h5")
+    assert any("strain T/EA" in w for w in stored)
+    ok = invoke_cli("history", case, "--omega", "2.4", "--duration", "5", "--no-plot", "-o", "ok.h5")
+    assert ok.returncode == 0 and "warning" not in ok.stderr and _stored_warnings(tmp_path / "ok.h5") == []
+
+
+def test_a_drift_of_eq_15_beyond_its_bound_is_warned_and_stored(invoke_cli, write_case, tmp_path):
+    from helpers_cli import EXAMPLE
+
+    case = write_case(EXAMPLE)
+    res = invoke_cli("history", case, "--omega", "2.4", "--duration", "60", "--no-plot", "-o", "h.h5",
+                     "--integrator", "newmark", "--dt", "0.5")
+    assert res.returncode == 0, res.stderr
+    assert "warning: the drift of eq. 15" in flat(res.stderr)
+    assert any("drift of eq. 15" in w for w in _stored_warnings(tmp_path / "h.h5"))
+    from cablesim.io.hdf5 import read_history
+
+    assert any("drift of eq. 15" in w for w in read_history(tmp_path / "h.h5").warnings)  # read back
+
+
+# ----------------------------------------------------------------------------------------------
+# 4. Strictness: the YAML rules in every section and in --set
+# ----------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("setting, needles", [
+    ("continuation.period='2'", ("continuation.period", "not text")),
+    ("continuation={omega: {start: true, stop: 3.0}}", ("continuation.omega.start", "not true/false")),
+    ("continuation={omega: {start: 1.0e-9, stop: 3.0}}", ("continuation.omega.start", "0.0001 to 10000 rad/s")),
+    ("continuation={omega: {start: 2.0, stop: 1.0e300}}", ("continuation.omega.stop", "0.0001 to 10000 rad/s")),
+    ("continuation={parameter: gamma, omega: 2.5, gamma: {start: 0.5, stop: 1.0e12}}",
+     ("continuation.gamma.stop", "at most 1e+06")),
+    ("continuation.segments=1.5", ("continuation.segments", "whole number")),
+    ("continuation.max_points=yes", ("continuation.max_points", "not true/false")),
+    ("continuation.channels=!!set {z1, z2}", ("--set continuation.channels", "!!set")),
+    ("continuation.period=" + "7" * 5000, ("--set continuation.period", "5000 digits")),
+], ids=["period-text", "start-bool", "omega-tiny", "omega-huge", "gamma-huge", "segments-real", "points-yes", "set-tag",
+        "huge-int"])
+def test_check_refuses_what_the_case_file_rules_refuse(invoke_cli, write_case, tmp_path, setting, needles):
+    case = write_case(ONE_NODE)
+    msg = assert_refused(invoke_cli("check", case, "--set", setting), tmp_path, *needles, keep=(case,))
+    assert len(msg) < 600  # one paragraph, not the value echoed back
+
+
+def test_a_set_tag_in_the_case_file_is_refused_with_its_line(invoke_cli, write_case, tmp_path):
+    case = write_case(ONE_NODE.replace("channels: [z1, z2]}", "channels: !!set {z1, z2}}"))
+    assert_refused(invoke_cli("continue", case), tmp_path, "line 6", "!!set", keep=(case,))
+
+
+def test_check_estimates_what_continue_takes(invoke_cli, write_case):
+    case = write_case(ONE_NODE)
+    res = invoke_cli("check", case)
+    assert res.returncode == 0, res.stderr
+    line = next(x for x in res.stdout.splitlines() if x.startswith("#   continue:"))
+    assert "on this machine" in line and " s " in line + " "

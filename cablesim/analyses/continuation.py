@@ -144,6 +144,9 @@ class ContinuationResult:
     start_failure: str = ""
     #: Plausibility warnings (one paragraph each), also stored in the result file.
     warnings: list = field(default_factory=list)
+    #: The kind of failure of the first orbit: ``SLACK``, ``NONFINITE``, ``INNER_SOLVE``, or
+    #: ``NEWTON`` (no convergence), "" when it was computed.
+    start_cause: str = ""
 
     @property
     def n_points(self) -> int:
@@ -185,6 +188,12 @@ def _start_failure(diagram) -> str:
     if failure is not None and failure.name in _FAILURE_TEXT:
         return f"on the first orbit {_FAILURE_TEXT[failure.name]}"
     return "Newton's method did not converge on the first orbit, nor from a response integrated towards steady"
+
+
+def _start_cause(diagram) -> str:
+    """:attr:`ContinuationResult.start_cause` of a diagram whose first orbit failed."""
+    failure = getattr(diagram.branches[0], "failure", None) if diagram.branches else None
+    return failure.name if failure is not None and failure.name in _FAILURE_TEXT else "NEWTON"
 
 
 def _grazing_points(diagram, parameter: str, fixed: float, idx: np.ndarray, dim: int = 2) -> list:
@@ -349,8 +358,9 @@ def run_continuation(
     result = ContinuationResult(
         parameter=spec.parameter, start=rng.start, stop=rng.stop, fixed=fixed, channels=names, branches=branches,
         bifurcations=bifs, analysis=static.analysis, modal_omega=static.modes.omega.copy(), case_name=case.name,
-        case_text=case.text, stats=stats, start_failure=_start_failure(diagram),
+        case_text=case.text, stats=stats, start_failure=_start_failure(diagram), warnings=list(static.warnings),
     )
+    result.start_cause = _start_cause(diagram) if result.start_failure else ""
     if interrupted:
         result.complete = False
         stats["wall"] = time.perf_counter() - t0

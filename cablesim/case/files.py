@@ -15,7 +15,7 @@ from ..errors import CablesimError
 from . import strict_yaml
 from .model import Case
 from .numbers import DURATION, RTOL, TIME_STEP, check_flag
-from .sections import HINTS, FigureSpec
+from .sections import HINTS, UNION_TAG, FigureSpec
 
 EXAMPLE_RESOURCE = "paper-example.yaml"
 
@@ -55,6 +55,8 @@ def _yaml(text: str, source: str):
 def _field_name(loc) -> str:
     parts = []
     for p in loc:
+        if isinstance(p, str) and p.startswith(UNION_TAG):  # which member of a union: not a key
+            continue
         if isinstance(p, int):
             parts.append(f"[{p + 1}]")
         else:
@@ -98,10 +100,13 @@ def apply_overrides(data: dict, overrides, source: str) -> dict:
             if not isinstance(child, dict):
                 raise CablesimError(f"--set {key}: `{part}` in {source} is not a section.")
             node = child
+        shown = repr(value) if len(value) <= 60 else repr(value[:40] + " ... " + value[-8:])
         try:
             node[parts[-1]] = strict_yaml.load(value)
-        except (yaml.YAMLError, strict_yaml.StrictYamlError, RecursionError):
-            raise CablesimError(f"--set {key}: the value {value!r} is not valid YAML.") from None
+        except strict_yaml.StrictYamlError as exc:
+            raise CablesimError(f"--set {key}: the value {shown} is refused: {exc}.", field=key.strip()) from None
+        except (yaml.YAMLError, RecursionError):
+            raise CablesimError(f"--set {key}: the value {shown} is not valid YAML.", field=key.strip()) from None
     return data
 
 

@@ -26,6 +26,7 @@ Layout (with the root attributes of every cablesim file, see :mod:`cablesim.io.h
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import h5py
@@ -49,6 +50,7 @@ def write_continuation(path: str | Path, res) -> Path:
                          case_name=res.case_name).items():
             g.attrs[k] = v
         g.attrs["complete"] = bool(getattr(res, "complete", True))  # False: interrupted, the orbits until then
+        g.attrs["warnings"] = json.dumps(list(getattr(res, "warnings", ())))  # plausibility warnings
         g.attrs["channels"] = np.array(res.channels, dtype="S")
         for k, v in res.stats.items():
             g.attrs[f"cost_{k}"] = v

@@ -19,7 +19,7 @@ from .hdf5 import describe_result, is_complete_result
 from .naming import remove_figures, replacing_note
 from .paths import beside, check_room
 from .report import history_summary
-from .terminal import LazyBar, say_error
+from .terminal import LazyBar, say_error, say_warnings
 
 
 #: Room allowed for each PNG a run draws, bytes (the figures of a one-node history: 70-190 kB).
@@ -77,6 +77,7 @@ def finish_history(run, out: Path, plot: bool, channels, wall: float, full: bool
     late = held.hit or interrupts.received() is not None  # a signal after the time loop: the run is whole
     draw = plot and hist.t.size > 1 and hist.status is not Status.INTERRUPTED and not late
     pngs = run.plot(target.with_suffix(""), channels=channels) if draw else []
+    say_warnings(hist.warnings)
     echo(history_summary(case, hist, run.integrator, wall, full=full))
     echo(f"\nWrote {target}" + (" and " + ", ".join(str(p) for p in pngs) if pngs else ""))
     if late and hist.completed:

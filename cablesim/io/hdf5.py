@@ -275,6 +275,7 @@ def write_history(path: str | Path, hist, case_text: str, command: str, extra_at
         g.attrs["status_code"] = int(hist.status)
         g.attrs["t_stop"] = np.nan if hist.t_stop is None else hist.t_stop
         g.attrs["completed"] = hist.completed
+        g.attrs["warnings"] = json.dumps(list(getattr(hist, "warnings", ())))  # plausibility warnings
         for k, v in hist.settings.items():
             g.attrs[k] = v
         for k, v in (extra_attrs or {}).items():
@@ -502,11 +503,22 @@ def read_history(path):
     t_stop = None if t_stop is None or not np.isfinite(float(t_stop)) else float(t_stop)
     attrs.pop("forced", None)  # derived from omega
     attrs.pop("units", None)  # the units of these attributes
+    warnings = _warnings(attrs.pop("warnings", "[]"))
     return HistoryResult(
         t=data["t"], z=data["z"], v=data["v"], zc=zc, ze=ze, T=data["T"], residual=data["residual"],
         y0=data["y0"], T0=data["T0"], omega=omega, analysis=analysis, integrator=integrator,
         status=status, message=message, t_stop=t_stop, modal_omega=modal, settings=attrs, dof=dof, slack=slack,
+        warnings=warnings,
     )
+
+
+def _warnings(text) -> tuple[str, ...]:
+    """The plausibility warnings stored as a JSON list (none if unreadable)."""
+    try:
+        value = json.loads(attr_text(text))
+    except ValueError:
+        return ()
+    return tuple(str(w) for w in value) if isinstance(value, list) else ()
 
 
 def _check_history_shapes(path, data: dict, zc, ze) -> None:

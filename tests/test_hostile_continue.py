@@ -427,3 +427,50 @@ def test_check_estimates_what_continue_takes(invoke_cli, write_case):
     assert res.returncode == 0, res.stderr
     line = next(x for x in res.stdout.splitlines() if x.startswith("#   continue:"))
     assert "on this machine" in line and " s " in line + " "
+
+
+# ----------------------------------------------------------------------------------------------
+# Resumes: journal records are checked like new results
+# ----------------------------------------------------------------------------------------------
+@pytest.fixture
+def interrupted_sweep(invoke_cli, write_case, tmp_path, monkeypatch):
+    """A sweep of the one-node cable stopped by Ctrl-C after its first point: (case, journal)."""
+    import cablesim.cli
+    from cablesim.io.terminal import LazyBar
+
+    class Stop(LazyBar):
+        def set(self, done, length=None):
+            super().set(done, length)
+            if done >= 1:
+                os.kill(os.getpid(), signal.SIGINT)
+
+    case = write_case(ONE_NODE)
+    with monkeypatch.context() as m:
+        m.setattr(cablesim.cli, "LazyBar", Stop)
+        res = invoke_cli("sweep", case, "-o", "s.h5", "--jobs", "1", "--no-plot")
+    assert res.returncode == 130, (res.stderr, res.exception)
+    journal = tmp_path / "s.h5.journal"
+    assert len([x for x in journal.read_text().splitlines() if x.strip()]) == 2  # settings and one point
+    return case, journal
+
+
+@pytest.mark.parametrize("value", ["NaN", "-0.5", "1e300", "Infinity"])
+def test_a_resumed_journal_record_with_an_impossible_amplitude_is_computed_again(invoke_cli, interrupted_sweep,
+                                                                                tmp_path, value):
+    import json
+
+    case, journal = interrupted_sweep
+    head, rec = journal.read_text().splitlines()[:2]
+    point = json.loads(rec)
+    good = point["amplitude"][1]
+    text = rec.replace(json.dumps(point["amplitude"]), f"[{point['amplitude'][0]}, {value}]", 1)
+    assert text != rec
+    journal.write_text(head + "\n" + text + "\n")
+    res = invoke_cli("sweep", case, "-o", "s.h5", "--jobs", "1", "--no-plot", "--resume")
+    assert res.returncode == 0, (res.stderr, res.exception)
+    assert "journal line 2 was skipped" in flat(res.stderr) and "computed again" in flat(res.stderr)
+    with h5py.File(tmp_path / "s.h5") as f:
+        amp = f["sweep/amplitude"][()]
+        omega = f["sweep/omega"][()]
+    k = int(np.argmin(np.abs(omega - point["omega"])))
+    assert np.isfinite(amp).all() and amp[k, 1] == pytest.approx(good, rel=1e-6)

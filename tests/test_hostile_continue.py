@@ -474,3 +474,23 @@ def test_a_resumed_journal_record_with_an_impossible_amplitude_is_computed_again
         omega = f["sweep/omega"][()]
     k = int(np.argmin(np.abs(omega - point["omega"])))
     assert np.isfinite(amp).all() and amp[k, 1] == pytest.approx(good, rel=1e-6)
+
+
+def test_a_signal_while_the_orbit_kernel_compiles_is_acted_on_after_it(invoke_cli, here, tmp_path, monkeypatch):
+    """The orbit kernel's entry point is compiled on every run; Ctrl-C inside numba's compiler left
+    it broken (RuntimeError, a traceback, exit status 1)."""
+    from cablesim.orbits import kernels
+
+    real, done = kernels.flow_segment.compile, []
+
+    def compile_(sig):
+        os.kill(os.getpid(), signal.SIGINT)  # Ctrl-C as the compilation starts
+        out = real(sig)
+        done.append(sig)
+        return out
+
+    monkeypatch.setattr(kernels.flow_segment, "compile", compile_)
+    res = invoke_cli("continue", here["case"], "-o", "c.h5")
+    assert done, "the compilation was cut short by the signal"
+    assert res.returncode == 130, (res.stderr, res.exception)
+    assert "before any orbit was computed" in flat(res.stderr) and not (tmp_path / "c.h5").exists()

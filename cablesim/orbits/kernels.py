@@ -47,6 +47,7 @@ import numba
 import numpy as np
 
 from ..dynamics.extremes import hermite_extreme
+from ..dynamics.interrupts import Deferred
 from ..dynamics.status import INNER_SOLVE, NONFINITE, OK, SLACK
 from ..jit import njit
 
@@ -85,7 +86,13 @@ class FlowCall:
     def __call__(self, *args):
         if self._entry is None:
             sig = tuple(numba.typeof(a) for a in args)
-            flow_segment.compile(sig)
+            # the entry point of a system's field functions is compiled on every run (about a
+            # second); a signal inside numba's compiler left it broken (RuntimeError "no compiled
+            # object yet"), so it is held off until the compilation is done, then acted on
+            with Deferred() as held:
+                flow_segment.compile(sig)
+            if held.hit:
+                raise KeyboardInterrupt
             self._entry = flow_segment.overloads[sig].entry_point
         return self._entry(*args)
 

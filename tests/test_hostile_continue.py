@@ -494,3 +494,27 @@ def test_a_signal_while_the_orbit_kernel_compiles_is_acted_on_after_it(invoke_cl
     assert done, "the compilation was cut short by the signal"
     assert res.returncode == 130, (res.stderr, res.exception)
     assert "before any orbit was computed" in flat(res.stderr) and not (tmp_path / "c.h5").exists()
+
+
+def test_sigterm_during_backbone_keeps_the_orbits_and_says_how_to_draw_them(invoke_cli, write_case, tmp_path,
+                                                                            monkeypatch):
+    import cablesim.cli_charts
+    from cablesim.io.terminal import StatusLine
+
+    class Stop(StatusLine):
+        calls = 0
+
+        def __call__(self, text):
+            super().__call__(text)
+            Stop.calls += 1
+            if Stop.calls == 3:
+                os.kill(os.getpid(), signal.SIGTERM)
+
+    monkeypatch.setattr(cablesim.cli_charts, "StatusLine", Stop)
+    case = write_case(ONE_NODE)
+    res = invoke_cli("backbone", case, "--mode", "1", "--amplitude", "0.05", "-o", "bb.h5")
+    assert res.returncode == 143, (res.stderr, res.exception)
+    assert "SIGTERM" in res.stderr and "Traceback" not in res.stderr and "incomplete" in flat(res.stderr)
+    with h5py.File(tmp_path / "bb.h5") as f:
+        assert not f["backbone"].attrs["complete"] and f["backbone/omega"].size >= 3
+    assert invoke_cli("plot", "bb.h5").returncode == 0

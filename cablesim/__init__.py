@@ -55,7 +55,8 @@ The package, from the bottom layer up (a module imports only from layers below i
   ``cli_results``: ``cablesim export`` and ``cablesim rerun``; ``cli_figures``: ``--format``,
   ``--width`` and ``--dpi`` on every command that draws; ``cli_views``: the commands that show
   results, ``cablesim animate`` and ``cablesim report``; ``warmup``: ``cablesim compile``'s
-  tiny runs).
+  tiny runs; ``cli_guard``: the checks of ``cablesim continue``'s inputs before it computes,
+  and its run).
 """
 
 from .version import __version__

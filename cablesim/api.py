@@ -359,7 +359,8 @@ def continuation(
     Raises
     ------
     cablesim.analyses.charts.Interrupted
-        Ctrl-C or SIGTERM while the curves were traced; its ``result`` keeps what was done.
+        Ctrl-C or SIGTERM while the branches or the curves were traced; its ``result`` keeps what
+        was done (``complete`` False).
     """
     return ContinuationRun(case, run_continuation(case, analysis, progress, loci_progress))
 

@@ -27,10 +27,10 @@ os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
 
 import typer
 
-from . import cli_charts, cli_figures, cli_results, cli_views
+from . import cli_charts, cli_figures, cli_guard, cli_results, cli_views
 from .errors import CablesimError
 from .io.terminal import (ANALYSIS_OPT, CASE_ARG, DT_OPT, FORCE_OPT, INTEGRATOR_OPT, MODES_DRAWN_OPT, MODES_OPT, RTOL_OPT, SET_OPT, SLACK_OPTION,
-                           SNAPSHOTS_OPT, STAMP_OPT, Analysis, CommandGroup, IntegratorName, LazyBar, SlackPolicy, StatusLine, compiling,
+                           SNAPSHOTS_OPT, STAMP_OPT, Analysis, CommandGroup, IntegratorName, LazyBar, SlackPolicy, compiling,
                            say_error, say_warnings)
 from .version import __version__
 
@@ -305,7 +305,7 @@ def history(
         planned = api.plan_history_run(case, omega, dur, output_step, analysis.value if analysis else None,
                                        integrator.value if integrator else None)
         say_warnings(planned.plan.static.warnings)
-        guard(planned.cost(), force, "Shorten --duration, raise --output-step or integrator.dt", out, _note)
+        guard(planned.cost(), force, "Shorten --duration, raise --output-step or integrator.dt", out, _note, 5 * plot)
         _effective(ctx, output=out, omega=w, duration=dur, output_step=planned.plan.output_step,
                    integrator={"name": planned.plan.integrator.name, **planned.plan.integrator.settings()})
         run, wall = simulate(planned, dur, notice, quiet=_OUT["quiet"])
@@ -363,7 +363,7 @@ def free_vibration(
                                               analysis.value if analysis else None,
                                               integrator.value if integrator else None)
         say_warnings(planned.plan.static.warnings)
-        guard(planned.cost(), force, "Shorten --duration, raise --output-step or integrator.dt", out, _note)
+        guard(planned.cost(), force, "Shorten --duration, raise --output-step or integrator.dt", out, _note, 5 * plot)
         _effective(ctx, output=out, mode=k, peak_velocity=v, duration=planned.plan.duration,
                    output_step=planned.plan.output_step,
                    integrator={"name": planned.plan.integrator.name, **planned.plan.integrator.settings()})
@@ -432,7 +432,7 @@ def sweep(
         _replace(out, None)  # the note now; the old figure goes once this sweep is complete
     with compiling(_note) as notice:
         guard(api.sweep_cost(case, an, integ), force, "Use fewer points (sweep.omega), a shorter sweep.duration "
-              "or a larger integrator.dt", out, _note)
+              "or a larger integrator.dt", out, _note, 1 * plot)
         _effective(ctx, output=out)
         _run_sweep(ctx, case, out, jobs, resume, an, integ, None if backend == Backend.loky else "dask", scheduler, plot,
                    notice)
@@ -491,31 +491,20 @@ def continue_(
     """Every periodic response over the continuation: range, stable and unstable, with Floquet
     multipliers and the bifurcations (folds, period doublings, Neimark-Sacker) where responses
     appear, vanish or jump."""
-    import time
-
     from .case import load_case
 
     _begin(ctx)
     case = load_case(case_file, overrides)[0]
     out = output if output is not None else Path("runs") / case.name / (
         "continuation" + (f"-{analysis.value}" if analysis else "") + ".h5")
-    if overlay is not None and not overlay.is_file():
-        raise CablesimError(f"--overlay {overlay}: no such sweep file; give the output of cablesim sweep.")
-    _check_outputs(out, case_file, (lambda o: [o.with_suffix(".png"), *cli_charts.chart_pngs(case, o)]) if plot else [])
-    _effective(ctx, output=out)
-    from . import api
-    from .io.report import continuation_summary
-    from .plots.continuation import plot_continuation
+    from .io.paths import check_output
 
-    t0 = time.perf_counter()
-    with compiling(_note) as notice, StatusLine(quiet=_OUT["quiet"]) as status:
-        run = cli_charts.interruptible(lambda: api.continuation(case, analysis.value if analysis else None, progress=cli_charts.branch_status(
-            status), loci_progress=cli_charts.loci_status(status)), case, out, "the response and the curves traced")
-    _replace(out, "continuation")
-    run.to_hdf5(out)
-    _echo(continuation_summary(case, run.result, time.perf_counter() - t0 - notice.seconds()) + cli_charts.loci_text(run.result))
-    drawn = f" and {plot_continuation(out, out.with_suffix('.png'), overlay=overlay)}" if plot else ""
-    _echo(f"\nWrote {out}" + drawn + (cli_charts.chart_text(out, run.result) if plot else ""))
+    pngs = (lambda o: [o.with_suffix(".png"), *cli_charts.chart_pngs(case, o)]) if plot else (lambda o: [])
+    check_output(out, inputs=cli_guard.continue_inputs(case_file, overlay), companions=pngs,
+                 need_bytes=cli_guard.continue_room(len(pngs(out))))
+    say_warnings(cli_guard.check_overlay(overlay, case))
+    _effective(ctx, output=out)
+    cli_guard.run_continue(case, out, analysis.value if analysis else None, overlay, plot, _note, _echo, _OUT["quiet"])
 
 
 @app.command()

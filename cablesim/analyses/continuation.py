@@ -20,6 +20,7 @@ from ..errors import CablesimError
 from ..dynamics.steady import SteadyCriterion, steady_response
 from ..modal import COUPLED, IN_PLANE
 from ..orbits import OrbitPoint, Settings, continue_branches
+from ..orbits.diagram import BranchEnd, BranchesInterrupted
 from ..orbits.stability import frequency_ratio
 from .charts import Interrupted, finish_loci, need_planar
 from .setup import build_equations, frequency_of_interest, make_integrator
@@ -136,8 +137,16 @@ class ContinuationResult:
     loci: list = field(default_factory=list)
     codim2: list = field(default_factory=list)
     gamma_range: tuple | None = None
-    #: False when an interruption came while the curves were traced (what was done is kept).
+    #: False when an interruption came while the branches or the curves were traced (what was
+    #: done is kept).
     complete: bool = True
+    #: Why no orbit could be computed at the start of the range ("" if one was).
+    start_failure: str = ""
+    #: Plausibility warnings (one paragraph each), also stored in the result file.
+    warnings: list = field(default_factory=list)
+    #: The kind of failure of the first orbit: ``SLACK``, ``NONFINITE``, ``INNER_SOLVE``, or
+    #: ``NEWTON`` (no convergence), "" when it was computed.
+    start_cause: str = ""
 
     @property
     def n_points(self) -> int:
@@ -145,7 +154,8 @@ class ContinuationResult:
         return int(sum(b.parameter.size for b in self.branches))
 
 
-def _channels(case: Case) -> tuple[list[str], np.ndarray]:
+def continuation_channels(case: Case) -> tuple[list[str], np.ndarray]:
+    """The channels a continuation reports (``z<k>`` names) and their DOF indices."""
     dim = case.dim
     n_dof = dim * case.cable.n_nodes
     names = case.continuation.channels or case.history.channels or [f"z{i + 1}" for i in range(n_dof)]
@@ -165,6 +175,25 @@ def _end_text(br) -> str:
     if failure is not None and failure.name in _FAILURE_TEXT:
         text += f" ({_FAILURE_TEXT[failure.name]})"
     return text
+
+
+def _start_failure(diagram) -> str:
+    """Why the first orbit could not be computed, in words ("" when it was)."""
+    if any(br.points for br in diagram.branches) or not diagram.branches:
+        return ""
+    br = diagram.branches[0]
+    failure = getattr(br, "failure", None)
+    if br.end != BranchEnd.START_FAILED:
+        return ""
+    if failure is not None and failure.name in _FAILURE_TEXT:
+        return f"on the first orbit {_FAILURE_TEXT[failure.name]}"
+    return "Newton's method did not converge on the first orbit, nor from a response integrated towards steady"
+
+
+def _start_cause(diagram) -> str:
+    """:attr:`ContinuationResult.start_cause` of a diagram whose first orbit failed."""
+    failure = getattr(diagram.branches[0], "failure", None) if diagram.branches else None
+    return failure.name if failure is not None and failure.name in _FAILURE_TEXT else "NEWTON"
 
 
 def _grazing_points(diagram, parameter: str, fixed: float, idx: np.ndarray, dim: int = 2) -> list:
@@ -271,8 +300,8 @@ def run_continuation(
     Raises
     ------
     Interrupted
-        Ctrl-C or SIGTERM while the bifurcation curves were traced: ``result`` holds the response
-        and the curves traced so far (``complete`` False).
+        Ctrl-C or SIGTERM while the branches or the bifurcation curves were traced: ``result``
+        holds the orbits and the curves traced so far (``complete`` False).
     """
     spec = case.continuation
     if spec is None:
@@ -291,7 +320,7 @@ def run_continuation(
     omega0 = rng.start if spec.parameter == "omega" else fixed
     gamma0 = rng.start if spec.parameter == "gamma" else fixed
     eom = build_equations(case, static, omega=omega0, load_scale=1.0)
-    names, idx = _channels(case)
+    names, idx = continuation_channels(case)
     initial = None
     if spec.start_from == "history":
         initial = _integrated_start(case, static, omega0, gamma0, names, idx)
@@ -302,11 +331,15 @@ def run_continuation(
             progress(point)
         return None
 
-    diagram = continue_branches(
-        eom, spec.parameter, rng.start, rng.stop, period=spec.period, switch_branches=spec.switch_branches,
-        callback=callback, gamma=fixed if spec.parameter == "omega" else 1.0, initial_state=initial,
-        segments=spec.segments, max_period=spec.max_period, settings=Settings(max_points=spec.max_points),
-    )
+    interrupted = False
+    try:
+        diagram = continue_branches(
+            eom, spec.parameter, rng.start, rng.stop, period=spec.period, switch_branches=spec.switch_branches,
+            callback=callback, gamma=fixed if spec.parameter == "omega" else 1.0, initial_state=initial,
+            segments=spec.segments, max_period=spec.max_period, settings=Settings(max_points=spec.max_points),
+        )
+    except BranchesInterrupted as exc:  # keep the orbits computed so far
+        diagram, interrupted = exc.diagram, True
     branches = [_branch(k, br, spec.parameter, fixed, idx, case.dim) for k, br in enumerate(diagram.branches)
                 if br.points]
     other = IN_PLANE if case.dim == 2 else COUPLED
@@ -325,8 +358,13 @@ def run_continuation(
     result = ContinuationResult(
         parameter=spec.parameter, start=rng.start, stop=rng.stop, fixed=fixed, channels=names, branches=branches,
         bifurcations=bifs, analysis=static.analysis, modal_omega=static.modes.omega.copy(), case_name=case.name,
-        case_text=case.text, stats=stats,
+        case_text=case.text, stats=stats, start_failure=_start_failure(diagram), warnings=list(static.warnings),
     )
+    result.start_cause = _start_cause(diagram) if result.start_failure else ""
+    if interrupted:
+        result.complete = False
+        stats["wall"] = time.perf_counter() - t0
+        raise Interrupted(result)
     if spec.loci:
         result.loci, result.codim2, more, interrupted = finish_loci(case, eom, diagram, idx, loci_progress)
         result.gamma_range = (spec.gamma.start, spec.gamma.stop)

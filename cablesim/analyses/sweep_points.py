@@ -181,6 +181,9 @@ def _numbers(x, n: int, none_ok: bool = True) -> bool:
 
 
 PER_CHANNEL = ("amplitude", "halfrange", "response_frequency")
+#: Largest value of each per-channel field a sweep computes (m, m, rad/s): a cable spans at most
+#: 1e5 m and frequencies are at most 1e4 rad/s, so anything beyond is a damaged record.
+RECORD_BOUND = {"amplitude": 1e6, "halfrange": 1e6, "response_frequency": 1e6}
 REQUIRED = ("curve", "omega", *PER_CHANNEL, "period", "steady", "t_end", "code", "floquet")
 
 
@@ -196,10 +199,16 @@ def _check_json(rec, n_channels: int, n_dof: int) -> None:
         raise BadRecord(f"its frequency {rec['omega']!r} is not a number")
     if not all(_numbers(rec[k], n_channels) for k in PER_CHANNEL):
         raise BadRecord(f"its per-channel values are not {n_channels} numbers each")
+    for k in PER_CHANNEL:  # the writer stores null for what is not finite: anything else is damage
+        bad = [v for v in rec[k] if v is not None and not (math.isfinite(v) and 0.0 <= v <= RECORD_BOUND[k])]
+        if bad:
+            raise BadRecord(f"its {k} {bad[0]!r} is not a value a sweep computes (from 0 to {RECORD_BOUND[k]:g})")
     if rec["code"] not in {int(s) for s in Status}:
         raise BadRecord(f"its status code {rec['code']} is unknown")
     if not isinstance(rec["steady"], bool) or not _numbers([rec["t_end"], rec.get("wall", 0.0)], 2, none_ok=False):
         raise BadRecord("steady must be true or false, t_end and wall numbers")
+    if not (math.isfinite(rec["t_end"]) and rec["t_end"] >= 0.0):
+        raise BadRecord(f"its end time {rec['t_end']!r} is not a time a sweep reaches")
     if not _numbers([rec["floquet"]], 1):
         raise BadRecord("floquet must be a number or null")
     final, n = rec.get("final_state"), 3 * n_dof

@@ -16,7 +16,7 @@ from . import strict_yaml
 from .model import Case
 from .numbers import DURATION, RTOL, TIME_STEP, check_flag
 from .placement import placement_lines, read_placements
-from .sections import HINTS, FigureSpec
+from .sections import HINTS, UNION_TAG, FigureSpec
 
 EXAMPLE_RESOURCE = "paper-example.yaml"
 
@@ -56,6 +56,8 @@ def _yaml(text: str, source: str):
 def _field_name(loc) -> str:
     parts = []
     for p in loc:
+        if isinstance(p, str) and p.startswith(UNION_TAG):  # which member of a union: not a key
+            continue
         if isinstance(p, int):
             parts.append(f"[{p + 1}]")
         else:
@@ -99,10 +101,13 @@ def apply_overrides(data: dict, overrides, source: str) -> dict:
             if not isinstance(child, dict):
                 raise CablesimError(f"--set {key}: `{part}` in {source} is not a section.")
             node = child
+        shown = repr(value) if len(value) <= 60 else repr(value[:40] + " ... " + value[-8:])
         try:
             node[parts[-1]] = strict_yaml.load(value)
-        except (yaml.YAMLError, strict_yaml.StrictYamlError, RecursionError):
-            raise CablesimError(f"--set {key}: the value {value!r} is not valid YAML.") from None
+        except strict_yaml.StrictYamlError as exc:
+            raise CablesimError(f"--set {key}: the value {shown} is refused: {exc}.", field=key.strip()) from None
+        except (yaml.YAMLError, RecursionError):
+            raise CablesimError(f"--set {key}: the value {shown} is not valid YAML.", field=key.strip()) from None
     return data
 
 
@@ -286,6 +291,12 @@ def _expanded_text(text: str, data: dict, case: Case, overrides) -> str:
     return f"{EXPANDED_MARK}\n{original}{applied}{placement_lines(case.placements)}{body}"
 
 
+def name_from_stem(stem: str) -> str:
+    """A valid case name (a letter or digit first, then letters, digits, '.', '_', '-') made from
+    a file's stem: ``"my run"`` -> ``"my-run"``."""
+    return re.sub(r"[^A-Za-z0-9._-]", "-", stem).lstrip("._-") or "case"
+
+
 def load_case(path: str | Path | None, overrides=None) -> tuple[Case, str]:
     """Read a case file, or the embedded paper example if ``path`` is None.
 
@@ -305,9 +316,7 @@ def load_case(path: str | Path | None, overrides=None) -> tuple[Case, str]:
         return case, case.text
     p = Path(path)
     text = read_text_file(p, "Case file", MAX_CASE_BYTES)
-    # A valid case name starts with a letter or digit; derive one from the file stem.
-    stem = re.sub(r"[^A-Za-z0-9._-]", "-", p.stem).lstrip("._-") or "case"
-    case = parse_case(text, source=str(p), default_name=stem, overrides=overrides, record_name=True)
+    case = parse_case(text, source=str(p), default_name=name_from_stem(p.stem), overrides=overrides, record_name=True)
     return case, case.text
 
 

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import math
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, Union
 
 import numpy as np
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import (BaseModel, BeforeValidator, ConfigDict, Discriminator, Field, Tag, ValidationError, field_validator,
+                      model_validator)
 from pydantic_core import PydanticCustomError
 
 from ..names import CONTINUATION_PARAMETERS, DIRECTIONS
@@ -460,11 +461,15 @@ class SweepSpec(StrictModel):
         return np.sort(w) if self.direction != "independent" else w
 
 
+#: A load factor gamma (scales FL and the support amplitudes).
+GAMMA = real(0.0, 1e6, lo_open=True)
+
+
 class ParameterRange(StrictModel):
     """A range of a continuation parameter: from ``start`` (where the first branch starts) to ``stop``."""
 
-    start: float = Field(gt=0, description="first value")
-    stop: float = Field(gt=0, description="last value")
+    start: GAMMA = Field(description="first value")
+    stop: GAMMA = Field(description="last value")
 
     @model_validator(mode="after")
     def _distinct(self):
@@ -473,29 +478,52 @@ class ParameterRange(StrictModel):
         return self
 
 
+class OmegaRange(ParameterRange):
+    """A range of the forcing frequency, rad/s (``continuation.omega``)."""
+
+    start: OMEGA = Field(description="first frequency, rad/s")
+    stop: OMEGA = Field(description="last frequency, rad/s")
+
+
 class LociRange(ParameterRange):
     """The range of gamma over which bifurcation curves are continued (``continuation.gamma``
     with ``loci: true``), and the gamma of the frequency response whose bifurcations start them."""
 
-    at: float | None = Field(default=None, gt=0, description="gamma of the response curve (default: stop)")
-    levels: tuple[float, ...] = Field(default=(), description=(
+    at: GAMMA | None = Field(default=None, description="gamma of the response curve (default: stop)")
+    levels: tuple[GAMMA, ...] = Field(default=(), description=(
         "values of gamma at which each curve's crossings are located (special: level), e.g. [0.5, 2]"))
+
+
+#: Marks a tag of a union in the location of a validation error; the messages leave it out.
+UNION_TAG = "~"
+
+
+def _range_or_value(v) -> str:
+    return f"{UNION_TAG}range" if isinstance(v, (dict, ParameterRange)) else f"{UNION_TAG}value"
+
+
+def range_or_value(range_type, value_type):
+    """A mapping ``{start, stop}`` validated as ``range_type``, anything else as the number
+    ``value_type`` (so that a message is about the one the user wrote, not both)."""
+    return Annotated[Union[Annotated[range_type, Tag(f"{UNION_TAG}range")], Annotated[value_type, Tag(f"{UNION_TAG}value")]],
+                     Discriminator(_range_or_value)]
 
 
 class ContinuationSpec(StrictModel):
     """Periodic responses by shooting and pseudo-arclength continuation (``continuation:``)."""
 
     parameter: Literal[CONTINUATION_PARAMETERS] = Field(default="omega", description="omega | gamma")
-    omega: ParameterRange | float = Field(description="range (parameter omega) or value, rad/s")
-    gamma: LociRange | float = Field(default=1.0, description="range (parameter gamma, or loci) or value; scales FL")
-    period: int = Field(default=1, ge=1, le=16, description="period of the first branch, forcing periods")
+    omega: range_or_value(OmegaRange, OMEGA) = Field(description="range (parameter omega) or value, rad/s")
+    gamma: range_or_value(LociRange, GAMMA) = Field(default=1.0, description=(
+        "range (parameter gamma, or loci) or value; scales FL"))
+    period: integer(1, 16) = Field(default=1, description="period of the first branch, forcing periods")
     switch_branches: bool = Field(default=True, description="follow every period doubling onto its 2p branch")
     channels: tuple[str, ...] | None = Field(default=None, description="DOF reported, e.g. [z2, z4]")
     start_from: Literal["linear", "history"] = Field(
         default="linear", description="first orbit from the linear response, or integrated from rest")
-    segments: int = Field(default=1, ge=1, le=64, description="shooting segments per orbit (multiple shooting)")
-    max_period: int = Field(default=8, ge=1, le=64, description="no branch switching beyond this period")
-    max_points: int = Field(default=2000, ge=2, le=100_000, description="most points per branch")
+    segments: integer(1, 64) = Field(default=1, description="shooting segments per orbit (multiple shooting)")
+    max_period: integer(1, 64) = Field(default=8, description="no branch switching beyond this period")
+    max_points: integer(2, 100_000) = Field(default=2000, description="most points per branch")
     loci: bool = Field(default=False, description=(
         "continue every fold, period doubling and Neimark-Sacker point found in omega and gamma "
         "(gamma: {start, stop, at}): the stability chart"))

@@ -9,7 +9,9 @@ first). This loader
 - keeps octal, base-60, hexadecimal and binary spellings as text (:class:`AmbiguousNumber`), so
   that a field expecting a number refuses them and says how YAML 1.1 would have read them;
 - reads ``1.0e9`` (a string to YAML 1.1) as the float it looks like;
-- limits nesting depth, alias use (no "billion laughs") and the expanded size of the document.
+- limits nesting depth, alias use (no "billion laughs") and the expanded size of the document;
+- refuses the explicit tags that make values no field takes (``!!set``, ``!!omap``, ``!!pairs``,
+  ``!!binary``, ``!!timestamp``) and whole numbers of more digits than any double holds.
 
 Every refusal is a :class:`StrictYamlError` carrying the line; :mod:`cablesim.case.files` turns
 it into a message naming the file.
@@ -174,6 +176,30 @@ def _construct_ambiguous(loader, node):
     return value
 
 
+#: Most digits of a whole number (a double holds up to about 1.8e308; Python refuses to read
+#: integers of more than 4300 digits).
+MAX_DIGITS = 310
+#: Explicit YAML tags whose values no case-file field takes (a `!!set` would become a list).
+_REFUSED_TAGS = {"set": "a set", "omap": "an ordered mapping", "pairs": "a list of pairs",
+                 "binary": "binary data", "timestamp": "a date"}
+
+
+def _construct_int(loader, node):
+    digits = sum(ch.isdigit() for ch in node.value)
+    if digits > MAX_DIGITS:
+        raise StrictYamlError(f"a whole number of {digits} digits is written (`{node.value[:12]}...`), beyond any value a "
+                              "case takes (a double holds up to about 1.8e308); write a number in range, e.g. 1.0e9",
+                              _line(node))
+    return yaml.SafeLoader.construct_yaml_int(loader, node)
+
+
+def _refuse_tag(word: str):
+    def construct(loader, node):
+        raise StrictYamlError(f"`{node.tag.replace('tag:yaml.org,2002:', '!!')}` makes {word}, which no case-file field "
+                              "takes; write a plain value or list without the tag", _line(node))
+    return construct
+
+
 def _install_resolvers() -> None:
     # Drop YAML 1.1's number and boolean resolvers, then add the strict ones.
     StrictLoader.yaml_implicit_resolvers = {
@@ -185,6 +211,9 @@ def _install_resolvers() -> None:
     StrictLoader.add_implicit_resolver("tag:yaml.org,2002:int", _INT, list("-+0123456789"))
     StrictLoader.add_implicit_resolver("tag:yaml.org,2002:float", _FLOAT, list("-+0123456789."))
     StrictLoader.add_constructor(_AMBIGUOUS_TAG, _construct_ambiguous)
+    StrictLoader.add_constructor("tag:yaml.org,2002:int", _construct_int)
+    for name, word in _REFUSED_TAGS.items():
+        StrictLoader.add_constructor(f"tag:yaml.org,2002:{name}", _refuse_tag(word))
 
 
 _install_resolvers()

@@ -123,6 +123,9 @@ class HistoryResult:
     slack : SlackRecord, optional
         Slack events and per-segment peak tension, time slack and episodes (None when not
         recorded).
+    warnings : tuple of str
+        Plausibility warnings, one paragraph each (strains beyond the model's range, a drift of
+        eq. 15 beyond its bound); stored in the file (``/history`` attribute ``warnings``).
     """
 
     t: np.ndarray
@@ -144,6 +147,7 @@ class HistoryResult:
     settings: dict = field(default_factory=dict)
     dof: tuple | None = None
     slack: SlackRecord | None = None
+    warnings: tuple = ()
 
     @property
     def dof_numbers(self) -> tuple:

@@ -243,50 +243,51 @@ def simulate(
                 progress(min(state.t, duration))
             spent = time.perf_counter() - wall
             steps = float(np.clip(steps * np.clip(chunk_seconds / max(spent, 1e-4), 0.5, 4.0), 1.0, MAX_CHUNK_STEPS))
-    if code != OK:
-        status, t_stop = Status(code), state.t
-        message = failure_text(code, state.t, eom, integrator, state.s).rstrip(".")
-    m = written + 1
-    t = np.concatenate([[0.0], t_out[:written]])
-    S = out[:m]
-    zc = np.empty((m, nd))
-    ze = np.empty((m, nd))
-    T = np.empty((m, eom.cable.n_segments))
-    residual = np.empty(m)
-    slack = np.empty(m, dtype=np.int64)
-    _observe_all(model, t, S, np.array(eom.F1, dtype=float), zc, ze, T, residual, slack, approximate_workspace(eom.cable.n_nodes, eom.cable.dim), split)
-    split, bad = _bad_instants(eom, S, T, residual, zc, ze, split)
-    if bad.any():
-        first = int(np.argmax(bad))
-        m = max(first, 1)
-        if status is Status.COMPLETED or first < written:
-            status, t_stop = Status.OUTPUT_NONFINITE, float(t[first])
-            message = f"stopped at t = {t[first]:.6g} s: {Status.OUTPUT_NONFINITE.text}"
-    record = _slack_record(eom, state, T[:m], t[:m], S[:m]) if eom.exact else None
-    return HistoryResult(
-        slack=record,
-        t=t[:m],
-        z=S[:m, :nd].copy(),
-        v=S[:m, nd : 2 * nd].copy(),
-        zc=zc[:m] if split else None,
-        ze=ze[:m] if split else None,
-        T=T[:m],
-        residual=residual[:m],
-        y0=eom.y0,
-        T0=eom.T0,
-        omega=eom.omega if np.any(eom.FL != 0) or eom.moving_supports else None,  # forced
-        analysis=eom.analysis,
-        integrator=integrator.name,
-        status=status,
-        message=message,
-        t_stop=t_stop,
-        modal_omega=eom.frequencies,
-        settings={
-            **{f"integrator_{k}": v for k, v in integrator.settings().items()},
-            "duration": float(duration),
-            "output_step": float(output_step),
-            "a0": eom.a0,
-            "a1": eom.a1,
-            "slack": eom.slack if eom.exact else "stop",
-        },
-    )
+        # a signal while the instants are evaluated is held off too: what was integrated is kept
+        if code != OK:
+            status, t_stop = Status(code), state.t
+            message = failure_text(code, state.t, eom, integrator, state.s).rstrip(".")
+        m = written + 1
+        t = np.concatenate([[0.0], t_out[:written]])
+        S = out[:m]
+        zc = np.empty((m, nd))
+        ze = np.empty((m, nd))
+        T = np.empty((m, eom.cable.n_segments))
+        residual = np.empty(m)
+        slack = np.empty(m, dtype=np.int64)
+        _observe_all(model, t, S, np.array(eom.F1, dtype=float), zc, ze, T, residual, slack, approximate_workspace(eom.cable.n_nodes, eom.cable.dim), split)
+        split, bad = _bad_instants(eom, S, T, residual, zc, ze, split)
+        if bad.any():
+            first = int(np.argmax(bad))
+            m = max(first, 1)
+            if status is Status.COMPLETED or first < written:
+                status, t_stop = Status.OUTPUT_NONFINITE, float(t[first])
+                message = f"stopped at t = {t[first]:.6g} s: {Status.OUTPUT_NONFINITE.text}"
+        record = _slack_record(eom, state, T[:m], t[:m], S[:m]) if eom.exact else None
+        return HistoryResult(
+            slack=record,
+            t=t[:m],
+            z=S[:m, :nd].copy(),
+            v=S[:m, nd : 2 * nd].copy(),
+            zc=zc[:m] if split else None,
+            ze=ze[:m] if split else None,
+            T=T[:m],
+            residual=residual[:m],
+            y0=eom.y0,
+            T0=eom.T0,
+            omega=eom.omega if np.any(eom.FL != 0) or eom.moving_supports else None,  # forced
+            analysis=eom.analysis,
+            integrator=integrator.name,
+            status=status,
+            message=message,
+            t_stop=t_stop,
+            modal_omega=eom.frequencies,
+            settings={
+                **{f"integrator_{k}": v for k, v in integrator.settings().items()},
+                "duration": float(duration),
+                "output_step": float(output_step),
+                "a0": eom.a0,
+                "a1": eom.a1,
+                "slack": eom.slack if eom.exact else "stop",
+            },
+        )

@@ -3,7 +3,8 @@
 Layout (with the root attributes of every cablesim file, see :mod:`cablesim.io.hdf5`):
 
 - ``/continuation`` attributes ``parameter`` (``omega`` or ``gamma``), ``start``, ``stop``,
-  ``fixed`` (the other parameter's value), ``channels``, ``case_name`` and the cost counters;
+  ``fixed`` (the other parameter's value), ``channels``, ``case_name``, ``complete`` (False: an
+  interrupted run, holding the orbits computed until then) and the cost counters;
 - ``/continuation/branches/<name>/{parameter, omega, gamma, amplitude (points x channels, max |z|
   over the orbit), halfrange, stable, trusted, multipliers (complex), state}`` with attributes
   ``period``, ``channels``, ``parent`` (-1: none) and ``end``;
@@ -25,6 +26,7 @@ Layout (with the root attributes of every cablesim file, see :mod:`cablesim.io.h
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import h5py
@@ -47,6 +49,8 @@ def write_continuation(path: str | Path, res) -> Path:
         for k, v in dict(parameter=res.parameter, start=res.start, stop=res.stop, fixed=res.fixed,
                          case_name=res.case_name).items():
             g.attrs[k] = v
+        g.attrs["complete"] = bool(getattr(res, "complete", True))  # False: interrupted, the orbits until then
+        g.attrs["warnings"] = json.dumps(list(getattr(res, "warnings", ())))  # plausibility warnings
         g.attrs["channels"] = np.array(res.channels, dtype="S")
         for k, v in res.stats.items():
             g.attrs[f"cost_{k}"] = v
@@ -103,36 +107,67 @@ def read_continuation(path: str | Path) -> dict:
     Returns
     -------
     dict
-        ``parameter``, ``start``, ``stop``, ``fixed``, ``channels``, ``case_name``, ``analysis``,
+        ``parameter``, ``start``, ``stop``, ``fixed``, ``channels``, ``case_name``, ``analysis``, ``complete``,
         ``modal`` (rad/s), ``branches`` (list of dicts with the datasets and ``name``, ``period``,
         ``parent``, ``end``, in file order), ``bifurcations`` (dict of arrays) and ``loci``
         (:func:`~cablesim.io.charts.read_loci`, None without bifurcation curves).
     """
     path = Path(path)
     with open_result(path, "continuation", "continuation", "cablesim continue") as f:
-        g = f["continuation"]
-        out = {k: g.attrs[k] for k in ("start", "stop", "fixed")}
-        out["parameter"] = attr_text(g.attrs["parameter"])
-        out["case_name"] = attr_text(g.attrs.get("case_name", path.stem))
-        out["channels"] = [attr_text(c) for c in np.asarray(g.attrs["channels"]).ravel()]
-        out["analysis"] = attr_text(f.attrs.get("analysis", "exact"))
-        out["modal"] = np.asarray(f["modal/omega"][()], dtype=float) if "modal/omega" in f else np.empty(0)
-        branches = []
-        for name, h in g["branches"].items():
-            b = {k: np.asarray(h[k][()]) for k in h}
-            if "multiplier_plane" in b:
-                b["multiplier_plane"] = np.char.decode(b["multiplier_plane"].astype("S"))
-            b["planar"] = bool(h.attrs.get("planar", False))
-            b["mirror_image"] = bool(h.attrs.get("mirror_image", False))
-            b.update(name=name, period=int(h.attrs["period"]), parent=int(h.attrs["parent"]),
-                     end=attr_text(h.attrs["end"]), index=int(h.attrs.get("index", len(branches))))
-            branches.append(b)
-        out["branches"] = sorted(branches, key=lambda b: b["index"])
-        fg = g["bifurcations"]
-        bif = {k: np.asarray(fg[k][()]) for k in fg}
-        bif["kind"] = [attr_text(k) for k in bif.get("kind", [])]
-        if "plane" in bif:
-            bif["plane"] = [attr_text(k) for k in bif["plane"]]
-        out["bifurcations"] = bif
-        out["loci"] = read_loci(g)
+        try:
+            out = _read(f, path)
+        except (KeyError, ValueError, TypeError, IndexError, AttributeError) as exc:
+            raise CablesimError(f"{path} is not a continuation file as cablesim continue writes it: {_what(exc)}. "
+                                "It may be damaged or edited; run cablesim continue again to rebuild it.") from None
+    for b in out["branches"]:
+        _check_branch(path, b, len(out["channels"]))
+    return out
+
+
+def _what(exc: Exception) -> str:
+    """The first line of an exception's text, for a message."""
+    text = str(exc).strip().strip("'\"").splitlines()
+    return f"{type(exc).__name__}: {text[0] if text else ''}".rstrip(": ")
+
+
+def _check_branch(path: Path, b: dict, n_chan: int) -> None:
+    """Refuse a branch whose datasets do not fit together (a damaged or edited file)."""
+    n = np.asarray(b["parameter"]).size
+    for key, shape in (("omega", (n,)), ("gamma", (n,)), ("stable", (n,)), ("trusted", (n,)),
+                       ("amplitude", (n, n_chan)), ("halfrange", (n, n_chan))):
+        if key not in b or np.shape(b[key]) != shape:
+            got = "is missing" if key not in b else f"has shape {np.shape(b[key])}, not {shape}"
+            raise CablesimError(f"{path} is not a continuation file as cablesim continue writes it: branch "
+                                f"{b['name']}'s {key} {got}. It may be damaged or edited; run cablesim continue "
+                                "again to rebuild it.")
+
+
+def _read(f, path: Path) -> dict:
+    """The body of :func:`read_continuation` (``f`` open)."""
+    g = f["continuation"]
+    out = {k: g.attrs[k] for k in ("start", "stop", "fixed")}
+    out["parameter"] = attr_text(g.attrs["parameter"])
+    out["complete"] = bool(g.attrs.get("complete", True))
+    out["case_name"] = attr_text(g.attrs.get("case_name", path.stem))
+    out["channels"] = [attr_text(c) for c in np.asarray(g.attrs["channels"]).ravel()]
+    out["analysis"] = attr_text(f.attrs.get("analysis", "exact"))
+    out["modal"] = np.asarray(f["modal/omega"][()], dtype=float) if "modal/omega" in f else np.empty(0)
+    branches = []
+    for name, h in g["branches"].items():
+        b = {k: np.asarray(h[k][()]) for k in h}
+        if "multiplier_plane" in b:
+            b["multiplier_plane"] = np.char.decode(b["multiplier_plane"].astype("S"))
+        b["planar"] = bool(h.attrs.get("planar", False))
+        b["mirror_image"] = bool(h.attrs.get("mirror_image", False))
+        b.update(name=name, period=int(h.attrs["period"]), parent=int(h.attrs["parent"]),
+                 end=attr_text(h.attrs["end"]), index=int(h.attrs.get("index", len(branches))))
+        branches.append(b)
+    out["branches"] = sorted(branches, key=lambda b: b["index"])
+    fg = g["bifurcations"]
+    bif = {k: np.asarray(fg[k][()]) for k in fg}
+    bif["kind"] = [attr_text(k) for k in bif.get("kind", [])]
+    if "plane" in bif:
+        bif["plane"] = [attr_text(k) for k in bif["plane"]]
+    out["bifurcations"] = bif
+    out["loci"] = read_loci(g)
     return out

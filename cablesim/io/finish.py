@@ -19,17 +19,22 @@ from .hdf5 import describe_result, is_complete_result
 from .naming import remove_figures, replacing_note
 from .paths import beside, check_room
 from .report import history_summary
-from .terminal import LazyBar, say_error
+from .terminal import LazyBar, say_error, say_warnings
 
 
-def guard(cost, force: bool, fix: str, out: Path | None, note) -> None:
+#: Room allowed for each PNG a run draws, bytes (the figures of a one-node history: 70-190 kB).
+PNG_BYTES = 400e3
+
+
+def guard(cost, force: bool, fix: str, out: Path | None, note, figures: int = 0) -> None:
     """Refuse a run above the cost limits (unless --force) or beyond this machine; say a long
-    run's estimate before it starts; refuse a disk without room for the results."""
+    run's estimate before it starts; refuse a disk without room for the results (the HDF5 file
+    and the ``figures`` PNGs drawn beside it)."""
     err = cost.refusal(force, fix)
     if err is not None:
         raise err
     if out is not None:
-        check_room(out, cost.disk)
+        check_room(out, cost.disk + PNG_BYTES * figures)
     long = cost.steps > 1e7 or cost.memory > 1e8
     note(f"estimate: {cost.text()}", verbose_only=not long)
 
@@ -67,11 +72,18 @@ def finish_history(run, out: Path, plot: bool, channels, wall: float, full: bool
     if not hist.completed and is_complete_result(out):
         target = beside(out)  # never replace a complete result with an incomplete one
     replace_result(target, "history", note)
-    run.to_hdf5(target)
-    draw = plot and hist.t.size > 1 and hist.status is not Status.INTERRUPTED
+    with interrupts.Deferred() as held:  # a signal while the file is written comes after it
+        run.to_hdf5(target)
+    late = held.hit or interrupts.received() is not None  # a signal after the time loop: the run is whole
+    draw = plot and hist.t.size > 1 and hist.status is not Status.INTERRUPTED and not late
     pngs = run.plot(target.with_suffix(""), channels=channels) if draw else []
+    say_warnings(hist.warnings)
     echo(history_summary(case, hist, run.integrator, wall, full=full))
     echo(f"\nWrote {target}" + (" and " + ", ".join(str(p) for p in pngs) if pngs else ""))
+    if late and hist.completed:
+        say_error(f"interrupted ({interrupts.signal_name()}) after the time integration had completed; {target} "
+                  f"holds the whole run. No figures were drawn (`cablesim plot {target}` draws them).")
+        raise typer.Exit(interrupts.exit_status())
     if not hist.completed:
         kept = f" The complete result {out} was kept; this run's results are in {target}." if target != out else ""
         drawn = "" if draw or not plot else f" No figures were drawn (`cablesim plot {target}` draws them)."

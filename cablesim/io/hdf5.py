@@ -25,9 +25,9 @@ says explicitly that they mark missing values.
 from __future__ import annotations
 
 import datetime
+import io
 import json
 import os
-import shutil
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -41,7 +41,7 @@ from ..dynamics.status import Status
 from ..errors import CablesimError
 from ..version import __version__
 from . import provenance
-from .paths import part_path, remove_stale_parts, write_error
+from .paths import discard, part_path, remove_stale_parts, write_error
 
 
 #: Arrays of at least this many values are written gzip-compressed.
@@ -54,6 +54,11 @@ MATRIX_DOF = 400
 @contextmanager
 def atomic_h5(path: str | Path, mode: str = "w"):
     """Open ``path`` for writing via a temporary file renamed into place on success.
+
+    The HDF5 file is built in memory and written to ``NAME.part`` in one piece by the operating
+    system's own calls, then renamed into place: a full disk is then a plain OSError (ENOSPC),
+    where the HDF5 library, running out of room while it writes a file, only prints the failure
+    on closing (or crashes) and leaves a truncated file.
 
     Parameters
     ----------
@@ -71,17 +76,33 @@ def atomic_h5(path: str | Path, mode: str = "w"):
     tmp = part_path(path)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        if mode == "a" and path.exists():
-            shutil.copyfile(path, tmp)
-        with h5py.File(tmp, "a" if mode == "a" else "w") as f:
+        image = io.BytesIO(path.read_bytes() if mode == "a" and path.exists() else b"")
+        with h5py.File(image, "a" if image.getbuffer().nbytes else "w") as f:
             yield f
+        with open(tmp, "wb") as out:
+            out.write(image.getbuffer())
+            out.flush()
+            os.fsync(out.fileno())
         os.replace(tmp, path)
     except OSError as exc:
-        tmp.unlink(missing_ok=True)
+        discard(tmp)
         raise write_error(path, exc) from None
+    except RuntimeError as exc:
+        discard(tmp)
+        if not _raised_by_h5py(exc):
+            raise
+        raise write_error(path, exc) from None  # an HDF5 library failure while the file was built
     except BaseException:
-        tmp.unlink(missing_ok=True)
+        discard(tmp)
         raise
+
+
+def _raised_by_h5py(exc: BaseException) -> bool:
+    """Whether the innermost frame of ``exc``'s traceback is in h5py (a file system error, not a bug)."""
+    tb = exc.__traceback__
+    while tb is not None and tb.tb_next is not None:
+        tb = tb.tb_next
+    return tb is not None and "h5py" in Path(tb.tb_frame.f_code.co_filename).parts
 
 
 #: Units of the numeric group attributes (stored per group as the JSON attribute ``units``).
@@ -261,6 +282,7 @@ def write_history(path: str | Path, hist, case_text: str, command: str, extra_at
         g.attrs["status_code"] = int(hist.status)
         g.attrs["t_stop"] = np.nan if hist.t_stop is None else hist.t_stop
         g.attrs["completed"] = hist.completed
+        g.attrs["warnings"] = json.dumps(list(getattr(hist, "warnings", ())))  # plausibility warnings
         for k, v in hist.settings.items():
             g.attrs[k] = v
         for k, v in (extra_attrs or {}).items():
@@ -371,6 +393,8 @@ def is_complete_result(path) -> bool:
             for group in ("backbone", "continuation/loci"):  # cablesim.io.charts
                 if group in f:
                     return bool(f[group].attrs.get("complete", False))
+            if "continuation" in f:  # written before the attribute existed: complete
+                return bool(f["continuation"].attrs.get("complete", True))
             return True
     except (OSError, KeyError, ValueError):
         return False
@@ -486,11 +510,22 @@ def read_history(path):
     t_stop = None if t_stop is None or not np.isfinite(float(t_stop)) else float(t_stop)
     attrs.pop("forced", None)  # derived from omega
     attrs.pop("units", None)  # the units of these attributes
+    warnings = _warnings(attrs.pop("warnings", "[]"))
     return HistoryResult(
         t=data["t"], z=data["z"], v=data["v"], zc=zc, ze=ze, T=data["T"], residual=data["residual"],
         y0=data["y0"], T0=data["T0"], omega=omega, analysis=analysis, integrator=integrator,
         status=status, message=message, t_stop=t_stop, modal_omega=modal, settings=attrs, dof=dof, slack=slack,
+        warnings=warnings,
     )
+
+
+def _warnings(text) -> tuple[str, ...]:
+    """The plausibility warnings stored as a JSON list (none if unreadable)."""
+    try:
+        value = json.loads(attr_text(text))
+    except ValueError:
+        return ()
+    return tuple(str(w) for w in value) if isinstance(value, list) else ()
 
 
 def _check_history_shapes(path, data: dict, zc, ze) -> None:

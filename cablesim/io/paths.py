@@ -196,11 +196,35 @@ def beside(path: Path) -> Path:
     return path.with_name(f"{path.stem}.partial{path.suffix}")
 
 
-def write_error(path: Path, exc: OSError) -> CablesimError:
-    """A message for a write that failed (disk full, permissions changed during the run)."""
-    why = exc.strerror or str(exc)
-    fix = "Free some space, or give -o on another disk" if exc.errno == errno.ENOSPC else "Give -o somewhere writable"
+def discard(path: Path) -> None:
+    """Remove a temporary file if it is there; a file system that refuses (read-only) leaves it."""
+    try:
+        Path(path).unlink(missing_ok=True)
+    except OSError:
+        pass
+
+
+def write_error(path: Path, exc: Exception) -> CablesimError:
+    """A message for a write that failed (disk full, permissions changed during the run): an
+    OSError, or the RuntimeError the HDF5 library raises when it cannot flush or extend a file."""
+    if isinstance(exc, OSError):
+        why = os.strerror(exc.errno) if exc.errno else (exc.strerror or str(exc))
+        full = exc.errno == errno.ENOSPC
+    else:
+        lines = str(exc).strip().splitlines()
+        full = _low_on_room(path)
+        why = ("the disk is full (the HDF5 library could not flush the file)" if full else
+               f"the HDF5 library could not complete the file ({lines[0] if lines else type(exc).__name__})")
+    fix = "Free some space, or give -o on another disk" if full else "Give -o somewhere writable"
     return CablesimError(f"Could not write {path}: {why}. Nothing was written under that name. {fix}.", field="output")
+
+
+def _low_on_room(path: Path, margin: float = 1e6) -> bool:
+    """Whether the disk holding ``path`` has less than ``margin`` bytes free."""
+    try:
+        return shutil.disk_usage(_existing_ancestor(Path(path).parent)).free < margin
+    except OSError:
+        return False
 
 
 class OutputLock:

@@ -35,7 +35,7 @@ from . import stability
 from .continuation import Settings, continuation
 from .matrixfree import MatrixFreeShooting, orbit_leading, solve_orbit_mf
 from .mfproblem import MatrixFreeOrbitProblem, use_matrix_free
-from .diagram import Bifurcation, BranchEnd, OrbitBranch, OrbitPoint, ResponseDiagram
+from .diagram import Bifurcation, BranchEnd, BranchesInterrupted, OrbitBranch, OrbitPoint, ResponseDiagram
 from .shooting import Evaluation, FlowStatus, Shooting, solve_orbit
 from .starting import integrate_to_steady, linear_response, linear_response_state
 from .switching import (
@@ -472,6 +472,11 @@ def trace_branches(
     Returns
     -------
     ResponseDiagram
+
+    Raises
+    ------
+    BranchesInterrupted
+        Ctrl-C or SIGTERM: its ``diagram`` holds the orbits computed until then.
     """
     t_start = time.perf_counter()
     n = system.dim
@@ -489,8 +494,12 @@ def trace_branches(
     mf = use_matrix_free(n, matrix_free) and (matrix_free or system.mechanical is not None)
     tracer = _Tracer(system, parameter, st, np.sign(stop - start) or 1.0, state_scale, lam_scale, callback,
                      integration, liouville_tol, switch_size, mf)
-    tracer.first_branch(u0, start, period, segments)
-    tracer.collect_bifurcations(switch_branches, max_period)
+    try:
+        tracer.first_branch(u0, start, period, segments)
+        tracer.collect_bifurcations(switch_branches, max_period)
+    except KeyboardInterrupt:  # keep every orbit computed so far
+        tracer.diagram.stats = tracer.stats(time.perf_counter() - t_start)
+        raise BranchesInterrupted(tracer.diagram) from None
     tracer.diagram.stats = tracer.stats(time.perf_counter() - t_start)
     return tracer.diagram
 

@@ -25,6 +25,7 @@ class BranchEnd(IntEnum):
     STOPPED_BY_CALLBACK = 3
     START_FAILED = 4
     MERGED = 5
+    INTERRUPTED = 6
 
 
 @dataclass
@@ -247,3 +248,14 @@ class ResponseDiagram:
 
     def of_kind(self, kind: str) -> list:
         return [b for b in self.bifurcations if b.kind == kind]
+
+
+class BranchesInterrupted(KeyboardInterrupt):
+    """Ctrl-C or SIGTERM while branches were traced: ``diagram`` holds every orbit computed until
+    then (the branch being traced ends :attr:`BranchEnd.INTERRUPTED`)."""
+
+    def __init__(self, diagram: ResponseDiagram):
+        super().__init__("interrupted")
+        self.diagram = diagram
+        if diagram.branches:
+            diagram.branches[-1].end = BranchEnd.INTERRUPTED

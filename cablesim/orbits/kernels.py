@@ -47,6 +47,7 @@ import numba
 import numpy as np
 
 from ..dynamics.extremes import hermite_extreme
+from ..dynamics.interrupts import Deferred
 from ..dynamics.status import INNER_SOLVE, NONFINITE, OK, SLACK
 from ..jit import njit
 
@@ -100,7 +101,13 @@ def entry_point(kernel, args):
     sig = tuple(numba.typeof(a) for a in args)
     key = (kernel, sig)
     if key not in _ENTRIES:
-        _ENTRIES[key] = kernel.compile(sig)
+        # a signal inside numba's compiler left the kernel broken (RuntimeError "no compiled
+        # object yet"): it is held off until the compilation (or the load) is done, then acted on
+        with Deferred() as held:
+            entry = kernel.compile(sig)
+        if held.hit:
+            raise KeyboardInterrupt
+        _ENTRIES[key] = entry
     return _ENTRIES[key]
 
 

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io.paths import part_path, remove_stale_parts, write_error
+from ..io.paths import discard, part_path, remove_stale_parts, write_error
 from ..io.provenance import git_commit, invocation
 from ..version import __version__
 from .style import COLOURS, DPI, FIGURE_FORMATS, FIGURE_WIDTH, figure_width, minmax_decimate, output_settings
@@ -61,8 +61,9 @@ def add_stamp(fig, text: str):
         fig.suptitle(" ")
     else:
         title.set_text("\n" + title.get_text())
+    # drawn as written: a `$` in the text is not the start of mathematical notation
     return fig.text(0.995, 0.995, text, ha="right", va="top", fontsize=8.5, fontweight="bold",
-                    color=COLOURS["failure"], zorder=100,
+                    color=COLOURS["failure"], zorder=100, parse_math=False, usetex=False,
                     bbox=dict(boxstyle="round,pad=0.15", fc="white", ec=COLOURS["failure"], lw=0.8))
 
 
@@ -122,7 +123,7 @@ def save_atomic(fig, path: str | Path, dpi: int | None = None) -> Path:
     except OSError as exc:
         raise write_error(path, exc) from None
     finally:
-        tmp.unlink(missing_ok=True)
+        discard(tmp)
         pyplot().close(fig)
     return path
 

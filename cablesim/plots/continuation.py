@@ -164,6 +164,7 @@ def plot_continuation(h5_path, png_path=None, overlay=None, title: str | None = 
     first = title or f"{d['case_name']}: periodic responses"
     symbol = "$\\omega$" if is_omega else "$\\gamma$"
     sub = (f"{d['analysis']} analysis; continuation in {symbol}, {fixed}; {len(d['branches'])} branch{'es' if len(d['branches']) != 1 else ''}, "
-           f"{sum(b['parameter'].size for b in d['branches'])} orbits; bifurcations: {found}")
+           f"{sum(b['parameter'].size for b in d['branches'])} orbits; bifurcations: {found}"
+           + ("" if d.get("complete", True) else "; INTERRUPTED: only the orbits computed until then"))
     title_line(fig, first, sub)
     return save_atomic(fig, png_path)

@@ -15,6 +15,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..case import parse_case, read_figure
+from ..case.files import name_from_stem
 from ..channels import normalise_channel
 from ..errors import CablesimError
 from ..io.charts import has_loci
@@ -88,7 +89,7 @@ def _redraw(paths: list[Path], output, figure, snapshots: int | None) -> list[Pa
     family = infos[0].family
     if snapshots is not None:
         return _snapshots(infos, output, snapshots)
-    case = parse_case(infos[0].case_text, source=f"(the case stored in {paths[0]})", default_name=paths[0].stem)
+    case = parse_case(infos[0].case_text, source=f"(the case stored in {paths[0]})", default_name=name_from_stem(paths[0].stem))
     output = None if output is None else Path(output)
 
     if figure is not None:  # asked for explicitly: it must fit the files
@@ -135,7 +136,7 @@ def _backbone_over_responses(infos, output) -> Path:
 
 def _standard(info: ResultInfo, output: Path | None) -> list[Path]:
     """The plots the command that wrote the file draws."""
-    case = parse_case(info.case_text, source=f"(the case stored in {info.path})", default_name=info.path.stem)
+    case = parse_case(info.case_text, source=f"(the case stored in {info.path})", default_name=name_from_stem(info.path.stem))
     if info.family == "static":
         result = read_static_drawing(info.path, case)
         png = output if output is not None else info.path.with_suffix(".png")
@@ -175,7 +176,7 @@ def _snapshots(infos: list[ResultInfo], output, count: int) -> list[Path]:
                             "(each figure goes beside its file as <file>-snapshots.png).")
     written = []
     for info in infos:
-        case = parse_case(info.case_text, source=f"(the case stored in {info.path})", default_name=info.path.stem)
+        case = parse_case(info.case_text, source=f"(the case stored in {info.path})", default_name=name_from_stem(info.path.stem))
         png = Path(output) if output is not None else info.path.with_name(info.path.stem + "-snapshots.png")
         written.append(plot_snapshots(read_history(info.path), case.to_cable(), png, case.name, count))
     return written

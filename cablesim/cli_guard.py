@@ -1,0 +1,158 @@
+"""Checks the newer commands make before anything is computed, and the warnings they give after.
+
+- :func:`check_overlay`: ``cablesim continue --overlay SWEEP.h5`` reads the sweep file at once
+  (a missing, damaged or truncated file, a file of another kind, or a sweep of another cable is
+  refused before the continuation runs; a sweep of other loads or damping is drawn with a note).
+- :func:`continue_inputs`: every file ``continue`` reads, which no output may be.
+- :func:`empty_continuation`: the refusal of a continuation that found no orbit (slack from the
+  first orbit), saying why and what to try.
+
+Like :mod:`cablesim.cli`, this module imports its machinery only when a check runs.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .errors import CablesimError
+
+#: Case sections whose difference makes a sweep's points another cable's.
+_SAME_CABLE = ("spatial", "cable")
+#: Case sections whose difference is noted when a sweep is drawn over a continuation.
+_NOTED = ("loads", "supports", "damping", "analysis")
+
+
+def continue_inputs(case_file, overlay) -> list:
+    """The files ``cablesim continue`` reads: no output may be one of them."""
+    return [p for p in (case_file, overlay) if p is not None]
+
+
+#: Room allowed for a continuation file, bytes (the paper example's: 130 kB).
+CONTINUATION_BYTES = 300e3
+
+
+def continue_room(figures: int) -> float:
+    """The room ``cablesim continue`` needs on disk: its file and ``figures`` PNGs, bytes."""
+    from .io.finish import PNG_BYTES
+
+    return CONTINUATION_BYTES + PNG_BYTES * figures
+
+
+def _sections(case) -> dict:
+    """The sections of a case compared between a continuation and its overlay (plain data)."""
+    data = case.model_dump(mode="json", exclude_none=True)
+    data.update(case.expanded())
+    return data
+
+
+def check_overlay(overlay: Path | None, case) -> list[str]:
+    """Refuse, before the continuation runs, an ``--overlay`` that cannot be drawn over ``case``.
+
+    Returns
+    -------
+    list of str
+        Notes to print (the sweep's loads or damping differ, no channel in common); empty if none.
+
+    Raises
+    ------
+    CablesimError
+        The file is missing, not a readable sweep file, or a sweep of another cable.
+    """
+    if overlay is None:
+        return []
+    from .case import parse_case
+    from .io.hdf5 import FAMILY_TEXT, inspect_result
+    from .io.sweeps import read_sweep
+
+    overlay = Path(overlay)
+    fix = "give the HDF5 file `cablesim sweep` wrote for this case, or drop --overlay."
+    if not overlay.exists():
+        raise CablesimError(f"--overlay {overlay}: no such file; {fix}", field="overlay")
+    try:
+        info = inspect_result(overlay)
+        if info.family != "sweep":
+            raise CablesimError(f"it is {FAMILY_TEXT[info.family]}, not a sweep file")
+        stored = parse_case(info.case_text, source=f"(the case stored in {overlay})", default_name="sweep")
+        sweep = read_sweep(overlay)
+    except CablesimError as exc:
+        raise CablesimError(f"--overlay {overlay} cannot be drawn: {str(exc).rstrip('.')}. Nothing was computed; "
+                            f"{fix}", field="overlay") from None
+    except (OSError, KeyError, ValueError, TypeError, IndexError) as exc:
+        raise CablesimError(f"--overlay {overlay} cannot be read as a sweep file ({type(exc).__name__}: {exc}); it "
+                            f"may be truncated or damaged. Nothing was computed; {fix}", field="overlay") from None
+    mine, theirs = _sections(case), _sections(stored)
+    other = [k for k in _SAME_CABLE if mine.get(k) != theirs.get(k)]
+    if other:
+        raise CablesimError(f"--overlay {overlay} is a sweep of another cable (its {' and '.join(other)} "
+                            f"section{'s differ' if len(other) > 1 else ' differs'} from this case's), so its "
+                            f"points are not this case's responses. Nothing was computed; {fix}", field="overlay")
+    notes = []
+    differ = [k for k in _NOTED if mine.get(k) != theirs.get(k)]
+    if differ:
+        notes.append(f"the sweep {overlay} was computed with other {', '.join(differ)} than this case; its "
+                     "points are drawn as they are, for comparison.")
+    names, _ = _continuation_channels(case)
+    if not set(names) & set(sweep.channels):
+        notes.append(f"the sweep {overlay} holds none of the channels {', '.join(names)}; none of its "
+                     "points can be drawn.")
+    return notes
+
+
+def _continuation_channels(case):
+    from .analyses.continuation import continuation_channels
+
+    return continuation_channels(case)
+
+
+def empty_continuation(result, case) -> CablesimError | None:
+    """The refusal of a continuation that found no orbit at all, with why and what to try (None
+    when it found one)."""
+    if result.branches:
+        return None
+    spec = case.continuation
+    why = result.start_failure or "the first orbit could not be computed"
+    start = f"continuation.{spec.parameter}.start"
+    if result.start_cause == "SLACK":  # orbits with slack intervals are not followed
+        fix = (f"Orbits with slack segments are not followed: give smaller harmonic loads (loads.FL) or load factor "
+               f"(continuation.gamma), or a {start} where the response is small (away from resonance); "
+               "`cablesim history` integrates through slack episodes")
+    else:
+        fix = (f"Try a {start} where the response is small (away from resonance), more shooting segments "
+               "(continuation.segments) or start_from: history")
+    return CablesimError(f"The continuation found no periodic orbit: {why}. Nothing was written. {fix}.",
+                         field="continuation")
+
+
+def kept_text(result) -> str:
+    """What an interrupted continuation kept, in words."""
+    n = result.n_points
+    text = f"the {n} periodic orbit{'s' if n != 1 else ''} on {len(result.branches)} branch(es) computed"
+    return text + (" and the bifurcation curves traced" if result.loci else "")
+
+
+def run_continue(case, out: Path, analysis, overlay, plot: bool, note, echo, quiet: bool) -> None:
+    """The computing part of ``cablesim continue``, its inputs and outputs checked: continue, keep
+    what an interruption leaves, refuse an empty result, write, report and draw."""
+    import time
+
+    from . import api, cli_charts
+    from .io.finish import replace_result
+    from .io.report import continuation_summary
+    from .io.terminal import StatusLine, compiling, say_warnings
+    from .plots.continuation import plot_continuation
+
+    t0 = time.perf_counter()
+    with compiling(note) as notice, StatusLine(quiet=quiet) as status:
+        run = cli_charts.interruptible(lambda: api.continuation(
+            case, analysis, progress=cli_charts.branch_status(status), loci_progress=cli_charts.loci_status(status)),
+            case, out, kept_text)
+    err = empty_continuation(run.result, case)
+    if err is not None:
+        raise err
+    say_warnings(run.result.warnings)
+    replace_result(out, "continuation", note)
+    run.to_hdf5(out)
+    echo(continuation_summary(case, run.result, time.perf_counter() - t0 - notice.seconds())
+         + cli_charts.loci_text(run.result))
+    drawn = f" and {plot_continuation(out, out.with_suffix('.png'), overlay=overlay)}" if plot else ""
+    echo(f"\nWrote {out}" + drawn + (cli_charts.chart_text(out, run.result) if plot else ""))

@@ -46,6 +46,7 @@ from .io.naming import rerun_output as _rerun_output
 from .io.results import ResultFile, load_result  # noqa: F401 (cablesim.load_result)
 from .io.sweeps import write_sweep
 from .orbits import OrbitPoint
+from .plots.base import kept_figures
 from .plots.animation import DEFAULT_FPS, DEFAULT_FRAMES, animate_file, animate_history, save_animation
 from .plots.cable import plot_cable
 from .plots.charts import plot_backbone, plot_stability_chart
@@ -88,7 +89,8 @@ def load_case(source: str | Path | dict | None = None, overrides: list[str] | No
 
 class LabelledArrays:
     """``to_xarray()`` for a run: its file, as ``to_hdf5`` writes it, read back as an
-    ``xarray.Dataset`` (:meth:`cablesim.io.results.ResultFile.to_xarray`; needs xarray)."""
+    ``xarray.Dataset`` (:meth:`cablesim.io.results.ResultFile.to_xarray`; needs xarray); and
+    ``figures()``, its standard figures as matplotlib ``Figure`` objects."""
 
     def to_xarray(self, group: str | None = None):
         """The run's results as an ``xarray.Dataset`` with named axes, coordinates and units:
@@ -97,6 +99,13 @@ class LabelledArrays:
             ds = load_result(self.to_hdf5(Path(folder) / "run.h5")).to_xarray(group)
         ds.attrs.pop("result_file", None)  # a file that no longer exists
         return ds
+
+    def figures(self) -> list:
+        """The run's standard figures, those its command draws, as matplotlib ``Figure`` objects
+        (in a notebook each shows itself; ``fig.savefig`` writes it in any format)."""
+        with tempfile.TemporaryDirectory() as folder, kept_figures() as kept:
+            redraw([self.to_hdf5(Path(folder) / "run.h5")])
+        return kept
 
 
 @dataclass(frozen=True)

@@ -110,7 +110,8 @@ def cable_from_yaml(data: dict) -> LumpedCable:
     lumped by the rules of the case format written again here: ``length`` / ``nodes`` give n+1
     equal segments; ``mass_per_length`` gives node r half of each adjacent segment,
     ``mu (S_r + S_(r+1)) / 2``; ``gravity`` adds ``g M_r`` along +v (point masses included);
-    ``per_length`` adds ``q (S_r + S_(r+1)) / 2``; ``point`` adds loads and masses at a node (1-based);
+    ``per_length`` adds ``q (S_r + S_(r+1)) / 2``; ``point`` adds loads and masses at a node (1-based, or the node nearest
+    a position ``x`` along the span or fraction ``s`` of the natural length);
     a planar list (x, v per node) is padded with w = 0 in a spatial case."""
     cab, ld = data["cable"], data["loads"]
     n = len(cab["S"]) - 1 if "S" in cab else int(cab["nodes"])
@@ -124,8 +125,16 @@ def cable_from_yaml(data: dict) -> LumpedCable:
     dim = 3 if data.get("spatial") or float(cab.get("W", 0.0)) != 0 or any(three) else 2
     F0 = _pad(ld["F0"], n, dim) if "F0" in ld else np.zeros(dim * n)
     FL = _pad(ld["FL"], n, dim) if "FL" in ld else np.zeros(dim * n)
+    # a point given by position goes on the nearest node, node r standing at the fraction
+    # s_r = (S_1 + ... + S_r) / sum S of the natural length, x_r = L s_r along the span (a tie: the
+    # node nearer A)
+    frac = np.cumsum(S)[:-1] / S.sum()
     for p in ld.get("point", ()):
-        i = int(p["node"]) - 1
+        if "node" in p:
+            i = int(p["node"]) - 1
+        else:
+            at = float(p["s"]) if "s" in p else float(p["x"]) / float(cab["L"])
+            i = int(np.argmin(np.abs(frac - at) - 1e-12 * np.arange(n)[::-1]))
         masses[i] += float(p.get("mass", 0.0))
         for key, target in (("F", F0), ("FL", FL)):
             if key in p:

@@ -477,8 +477,9 @@ def test_a_resumed_journal_record_with_an_impossible_amplitude_is_computed_again
 
 
 def test_a_signal_while_the_orbit_kernel_compiles_is_acted_on_after_it(invoke_cli, here, tmp_path, monkeypatch):
-    """The orbit kernel's entry point is compiled on every run; Ctrl-C inside numba's compiler left
-    it broken (RuntimeError, a traceback, exit status 1)."""
+    """The orbit kernel's entry point is compiled (or loaded from the cache) on its first use in a
+    process; Ctrl-C inside numba's compiler left it broken (RuntimeError, a traceback, exit
+    status 1)."""
     from cablesim.orbits import kernels
 
     real, done = kernels.flow_segment.compile, []
@@ -490,6 +491,7 @@ def test_a_signal_while_the_orbit_kernel_compiles_is_acted_on_after_it(invoke_cl
         return out
 
     monkeypatch.setattr(kernels.flow_segment, "compile", compile_)
+    monkeypatch.setattr(kernels, "_ENTRIES", {})  # as in a fresh process
     res = invoke_cli("continue", here["case"], "-o", "c.h5")
     assert done, "the compilation was cut short by the signal"
     assert res.returncode == 130, (res.stderr, res.exception)

@@ -272,3 +272,20 @@ def test_the_api_exports_and_reruns_like_the_command_line(files, tmp_path):
     assert set(a) == set(b) and all(same(a[k][0], b[k][0]) for k in a)
     with pytest.raises(cablesim.errors.CablesimError, match="never replaces"):
         cablesim.rerun(original, original)
+
+
+def test_the_runs_of_the_api_return_their_figures():
+    """The runs' plot methods wrote PNGs only; a notebook wants the figures themselves."""
+    import matplotlib.figure
+
+    case = cablesim.load_case(None)
+    static = cablesim.static(case)
+    figs = static.figures()
+    assert figs and all(isinstance(f, matplotlib.figure.Figure) for f in figs)
+    # the cable drawn is the static shape of the run (the first figure: the cable under F0)
+    y = static.result.exact.y
+    drawn = [line.get_xydata() for ax in figs[0].axes for line in ax.get_lines() if len(line.get_xydata()) == y.size // 2 + 2]
+    assert any(np.allclose(xy[1:-1].ravel(), y) for xy in drawn)
+    history = cablesim.history(case, duration=5.0)
+    titles = [t.get_text() for f in history.figures() for t in f.texts]
+    assert len(history.figures()) >= 3 and any(case.name in t for t in titles)

@@ -20,21 +20,19 @@ from .files import (
 )
 from .model import Case
 from .charts import BackboneSpec
+from .continuation_spec import ContinuationSpec, LociRange, ParameterRange
 from .integrator_spec import IntegratorSpec
 from .sections import (
     FIGURE_KINDS,
     CableSpec,
-    ContinuationSpec,
     DampingSpec,
     FigureSpec,
     FreeVibrationSpec,
     HistorySpec,
     LoadsSpec,
-    LociRange,
     ModalSpec,
     OmegaGrid,
     OutputsSpec,
-    ParameterRange,
     SweepSpec,
 )
 

@@ -16,7 +16,8 @@ from . import strict_yaml
 from .model import Case
 from .numbers import DURATION, RTOL, TIME_STEP, check_flag
 from .placement import placement_lines, read_placements
-from .sections import HINTS, UNION_TAG, FigureSpec
+from .continuation_spec import UNION_TAG
+from .sections import HINTS, FigureSpec
 
 EXAMPLE_RESOURCE = "paper-example.yaml"
 

@@ -14,11 +14,11 @@ from ..channels import channel_index
 from ..errors import CablesimError
 from ..names import ANALYSES, SLACK_POLICIES
 from .charts import BackboneSpec
+from .continuation_spec import ContinuationSpec
 from .integrator_spec import IntegratorSpec
 from .placement import Placement, place
 from .sections import (
     CableSpec,
-    ContinuationSpec,
     DampingSpec,
     FigureSpec,
     FreeVibrationSpec,

@@ -172,6 +172,7 @@ class CompileNotice:
         self.said = False
         self.timer = None
         self.shown = 0.0
+        self.last = None
 
     def kernels(self) -> int:
         """Kernels compiled since the notice began."""
@@ -183,6 +184,7 @@ class CompileNotice:
 
     def started(self, name: str) -> None:
         """A kernel starts compiling (the hook of :class:`cablesim.jit.on_compile`)."""
+        self.last = name
         if self.said:
             self._status(name)
         elif self.timer is None or not self.timer.is_alive():  # the delay counts compiling time only
@@ -202,7 +204,7 @@ class CompileNotice:
                 self.timer.start()
             return
         self.said = True
-        name = name or "the kernels"
+        name = name or self.last or "the kernels"  # (one that ended before the timer is still named)
         self.note(f"compiling {name} and the kernels it needs (first use on this machine; cached for later "
                   "runs: `cablesim compile` compiles them all at once) ...")
 

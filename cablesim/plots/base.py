@@ -29,6 +29,8 @@ CURVE_POINTS = 20000
 TITLE_CHARS = 85
 #: Text drawn in a corner of every figure saved inside :func:`stamp_figures` (None: none).
 _STAMP = {"text": None}
+#: The figures :func:`kept_figures` collects (None outside it).
+_KEPT: dict = {"figures": None}
 
 
 def pyplot():
@@ -102,6 +104,18 @@ def figure_path(path: str | Path) -> tuple[Path, str]:
     return path, own if own in FIGURE_FORMATS else "png"
 
 
+@contextlib.contextmanager
+def kept_figures():
+    """Within this context every figure saved (:func:`save_atomic`) is also kept: yields the
+    list they are appended to, for the API to return the figures themselves."""
+    previous = _KEPT["figures"]
+    _KEPT["figures"] = kept = []
+    try:
+        yield kept
+    finally:
+        _KEPT["figures"] = previous
+
+
 def save_atomic(fig, path: str | Path, dpi: int | None = None) -> Path:
     """Save a figure through a temporary file so a failure never leaves a broken file; it
     carries :func:`figure_metadata` and, inside :func:`stamp_figures`, the stamp. The format and
@@ -124,7 +138,9 @@ def save_atomic(fig, path: str | Path, dpi: int | None = None) -> Path:
         raise write_error(path, exc) from None
     finally:
         discard(tmp)
-        pyplot().close(fig)
+        pyplot().close(fig)  # (a closed figure can still be shown, in a notebook, and saved)
+        if _KEPT["figures"] is not None:
+            _KEPT["figures"].append(fig)
     return path
 
 

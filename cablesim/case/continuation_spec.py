@@ -1,0 +1,127 @@
+"""The ``continuation:`` section of a case file: the parameter, its range and the orbits' settings."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal, Union
+
+from pydantic import Discriminator, Field, Tag, model_validator
+
+from ..names import CONTINUATION_PARAMETERS
+from .numbers import OMEGA, integer, real
+from .sections import StrictModel
+
+
+#: A load factor gamma (scales FL and the support amplitudes).
+GAMMA = real(0.0, 1e6, lo_open=True)
+
+
+class ParameterRange(StrictModel):
+    """A range of a continuation parameter: from ``start`` (where the first branch starts) to ``stop``."""
+
+    start: GAMMA = Field(description="first value")
+    stop: GAMMA = Field(description="last value")
+
+    @model_validator(mode="after")
+    def _distinct(self):
+        if self.stop == self.start:
+            raise ValueError("start and stop must differ")
+        return self
+
+
+class OmegaRange(ParameterRange):
+    """A range of the forcing frequency, rad/s (``continuation.omega``)."""
+
+    start: OMEGA = Field(description="first frequency, rad/s")
+    stop: OMEGA = Field(description="last frequency, rad/s")
+
+
+class LociRange(ParameterRange):
+    """The range of gamma over which bifurcation curves are continued (``continuation.gamma``
+    with ``loci: true``), and the gamma of the frequency response whose bifurcations start them."""
+
+    at: GAMMA | None = Field(default=None, description="gamma of the response curve (default: stop)")
+    levels: tuple[GAMMA, ...] = Field(default=(), description=(
+        "values of gamma at which each curve's crossings are located (special: level), e.g. [0.5, 2]"))
+
+
+#: Marks a tag of a union in the location of a validation error; the messages leave it out.
+UNION_TAG = "~"
+
+
+def _range_or_value(v) -> str:
+    return f"{UNION_TAG}range" if isinstance(v, (dict, ParameterRange)) else f"{UNION_TAG}value"
+
+
+def range_or_value(range_type, value_type):
+    """A mapping ``{start, stop}`` validated as ``range_type``, anything else as the number
+    ``value_type`` (so that a message is about the one the user wrote, not both)."""
+    return Annotated[Union[Annotated[range_type, Tag(f"{UNION_TAG}range")], Annotated[value_type, Tag(f"{UNION_TAG}value")]],
+                     Discriminator(_range_or_value)]
+
+
+class ContinuationSpec(StrictModel):
+    """Periodic responses by shooting and pseudo-arclength continuation (``continuation:``)."""
+
+    parameter: Literal[CONTINUATION_PARAMETERS] = Field(default="omega", description="omega | gamma")
+    omega: range_or_value(OmegaRange, OMEGA) = Field(description="range (parameter omega) or value, rad/s")
+    gamma: range_or_value(LociRange, GAMMA) = Field(default=1.0, description=(
+        "range (parameter gamma, or loci) or value; scales FL"))
+    period: integer(1, 16) = Field(default=1, description="period of the first branch, forcing periods")
+    switch_branches: bool = Field(default=True, description="follow every period doubling onto its 2p branch")
+    channels: tuple[str, ...] | None = Field(default=None, description="DOF reported, e.g. [z2, z4]")
+    start_from: Literal["linear", "history"] = Field(
+        default="linear", description="first orbit from the linear response, or integrated from rest")
+    segments: integer(1, 64) = Field(default=1, description="shooting segments per orbit (multiple shooting)")
+    max_period: integer(1, 64) = Field(default=8, description="no branch switching beyond this period")
+    max_points: integer(2, 100_000) = Field(default=2000, description="most points per branch")
+    loci: bool = Field(default=False, description=(
+        "continue every fold, period doubling and Neimark-Sacker point found in omega and gamma "
+        "(gamma: {start, stop, at}): the stability chart"))
+
+    @model_validator(mode="after")
+    def _ranges(self):
+        ranged = {k: isinstance(getattr(self, k), ParameterRange) for k in ("omega", "gamma")}
+        if self.loci:
+            if self.parameter != "omega" or not (ranged["omega"] and ranged["gamma"]):
+                raise ValueError(
+                    "continuation.loci needs the response in omega (parameter: omega, the default) with "
+                    "continuation.omega a range {start: .., stop: ..} and continuation.gamma the range of "
+                    "the curves {start: .., stop: .., at: ..} (at: the gamma of the response, default stop)")
+            g = self.gamma
+            if g.at is not None and not min(g.start, g.stop) <= g.at <= max(g.start, g.stop):
+                raise ValueError(f"continuation.gamma.at ({g.at:g}) must lie between gamma.start ({g.start:g}) and "
+                                 f"gamma.stop ({g.stop:g}), the range the curves are continued over")
+            bad = [x for x in g.levels if not min(g.start, g.stop) <= x <= max(g.start, g.stop)]
+            if bad:
+                raise ValueError(f"continuation.gamma.levels: {', '.join(f'{x:g}' for x in bad)} outside the range "
+                                 f"gamma.start ({g.start:g}) to gamma.stop ({g.stop:g}); give levels inside it")
+            return self
+        other = "gamma" if self.parameter == "omega" else "omega"
+        if not ranged[self.parameter]:
+            raise ValueError(
+                f"continuation.parameter is {self.parameter}, so continuation.{self.parameter} must be a "
+                f"range {{start: .., stop: ..}}"
+            )
+        if ranged[other]:
+            hint = " (or add loci: true to continue the bifurcations over that gamma range)" if other == "gamma" else ""
+            raise ValueError(f"continuation.{other} must be a single value when the parameter is {self.parameter}"
+                             + hint)
+        if isinstance(self.gamma, LociRange) and (self.gamma.at is not None or self.gamma.levels):
+            raise ValueError("continuation.gamma.at and continuation.gamma.levels are used only with loci: true")
+        if not isinstance(getattr(self, other), ParameterRange) and not getattr(self, other) > 0:
+            raise ValueError(f"continuation.{other} must be positive")
+        return self
+
+    @property
+    def range(self) -> ParameterRange:
+        """The range of the continuation parameter."""
+        return getattr(self, self.parameter)
+
+    @property
+    def fixed(self) -> float:
+        """The value of the other parameter (omega in rad/s, or gamma; with loci the gamma of the
+        response curve)."""
+        if self.loci:
+            g = self.gamma
+            return float(g.at if g.at is not None else g.stop)
+        return float(getattr(self, "gamma" if self.parameter == "omega" else "omega"))

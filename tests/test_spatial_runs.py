@@ -183,3 +183,28 @@ def test_the_shipped_spatial_examples_run(invoke_cli, tmp_path, name):
     r = invoke_cli("history", case, "--duration", "2", "-o", tmp_path / "h.h5")
     assert r.returncode == 0, r.stderr
     assert "forcing w =" in r.stdout and (tmp_path / "h-across.png").is_file()
+
+
+def test_snapshots_of_a_spatial_history_draw_its_plan_and_end_views():
+    """The snapshots of a spatial cable showed its elevation only: motion across the span, and a
+    cable swung out of its plane, were not drawn."""
+    from cablesim.cable import nodes_with_supports
+    from cablesim.plots.snapshots import snapshot_figure
+
+    loads = {"F0": [300.0e3, 1100.0e3, 80.0e3, 450.0e3, 2000.0e3, 120.0e3],
+             "FL": [-6.0e3, 22.0e3, 5.0e3, -18.0e3, 120.0e3, 9.0e3]}
+    case = case_from_dict(spatial(loads=loads))
+    _, hist, _ = run_history(case, omega=2.4, duration=6.0)
+    fig = snapshot_figure(hist, case.to_cable(), "space", count=3)
+    shape, disp, plan, end = fig.axes[:4]
+    assert "plan view" in plan.get_title() and "end view" in end.get_title()
+    drawn_plan = [ln.get_xydata() for ln in plan.get_lines()]
+    drawn_end = [ln.get_xydata() for ln in end.get_lines()]
+    states = [nodes_with_supports(case.to_cable(), hist.y0 + hist.z[i]) for i in range(hist.t.size)]
+    for xy in drawn_plan[2:]:  # after the static shape and its supports: the instants, (x, w)
+        assert any(np.allclose(xy, p[:, [0, 2]]) for p in states)
+    for xy in drawn_end[2:]:  # (w, v)
+        assert any(np.allclose(xy, p[:, [2, 1]]) for p in states)
+    assert len(drawn_plan) == len(drawn_end) == 2 + 3
+    w = np.array([p[1:-1, 2] for p in states])
+    assert np.abs(w).max() > 1e-3  # the out-of-plane loads swing the cable: something to see

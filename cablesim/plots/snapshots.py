@@ -16,6 +16,7 @@ import numpy as np
 from ..cable import Cable, nodes_with_supports
 from ..errors import CablesimError
 from .base import pyplot, save_atomic, title_line
+from .spatial import end_view, plan_view
 from .style import COLOURS, figure_width, styled
 
 #: Largest number of node labels on a cable drawing (more would overlap).
@@ -94,7 +95,8 @@ def plot_snapshots(hist, cable: Cable, path: str | Path, title: str, count: int 
 
 
 def snapshot_figure(hist, cable: Cable, title: str, count: int = 6):
-    """The figure of :func:`plot_snapshots`: axes 0 the shapes, axes 1 the vertical displacements.
+    """The figure of :func:`plot_snapshots`: axes 0 the shapes, axes 1 the vertical displacements
+    and, for a spatial cable, axes 2 and 3 the plan (x, w) and end (w, v) views of the same instants.
 
     Parameters
     ----------
@@ -125,8 +127,15 @@ def snapshot_figure(hist, cable: Cable, title: str, count: int = 6):
             f"Snapshots of the cable need every DOF, but this history kept only {len(hist.dof_numbers)} of "
             f"{n_dof} (outputs.channels); rerun it without outputs.channels.", field="snapshots")
     plt = pyplot()
-    fig, (shape_ax, disp_ax) = plt.subplots(2, 1, figsize=(figure_width(), 6.6), layout="constrained",
-                                            gridspec_kw=dict(height_ratios=(3, 2)))
+    spatial = cable.dim == 3
+    if spatial:  # the plan and end views of the same instants below (axes 2 and 3)
+        fig = plt.figure(figsize=(figure_width(), 9.4), layout="constrained")
+        grid = fig.add_gridspec(3, 2, height_ratios=(3, 2, 2.2), width_ratios=(2.2, 1.0))
+        shape_ax, disp_ax = fig.add_subplot(grid[0, :]), fig.add_subplot(grid[1, :])
+        plan_ax, end_ax = fig.add_subplot(grid[2, 0]), fig.add_subplot(grid[2, 1])
+    else:
+        fig, (shape_ax, disp_ax) = plt.subplots(2, 1, figsize=(figure_width(), 6.6), layout="constrained",
+                                                gridspec_kw=dict(height_ratios=(3, 2)))
     base = nodes_with_supports(cable, hist.y0)[:, :2]  # a spatial cable: its elevation (x, v)
     shape_ax.plot(base[:, 0], base[:, 1], "--", color=COLOURS["reference"], lw=1.2, label="static equilibrium $y_0$")
     label_nodes(shape_ax, base)
@@ -136,10 +145,18 @@ def snapshot_figure(hist, cable: Cable, title: str, count: int = 6):
     colours = plt.get_cmap("viridis")(np.linspace(0.0, 0.9, picks.size))
     vertical = np.zeros((hist.t.size, cable.n_nodes + 2))  # zero at the supports
     vertical[:, 1:-1] = hist.z[:, 1::cable.dim]
+    if spatial:
+        base3 = nodes_with_supports(cable, hist.y0)
+        plan_view(plan_ax, base3, None, cable.L, COLOURS["reference"])
+        end_view(end_ax, base3, COLOURS["reference"])
     for colour, i in zip(colours, picks):
-        pts = nodes_with_supports(cable, hist.y0 + hist.z[i])[:, :2]
+        pts3 = nodes_with_supports(cable, hist.y0 + hist.z[i])
+        pts = pts3[:, :2]
         shape_ax.plot(pts[:, 0], pts[:, 1], "-", color=colour, lw=1.4, label=f"t = {hist.t[i]:.4g} s")
         disp_ax.plot(base[:, 0], vertical[i], "-", color=colour, lw=1.4)
+        if spatial:
+            plan_ax.plot(pts3[:, 0], pts3[:, 2], "-", color=colour, lw=1.2)
+            end_ax.plot(pts3[:, 2], pts3[:, 1], "-", color=colour, lw=1.2)
     disp_ax.fill_between(base[:, 0], vertical.min(axis=0), vertical.max(axis=0), color="0.85",
                          label=f"envelope over {hist.t[0]:.4g}-{hist.t[-1]:.4g} s")
     shape_ax.plot([0, cable.L], [0, cable.H], "^", color="k", ms=8, zorder=4)

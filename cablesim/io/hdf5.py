@@ -413,7 +413,7 @@ def inspect_result(path) -> ResultInfo:
     except OSError:
         raise CablesimError(
             f"{path} is not an HDF5 file (or cannot be read); give a .h5 file written by cablesim "
-            "static, history, free-vibration or sweep."
+            "static, history, free-vibration, sweep, continue or backbone."
         ) from None
     with f:
         command = f.attrs.get("command")
@@ -421,7 +421,8 @@ def inspect_result(path) -> ResultInfo:
     if command is None or case_text is None:
         raise CablesimError(
             f"{path} is an HDF5 file but not a cablesim result: it has no 'command' and 'case_yaml' "
-            "attributes. Give a file written by cablesim static, history, free-vibration or sweep."
+            "attributes. Give a file written by cablesim static, history, free-vibration, sweep, continue "
+            "or backbone."
         )
     command = attr_text(command)
     if command not in FAMILIES:

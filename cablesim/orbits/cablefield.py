@@ -172,7 +172,7 @@ def _support_derivatives(theta, omega, x, model, prm, dp, ipar, zA, zB):
         dp[2 * nd - dim + d] += rB[d] / model.mass[nd - dim + d]
 
 
-@njit
+@njit(borrowed=True)  # called at every stage: no reference counting (cablesim.jit)
 def exact_field(theta, omega, x, model, prm, work, dx, J, dp, ipar):
     """Exact analysis (module docstring)."""
     nd = model.mass.size

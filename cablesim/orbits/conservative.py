@@ -42,7 +42,7 @@ def _unfold(x, prm, dx, J, dp, ipar):
             dp[nd + i] = -x[nd + i]
 
 
-@njit
+@njit(borrowed=True)  # called at every stage: no reference counting (cablesim.jit)
 def unfolded_exact_field(theta, omega, x, model, prm, work, dx, J, dp, ipar):
     """Exact analysis, unforced and undamped (``model.FL = 0``, ``model.C = 0``), unfolded."""
     code = cablefield.exact_field(theta, omega, x, model, prm, work, dx, J, dp, -1)

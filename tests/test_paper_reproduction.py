@@ -219,3 +219,20 @@ def test_grid_frequencies_print_to_the_step():
     pn = paper_numbers_module()
     assert [pn.step_decimals(s) for s in (0.02, 0.025, 0.005, 0.5, 1.0)] == [2, 3, 3, 1, 0]
     assert pn.decimals(2 * np.pi / 600) == 2 and pn.decimals(2 * np.pi / 29.2) == 1
+
+
+def test_every_full_scene_passes_the_cost_check_or_is_forced():
+    """`make fig8a` (and so `make figures` and `make paper-numbers`) stopped at the sweep's cost
+    check: 81 points of up to 6000 s by the error-controlled scheme's largest step rate is an
+    upper bound of 1.96e9 steps, above the 1e9 allowed without --force."""
+    from cablesim import api
+
+    sweeps = {}
+    for line in dry_run("figures").splitlines():
+        if line.startswith("CABLESIM sweep ") and " -o " in line:
+            args = shlex.split(line.split("||")[0])[1:]
+            sweeps[Path(args[args.index("-o") + 1]).stem] = args
+    assert "fig8a" in sweeps and len(sweeps) >= 5
+    for scene, args in sweeps.items():
+        why = api.sweep_cost(fast_case(args)).excess()
+        assert why is None or "--force" in args, (scene, why)

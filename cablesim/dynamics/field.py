@@ -95,7 +95,7 @@ def resisting_from_eq15(model, t, v, a, P):
         P[i] = F0[i] + FL[i] * sw - m[i] * a[i] - P[i]
 
 
-@njit
+@njit(borrowed=True)  # called at every stage: no reference counting (cablesim.jit)
 def exact_force_and_rate(model, t, y, v, wk):
     """``P(y)`` into ``wk.P`` and ``K(y) v`` into ``wk.Kv`` (with moving supports, the whole rate
     ``K y' + Ks s'``) for the segment modes ``wk.taut`` at time ``t``; the first segment not
@@ -134,12 +134,7 @@ def rate(model, t, s, warm, ds, wk, awk):
     if awk is None:
         for i in range(nd):
             y[i] = model.y0[i] + s[i]
-        if model.moving:
-            slack = exact_force_and_rate(model, t, y, v, wk)
-        else:  # fixed supports: called here, not through exact_force_and_rate, whose call
-            z = sg.zero_rate(model.A)  # with the whole model costs a third of a 2-node cable's rate
-            slack = asm.force_and_rate(y, v, model.S, model.EA, model.A, model.B, z, z, wk.taut, wk.P, wk.Kv)
-        if slack >= 0 and model.slack == STOP:
+        if exact_force_and_rate(model, t, y, v, wk) >= 0 and model.slack == STOP:
             return SLACK
     else:  # K(P) y' with P from eq. 15 (written out here: see closure_and_factors)
         resisting_from_eq15(model, t, s[nd : 2 * nd], s[2 * nd :], wk.P)

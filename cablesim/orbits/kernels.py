@@ -61,7 +61,7 @@ IPAR_OMEGA = -2
 #: Restart the propagated Jacobian when ``|int tr J dt|`` over a chunk exceeds this.
 CHUNK_DIVERGENCE = 2.0
 
-__all__ = ["FlowCall", "INNER_SOLVE", "IPAR_OMEGA", "NONFINITE", "OK", "SLACK", "flow_segment", "copy_work"]
+__all__ = ["EntryPoint", "INNER_SOLVE", "IPAR_OMEGA", "NONFINITE", "OK", "SLACK", "flow_segment", "copy_work"]
 
 
 def copy_work(work):
@@ -74,18 +74,19 @@ def copy_work(work):
     return work
 
 
-class FlowCall:
-    """:func:`flow_segment` for one system, called through the entry point compiled for its
-    argument types: numba's type dispatch of a named-tuple argument costs about 20 us a call, a
-    tenth of a one-period evaluation of the paper's cable. The flow map is the same function
-    either way."""
+class EntryPoint:
+    """A compiled kernel called through the entry point compiled for its argument types
+    (:func:`entry_point`, looked up on the first call): numba's type dispatch of a named-tuple
+    argument costs about 20 us a call, a tenth of a one-period evaluation of the paper's cable.
+    The function is the same either way."""
 
-    def __init__(self):
+    def __init__(self, kernel):
+        self.kernel = kernel
         self._entry = None
 
     def __call__(self, *args):
         if self._entry is None:
-            self._entry = entry_point(flow_segment, args)
+            self._entry = entry_point(self.kernel, args)
         return self._entry(*args)
 
 

@@ -63,20 +63,6 @@ KEEP_TAPES = 3
 _EMPTY_REC = np.zeros((0, 0))
 
 
-class _Entry:
-    """A compiled kernel called through the entry point of its argument types (numba's type
-    dispatch of named tuples costs about 20 us a call)."""
-
-    def __init__(self, kernel):
-        self.kernel = kernel
-        self._entry = None
-
-    def __call__(self, *args):
-        if self._entry is None:
-            self._entry = ok.entry_point(self.kernel, args)
-        return self._entry(*args)
-
-
 class _Tape:
     """The stages of one Radau segment (:func:`cablesim.orbits.radau.radau_orbit`)."""
 
@@ -151,9 +137,9 @@ class MatrixFreeShooting:
         if scheme != "radau":
             tab = TABLEAUX[scheme]
             self._A, self._b, self._c = (np.ascontiguousarray(a) for a in (tab.A, tab.b, tab.c))
-        self._flow = _Entry(dk.flow_mechanical if self.mech is not None else dk.flow_dense_directions)
-        self._radau = _Entry(rd.radau_orbit)
-        self._replay = _Entry(rd.radau_directions)
+        self._flow = ok.EntryPoint(dk.flow_mechanical if self.mech is not None else dk.flow_dense_directions)
+        self._radau = ok.EntryPoint(rd.radau_orbit)
+        self._replay = ok.EntryPoint(rd.radau_directions)
         noise = np.broadcast_to(np.asarray(system.noise, dtype=float), (self.n,))
         self._vnoise = np.ascontiguousarray(noise[self.n // 2:])
         self._taped: deque = deque()

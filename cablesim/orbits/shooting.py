@@ -184,7 +184,7 @@ class Shooting:
         self._A = np.ascontiguousarray(self.tableau.A)
         self._b = np.ascontiguousarray(self.tableau.b)
         self._c = np.ascontiguousarray(self.tableau.c)
-        self._flow = ok.FlowCall()
+        self._flow = ok.EntryPoint(ok.flow_segment)
         self._ipar = -1 if parameter == "omega" else int(system.parameters[parameter])
         self._pmode = ok.PARAM_OMEGA if parameter == "omega" else ok.PARAM_PRM
         #: Counters: flow-segment integrations and Runge-Kutta steps taken.

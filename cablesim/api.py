@@ -41,6 +41,7 @@ from .io.continuation import write_continuation
 from .io.hdf5 import write_history, write_static
 from .io.journal import SweepFile, fingerprint
 from .io.provenance import invocation
+from .io.export import default_export_folder
 from .io.export import export_csv as _export_csv
 from .io.naming import rerun_output as _rerun_output
 from .io.results import ResultFile, load_result  # noqa: F401 (cablesim.load_result)
@@ -537,7 +538,7 @@ def export_csv(result: str | Path, folder: str | Path | None = None) -> list[Pat
         then ``index.csv`` and ``attributes.csv``.
     """
     stored = load_result(result)
-    return _export_csv(stored, stored.path.with_name(stored.path.stem + "-csv") if folder is None else folder)
+    return _export_csv(stored, default_export_folder(stored.path) if folder is None else folder)
 
 
 def rerun(result: str | Path, output: str | Path | None = None) -> ResultFile:

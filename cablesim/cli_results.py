@@ -8,7 +8,6 @@ imports its machinery only when a command runs, so that ``cablesim --help`` star
 from __future__ import annotations
 
 import shlex
-import sys
 from enum import Enum
 from pathlib import Path
 from typing import Optional
@@ -16,6 +15,7 @@ from typing import Optional
 import typer
 
 from .errors import CablesimError
+from .io.terminal import quiet_outputs
 
 #: The commands whose files ``cablesim rerun`` reruns.
 RERUNNABLE = ("static", "history", "free-vibration", "sweep", "continue", "backbone")
@@ -43,26 +43,14 @@ class ExportFormat(str, Enum):
     csv = "csv"
 
 
-def _outputs(echo_quiet: bool):
-    def echo(text: str) -> None:
-        if not echo_quiet:
-            typer.echo(text)
-
-    def note(text: str) -> None:
-        if not echo_quiet:
-            sys.stderr.write(text + "\n")
-
-    return echo, note
-
-
 def run_export(ctx, result_path: Path, fmt: ExportFormat, output: Optional[Path]) -> None:
     """``cablesim export`` (see :func:`register`)."""
-    from .io.export import INDEX, check_export_folder, export_csv
+    from .io.export import INDEX, check_export_folder, default_export_folder, export_csv
     from .io.results import load_result
 
-    echo, note = _outputs(bool(ctx.find_root().params.get("quiet")))
+    echo, note = quiet_outputs(bool(ctx.find_root().params.get("quiet")))
     result = load_result(result_path)
-    folder = output if output is not None else result.path.with_name(result.path.stem + "-csv")
+    folder = output if output is not None else default_export_folder(result.path)
     check_export_folder(folder)
     if (folder / INDEX).is_file():
         note(f"replacing the CSV export in {folder}")
@@ -105,7 +93,7 @@ def run_rerun(ctx, result_path: Path, output: Optional[Path]) -> None:
     from .io.paths import check_output
 
     root = ctx.find_root()
-    echo, note = _outputs(bool(root.params.get("quiet")))
+    echo, note = quiet_outputs(bool(root.params.get("quiet")))
     info = inspect_result(result_path)
     if info.command not in RERUNNABLE:
         raise CablesimError(f"{info.path} was written by 'cablesim {info.command}', which cablesim rerun does not "

@@ -8,11 +8,12 @@ module imports its machinery only when a command runs, so that ``cablesim --help
 from __future__ import annotations
 
 import shlex
-import sys
 from pathlib import Path
 from typing import Optional
 
 import typer
+
+from .io.terminal import quiet_outputs
 
 
 def static_figures(modes_drawn: int):
@@ -40,18 +41,8 @@ def _begin(ctx) -> tuple:
     """Record the invocation (for the figures' metadata); ``(echo, note)`` honouring --quiet."""
     from .io.provenance import command_words, plain, set_invocation
 
-    quiet = bool(ctx.find_root().params.get("quiet"))
     set_invocation(shlex.join(command_words(ctx)), {k: plain(v) for k, v in ctx.params.items()})
-
-    def echo(text: str) -> None:
-        if not quiet:
-            typer.echo(text)
-
-    def note(text: str) -> None:
-        if not quiet:
-            sys.stderr.write(text + "\n")
-
-    return echo, note
+    return quiet_outputs(bool(ctx.find_root().params.get("quiet")))
 
 
 def run_animate(ctx, result: Path, output, frames: int, fps: float, start, stop, branch=None, omega=None) -> None:

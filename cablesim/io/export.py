@@ -98,6 +98,12 @@ def check_export_folder(folder: Path) -> None:
                             "folder with -o, or remove it.")
 
 
+def default_export_folder(result: str | Path) -> Path:
+    """Where a result file's CSV export goes by default: ``RESULT-csv`` beside it."""
+    result = Path(result)
+    return result.with_name(result.stem + "-csv")
+
+
 def export_csv(result: ResultFile, folder: str | Path) -> list[Path]:
     """Write every dataset of a result file as a tidy CSV file into ``folder``.
 

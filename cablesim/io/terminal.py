@@ -28,6 +28,21 @@ def paragraph(text: str, width: int = 100) -> str:
     return textwrap.fill(text, width=width, break_long_words=False, break_on_hyphens=False)
 
 
+def quiet_outputs(quiet: bool) -> tuple:
+    """``(echo, note)`` for a command: results to standard output, notes to standard error,
+    both silent with ``--quiet``."""
+
+    def echo(text: str) -> None:
+        if not quiet:
+            typer.echo(text)
+
+    def note(text: str) -> None:
+        if not quiet:
+            sys.stderr.write(text + "\n")
+
+    return echo, note
+
+
 def say_error(message: str, command: str | None = None) -> None:
     """A refusal or failure: one ``error:`` paragraph on standard error, then ``command`` (one to
     copy, such as the --resume hint) whole on a line of its own."""

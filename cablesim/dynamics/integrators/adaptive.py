@@ -45,7 +45,7 @@ import numpy as np
 from ...jit import njit
 from ..status import OK, SLACK, STEP_UNDERFLOW
 from .events import locate_event
-from .newmark import equilibrium_acceleration, galpha_step, step_scratch, store_state, write_outputs
+from .newmark import galpha_step, step_scratch, store_state, write_step_outputs
 
 #: Safety factor of the step-size rule.
 SAFETY = 0.9
@@ -144,12 +144,8 @@ def adaptive_advance(model, s, P_n, warm, wk, awk, evw, track, t, h, t_end, coef
                     return t, h, j, st, -1
                 tb = te
         if j < t_out.size and t_out[j] <= tb:
-            if awk is None:
-                j = write_outputs(t, tb, tb - t, z, v, a, z1, v1, a1, sa, sb, da, db, t_out, out, j)
-            else:  # saved y'' from the carried internal force (see equilibrium_acceleration)
-                equilibrium_acceleration(model, t, v, P_n, ae, scratch[9])
-                equilibrium_acceleration(model, tb, v1, P1, ae1, scratch[9])
-                j = write_outputs(t, tb, tb - t, z, v, ae, z1, v1, ae1, sa, sb, da, db, t_out, out, j)
+            j = write_step_outputs(model, awk, t, tb, z, v, a, z1, v1, a1, P_n, P1, ae, ae1, scratch, sa, sb, da, db,
+                                   t_out, out, j)
         counts[0] += 1
         for q in range(nd):
             peaks[0] = max(peaks[0], abs(z1[q]))

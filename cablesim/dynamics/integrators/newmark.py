@@ -104,6 +104,19 @@ def equilibrium_acceleration(model, t, v, P, a_out, Cv):
 
 
 @njit
+def write_step_outputs(model, awk, ta, tb, z, v, a, z1, v1, a1, P_a, P_b, ae, ae1, scratch, sa, sb, da, db, t_out,
+                       out, j):
+    """:func:`write_outputs` for an implicit step ``ta -> tb``: in the approximate analysis the
+    saved ``y''`` comes from the carried internal forces ``P_a``, ``P_b`` (see
+    :func:`equilibrium_acceleration`, into ``ae``, ``ae1``)."""
+    if awk is None:
+        return write_outputs(ta, tb, tb - ta, z, v, a, z1, v1, a1, sa, sb, da, db, t_out, out, j)
+    equilibrium_acceleration(model, ta, v, P_a, ae, scratch[9])
+    equilibrium_acceleration(model, tb, v1, P_b, ae1, scratch[9])
+    return write_outputs(ta, tb, tb - ta, z, v, ae, z1, v1, ae1, sa, sb, da, db, t_out, out, j)
+
+
+@njit
 def write_outputs(ta, tb, h, z, v, a, z1, v1, a1, sa, sb, da, db, t_out, out, j):
     """Interpolate the step ``ta -> tb`` at the output instants it covers; the next index."""
     nd = z.size
@@ -372,12 +385,8 @@ def fixed_step_advance(model, s, P_n, warm, wk, awk, evw, track, t0, h, i, i_end
                     return i, t, j, st, -1
             tb = te
         if j < t_out.size and t_out[j] <= tb + (1e-9 * h if k < 0 else 0.0):
-            if awk is None:
-                j = write_outputs(t, tb, tb - t, z, v, a, z1, v1, a1, sa, sb, da, db, t_out, out, j)
-            else:  # saved y'' from the carried internal force (see equilibrium_acceleration)
-                equilibrium_acceleration(model, t, v, P_n, ae, scratch[9])
-                equilibrium_acceleration(model, tb, v1, P1, ae1, scratch[9])
-                j = write_outputs(t, tb, tb - t, z, v, ae, z1, v1, ae1, sa, sb, da, db, t_out, out, j)
+            j = write_step_outputs(model, awk, t, tb, z, v, a, z1, v1, a1, P_n, P1, ae, ae1, scratch, sa, sb, da, db,
+                                   t_out, out, j)
         z[:], v[:], a[:], P_n[:] = z1, v1, a1, P1
         t = tb
         if k >= 0:

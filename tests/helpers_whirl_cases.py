@@ -134,7 +134,7 @@ def cable_from_yaml(data: dict) -> LumpedCable:
             i = int(p["node"]) - 1
         else:
             at = float(p["s"]) if "s" in p else float(p["x"]) / float(cab["L"])
-            i = int(np.argmin(np.abs(frac - at) - 1e-12 * np.arange(n)[::-1]))
+            i = int(np.argmin(np.abs(frac - at)))  # (argmin: the first, nearer A, of equals)
         masses[i] += float(p.get("mass", 0.0))
         for key, target in (("F", F0), ("FL", FL)):
             if key in p:

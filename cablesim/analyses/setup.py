@@ -30,6 +30,7 @@ def build_equations(
     load_scale: float = 1.0,
     damping_ratio: float | None = None,
     slack: str | None = None,
+    support_scale: float = 1.0,
 ) -> EquationsOfMotion:
     """The equations of motion of a case about its static equilibrium under F0.
 
@@ -47,6 +48,8 @@ def build_equations(
         Overrides the case's damping ratio (same two modes).
     slack : str, optional
         ``"continue"`` or ``"stop"``; overrides the case's ``slack``.
+    support_scale : float
+        Multiplies the supports' motion alone (the support multiplier s of a continuation).
 
     Returns
     -------
@@ -85,8 +88,8 @@ def build_equations(
         slack=slack or case.slack,
         K0_band=static.K0_band.copy() if banded else None,
         K0_dense=None if banded else static.K0.copy(),
-        uA=uA * load_scale,
-        uB=uB * load_scale,
+        uA=uA * (load_scale * support_scale),
+        uB=uB * (load_scale * support_scale),
         phA=phA,
         phB=phB,
     )

@@ -67,6 +67,11 @@ def build_equations(
     banded = static.K0_band is not None  # exact analysis: K0 is block-tridiagonal, so is C
     inext = static.inextensible
     uA, uB, phA, phB = case.support_motion()  # scaled with FL by load_scale, like the loads
+    if static.analysis != "exact" and load_scale * support_scale != 0.0 and (np.any(uA) or np.any(uB)):
+        raise CablesimError(  # (a case file with analysis: approximate is refused when read)
+            "supports: moving supports need the exact analysis, and the approximate one was asked for "
+            "(--analysis approximate); leave that flag out (or give --analysis exact) to run this case in the "
+            "exact analysis, or remove supports: to use the approximate one.", field="analysis")
     # A taut cable (exact analysis only) has no natural state x(F0): x0 = y0, no elastic split.
     x0 = inext.x if inext is not None else static.y0.copy()
     F1 = inext.segments.F[0].copy() if inext is not None else _segment_one_force(static)

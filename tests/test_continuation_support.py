@@ -197,6 +197,18 @@ def test_summary_names_the_parameter_and_what_it_multiplies(stay_file):
     assert re.search(r"\b0\.2407\d*\b", row)
 
 
+def test_report_table_lists_each_bifurcation_at_its_s_and_plane(stay_file):
+    from cablesim.io.report_tables import continuation_tables
+
+    _, path = stay_file
+    (_, table), _ = continuation_tables(path)
+    assert table.columns[:4] == ["kind", "plane", "s", "ω (rad/s)"] and "|u_A| = 5.0 mm" in table.note
+    with h5py.File(path, "r") as f:
+        fb = f["continuation/bifurcations"]
+        np.testing.assert_allclose([row[2].value for row in table.rows], fb["support"][()], rtol=1e-12)
+        assert [row[1].text for row in table.rows] == [p.decode() for p in fb["plane"][()]]
+
+
 CONT = "continuation={parameter: support, omega: 2.0, support: {start: 0.0, stop: 1.0}}"
 MOVING = "supports={A: {amplitude: [0.1, 0.2]}}"
 

@@ -301,7 +301,9 @@ def continuation_tables(path: Path) -> tuple[list[Table], list[str]]:
     bif = res["bifurcations"]
     # in gamma or the support multiplier s: the parameter's column first (omega is fixed)
     symbol = {"omega": None, "gamma": "γ", "support": "s"}[res["parameter"]]
-    cols = ["kind", *([symbol] if symbol else []), "ω (rad/s)", "branch", "period",
+    planes = list(bif.get("plane", []))
+    spatial = any(p != "in-plane" for p in planes)  # the block of the critical multiplier, when it varies
+    cols = ["kind", *(["plane"] if spatial else []), *([symbol] if symbol else []), "ω (rad/s)", "branch", "period",
             *(f"|z| {ch} (m)" for ch in res["channels"]), "|μ|", "located", "trusted"]
     bt = Table("bifurcations", "Bifurcations", cols)
     if res["parameter"] == "support" and res.get("support_amplitudes"):
@@ -309,7 +311,8 @@ def continuation_tables(path: Path) -> tuple[list[Table], list[str]]:
     warnings = []
     for k, kind in enumerate(bif.get("kind", [])):
         amp = np.atleast_2d(bif["amplitude"])[k]
-        bt.rows.append([text(kind), *([num(bif["parameter"][k])] if symbol else []), num(bif["omega"][k]),
+        bt.rows.append([text(kind), *([text(planes[k])] if spatial else []), *([num(bif["parameter"][k])] if symbol else []),
+                        num(bif["omega"][k]),
                         num(bif["branch"][k], ".0f"), num(bif["period"][k], ".0f"),
                         *(num(a) for a in amp), num(abs(bif["multiplier"][k]), ".6g"),
                         text("yes" if bif["located"][k] else "no"), text("yes" if bif["trusted"][k] else "no")])

@@ -93,6 +93,18 @@ def test_the_support_multiplier_is_not_gamma(in_support):
     np.testing.assert_allclose(g.amplitude[0], amplitude, rtol=1e-8)
 
 
+def test_a_fixed_support_multiplier_in_omega_scales_the_supports_alone():
+    """continuation.support as a single value, in an omega continuation: the orbits of the case
+    written with its support amplitudes times that value."""
+    case = small_case(AMPLITUDE, {"omega": {"start": OMEGA, "stop": OMEGA * 1.0005}, "gamma": GAMMA, "support": 0.35,
+                                  "switch_branches": False})
+    (b,) = cablesim.continuation(case).result.branches
+    assert np.all(b.support == 0.35) and np.all(b.gamma == GAMMA)
+    amplitude, state = orbit_with_scaled_supports(0.35)
+    np.testing.assert_allclose(b.amplitude[0], amplitude, rtol=1e-8)
+    assert np.abs(orbit_with_scaled_supports(1.0)[0] / amplitude - 1).max() > 0.1  # s matters here
+
+
 def stay(nodes: int, omega: float, **continuation):
     data = yaml.safe_load(STAY_CASE.format(nodes=nodes, omega=omega))
     data["continuation"] = {"parameter": "support", "omega": omega, "switch_branches": False, **continuation}

@@ -71,7 +71,10 @@ def range_or_value(range_type, value_type):
 
 
 class ContinuationSpec(StrictModel):
-    """Periodic responses by shooting and pseudo-arclength continuation (``continuation:``)."""
+    """Periodic responses by shooting and pseudo-arclength continuation (``continuation:``), in the
+    forcing frequency omega, the load factor gamma (FL and the supports' motion) or the support
+    motion multiplier s (``support``: the amplitudes of ``supports:`` alone); the parameter is a
+    range ``{start, stop}``, the others single values."""
 
     parameter: Literal[CONTINUATION_PARAMETERS] = Field(default="omega", description="omega | gamma | support")
     omega: range_or_value(OmegaRange, OMEGA) = Field(description="range (parameter omega) or value, rad/s")

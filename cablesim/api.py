@@ -349,7 +349,9 @@ def continuation(
 
     Periodic orbits are found by shooting on ``(z, y')`` (Newton with the monodromy matrix of
     the variational equations) and followed by pseudo-arclength continuation in the forcing
-    frequency (or the load factor ``gamma``); folds, period doublings and Neimark-Sacker points
+    frequency, the load factor ``gamma`` (FL and the supports' motion) or the support motion
+    multiplier ``s`` (``continuation.parameter: support``: the amplitudes of ``supports:``
+    alone; ``result.branches[k].support``); folds, period doublings and Neimark-Sacker points
     are located, and every period doubling is followed onto its period-2p branch. With
     ``continuation.loci`` every fold, period doubling and Neimark-Sacker point is then continued
     in omega and gamma over ``continuation.gamma`` (``result.loci``, ``result.codim2``: cusps,

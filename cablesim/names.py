@@ -26,5 +26,6 @@ INTEGRATOR_KEYS = tuple(sorted({k for keys in INTEGRATOR_SETTINGS.values() for k
 SLACK_POLICIES = ("continue", "stop")
 #: Sweep directions (``sweep.direction``).
 DIRECTIONS = ("independent", "up", "down", "both")
-#: Continuation parameters (``continuation.parameter``).
-CONTINUATION_PARAMETERS = ("omega", "gamma")
+#: Continuation parameters (``continuation.parameter``): the forcing frequency, the multiplier of
+#: FL and of the supports' motion, and the multiplier of the supports' motion alone.
+CONTINUATION_PARAMETERS = ("omega", "gamma", "support")

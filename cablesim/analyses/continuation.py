@@ -1,4 +1,5 @@
-"""Every periodic response of a case over a frequency (or load-factor) range: case in, result out.
+"""Every periodic response of a case over a range of the forcing frequency omega, the load factor
+gamma (FL and the supports' motion) or the support motion multiplier s: case in, result out.
 
 Builds the equations of motion, starts the first branch from the linear response (or from a
 response integrated from rest), and lets :func:`cablesim.orbits.continue_branches` follow it and
@@ -38,11 +39,11 @@ class BranchResult:
     period : int
         Response period in forcing periods.
     parameter : ndarray (points,)
-        Value of the continuation parameter (omega in rad/s, or gamma).
+        Value of the continuation parameter (omega in rad/s, gamma, or the support multiplier s).
     omega : ndarray (points,)
         Forcing frequency, rad/s.
     gamma : ndarray (points,)
-        Scale of FL.
+        Scale of FL (and of the supports' motion).
     amplitude, halfrange : ndarray (points, channels)
         Largest ``|z|`` over the orbit and half its peak-to-peak range, m.
     stable, trusted : ndarray of bool (points,)
@@ -69,6 +70,9 @@ class BranchResult:
         over the orbit, m^2 (positive counter-clockwise; zero on a planar orbit).
     tilt : ndarray (points,) or None
         Spatial cable: the angle of the orbit's mean plane of motion from the cable's plane, deg.
+    support : ndarray (points,) or None
+        The support motion multiplier s: the supports move by ``gamma s`` times the amplitudes of
+        ``supports:`` (None: 1 throughout).
     """
 
     name: str
@@ -89,6 +93,7 @@ class BranchResult:
     mirror_image: bool = False
     whirl_area: np.ndarray | None = None
     tilt: np.ndarray | None = None
+    support: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -101,7 +106,7 @@ class BifurcationResult:
     on a nonplanar orbit of a spatial cable), where an out-of-plane multiplier through +1 is a
     ``pitchfork``; ``frequency_ratio``: ``|arg(mu)| / 2 pi`` of the critical multiplier (0 at a fold or
     pitchfork, 1/2 at a period doubling, the new frequency over the orbit's at a Neimark-Sacker
-    point)."""
+    point); ``gamma`` and ``support`` (the multiplier s of the supports' amplitudes) there."""
 
     kind: str
     parameter: float
@@ -114,6 +119,8 @@ class BifurcationResult:
     trusted: bool
     plane: str = IN_PLANE
     frequency_ratio: float = 0.0
+    gamma: float = 1.0
+    support: float = 1.0
 
 
 @dataclass
@@ -147,11 +154,26 @@ class ContinuationResult:
     #: The kind of failure of the first orbit: ``SLACK``, ``NONFINITE``, ``INNER_SOLVE``, or
     #: ``NEWTON`` (no convergence), "" when it was computed.
     start_cause: str = ""
+    #: gamma when it is not the parameter (with the support parameter, ``fixed`` is omega).
+    fixed_gamma: float = 1.0
+    #: The amplitude (m, one component per axis) of each moving support at support multiplier
+    #: s = 1 and gamma = 1, as ``supports:`` gives it: ``{"A": array, ...}``.
+    support_amplitudes: dict = field(default_factory=dict)
+    #: Components per node of the cable: 2 (planar) or 3 (spatial), which the DOF of
+    #: ``channels`` count in.
+    components: int = 2
 
     @property
     def n_points(self) -> int:
         """Points over all branches."""
         return int(sum(b.parameter.size for b in self.branches))
+
+
+def support_amplitudes(case: Case) -> dict:
+    """The amplitude (m, ``case.dim`` components) of each moving support as ``supports:`` gives
+    it (support multiplier s = 1, gamma = 1): ``{"A": array, "B": array}``, the still ones left out."""
+    uA, uB, _, _ = case.support_motion()
+    return {name: u.copy() for name, u in (("A", uA), ("B", uB)) if np.any(u != 0.0)}
 
 
 def continuation_channels(case: Case) -> tuple[list[str], np.ndarray]:
@@ -196,7 +218,16 @@ def _start_cause(diagram) -> str:
     return failure.name if failure is not None and failure.name in _FAILURE_TEXT else "NEWTON"
 
 
-def _grazing_points(diagram, parameter: str, fixed: float, idx: np.ndarray, dim: int = 2) -> list:
+def parameter_values(spec, value: float) -> dict:
+    """``omega`` (rad/s), ``gamma`` and ``support`` (s) of an orbit at parameter ``value`` of the
+    ``continuation:`` section ``spec`` (the others at their fixed values)."""
+    out = {"omega": spec.fixed if spec.parameter != "omega" else 0.0, "gamma": spec.fixed_gamma,
+           "support": spec.fixed_support}
+    out[spec.parameter] = float(value)
+    return out
+
+
+def _grazing_points(diagram, spec, idx: np.ndarray, dim: int = 2) -> list:
     """A branch that ended because a segment went slack ends at a *grazing* orbit: its last
     orbit, whose smallest tension is about to reach zero (orbits with slack intervals are not
     followed). One record per such branch, at its last orbit."""
@@ -206,8 +237,9 @@ def _grazing_points(diagram, parameter: str, fixed: float, idx: np.ndarray, dim:
         if not br.points or failure is None or failure.name != "SLACK":
             continue
         p = br.points[-1]
+        at = parameter_values(spec, p.parameter)
         out.append(BifurcationResult(
-            kind="grazing", parameter=float(p.parameter), omega=float(p.omega),
+            kind="grazing", parameter=float(p.parameter), omega=float(p.omega), gamma=at["gamma"], support=at["support"],
             branch=k, period=int(br.period), amplitude=np.asarray(p.amplitude)[idx],
             multiplier=complex(p.multipliers[0]), located=False, trusted=bool(p.trusted),
             frequency_ratio=frequency_ratio(complex(p.multipliers[0])), plane=IN_PLANE if dim == 2 or br.planar else COUPLED))
@@ -221,17 +253,19 @@ def _planes(br, dim: int) -> np.ndarray:
                     dtype=str).reshape(len(br.points), -1)
 
 
-def _branch(k: int, br, parameter: str, fixed: float, idx: np.ndarray, dim: int = 2) -> BranchResult:
+def _branch(k: int, br, spec, idx: np.ndarray, dim: int = 2) -> BranchResult:
     pts = br.points
     values = np.array([p.parameter for p in pts], dtype=float)
     omega = np.array([p.omega for p in pts], dtype=float)
-    gamma = values.copy() if parameter == "gamma" else np.full(values.size, fixed)
+    gamma = values.copy() if spec.parameter == "gamma" else np.full(values.size, spec.fixed_gamma)
+    support = values.copy() if spec.parameter == "support" else np.full(values.size, spec.fixed_support)
     return BranchResult(
         name=f"b{k}-p{br.period}",
         period=int(br.period),
         parameter=values,
         omega=omega,
         gamma=gamma,
+        support=support,
         amplitude=np.array([p.amplitude[idx] for p in pts]).reshape(len(pts), idx.size),
         halfrange=np.array([p.halfrange[idx] for p in pts]).reshape(len(pts), idx.size),
         stable=np.array([p.stable for p in pts], dtype=bool),
@@ -257,9 +291,10 @@ def _whirling(br, dim: int) -> dict:
     return {"whirl_area": area, "tilt": tilt}
 
 
-def _integrated_start(case: Case, static, omega: float, gamma: float, names, idx) -> np.ndarray:
-    """``(z, y')`` at forcing phase 0 of the response integrated from rest until steady."""
-    eom = build_equations(case, static, omega=omega, load_scale=gamma)
+def _integrated_start(case: Case, static, omega: float, gamma: float, names, idx, support: float = 1.0) -> np.ndarray:
+    """``(z, y')`` at forcing phase 0 of the response integrated from rest until steady (the
+    supports' motion scaled by ``gamma support``)."""
+    eom = build_equations(case, static, omega=omega, load_scale=gamma, support_scale=support)
     integ = make_integrator(case.integrator, eom, frequency_of_interest(eom, omega))
     sw = case.sweep
     crit = SteadyCriterion() if sw is None else SteadyCriterion(cap=sw.duration, window=sw.window, tol=sw.tol,
@@ -268,7 +303,7 @@ def _integrated_start(case: Case, static, omega: float, gamma: float, names, idx
     if point.failed:
         raise CablesimError(
             f"continuation.start_from is history, but the response at the start ({omega:g} rad/s, gamma "
-            f"{gamma:g}) could not be integrated: {point.message}. Start from the linear response instead "
+            f"{gamma:g}, support {support:g}) could not be integrated: {point.message}. Start from the linear response instead "
             "(start_from: linear).", field="continuation.start_from")
     return point.final_state[: 2 * eom.n_dof]
 
@@ -317,13 +352,13 @@ def run_continuation(
                             "give peak harmonic loads FL or a support amplitude (supports:).", field="loads.FL")
     static = run_static(case, analysis, all_models=False)
     rng, fixed = spec.range, spec.fixed
-    omega0 = rng.start if spec.parameter == "omega" else fixed
-    gamma0 = rng.start if spec.parameter == "gamma" else fixed
+    at_start = parameter_values(spec, rng.start)
+    omega0 = at_start["omega"]
     eom = build_equations(case, static, omega=omega0, load_scale=1.0)
     names, idx = continuation_channels(case)
     initial = None
     if spec.start_from == "history":
-        initial = _integrated_start(case, static, omega0, gamma0, names, idx)
+        initial = _integrated_start(case, static, omega0, at_start["gamma"], names, idx, at_start["support"])
     t0 = time.perf_counter()
 
     def callback(point):
@@ -335,30 +370,29 @@ def run_continuation(
     try:
         diagram = continue_branches(
             eom, spec.parameter, rng.start, rng.stop, period=spec.period, switch_branches=spec.switch_branches,
-            callback=callback, gamma=fixed if spec.parameter == "omega" else 1.0, initial_state=initial,
+            callback=callback, gamma=spec.fixed_gamma, support=spec.fixed_support, initial_state=initial,
             segments=spec.segments, max_period=spec.max_period, settings=Settings(max_points=spec.max_points),
         )
     except BranchesInterrupted as exc:  # keep the orbits computed so far
         diagram, interrupted = exc.diagram, True
-    branches = [_branch(k, br, spec.parameter, fixed, idx, case.dim) for k, br in enumerate(diagram.branches)
-                if br.points]
+    branches = [_branch(k, br, spec, idx, case.dim) for k, br in enumerate(diagram.branches) if br.points]
     other = IN_PLANE if case.dim == 2 else COUPLED
     bifs = [
         BifurcationResult(
-            kind=b.kind, parameter=float(b.parameter),
-            omega=float(b.parameter) if spec.parameter == "omega" else fixed,
+            kind=b.kind, parameter=float(b.parameter), **parameter_values(spec, b.parameter),
             branch=int(b.branch), period=int(b.period), amplitude=np.asarray(b.amplitude)[idx],
             multiplier=complex(b.multiplier), located=bool(b.located), trusted=bool(b.trusted),
             plane=b.plane or other, frequency_ratio=frequency_ratio(complex(b.multiplier)),
         )
         for b in diagram.bifurcations
     ]
-    bifs += _grazing_points(diagram, spec.parameter, fixed, idx, case.dim)
+    bifs += _grazing_points(diagram, spec, idx, case.dim)
     stats = dict(diagram.stats)
     result = ContinuationResult(
         parameter=spec.parameter, start=rng.start, stop=rng.stop, fixed=fixed, channels=names, branches=branches,
         bifurcations=bifs, analysis=static.analysis, modal_omega=static.modes.omega.copy(), case_name=case.name,
         case_text=case.text, stats=stats, start_failure=_start_failure(diagram), warnings=list(static.warnings),
+        fixed_gamma=spec.fixed_gamma, support_amplitudes=support_amplitudes(case), components=case.dim,
     )
     result.start_cause = _start_cause(diagram) if result.start_failure else ""
     if interrupted:

@@ -300,7 +300,7 @@ ORBIT_SAMPLES = 120
 
 
 def plan_orbit(case: Case, omega: float, gamma: float, state: np.ndarray, period: int, periods: int = 2,
-               analysis: str | None = None, samples: int = ORBIT_SAMPLES) -> HistoryPlan:
+               analysis: str | None = None, samples: int = ORBIT_SAMPLES, support: float = 1.0) -> HistoryPlan:
     """A forced response started on a periodic orbit of a continuation, without integrating.
 
     Parameters
@@ -321,6 +321,9 @@ def plan_orbit(case: Case, omega: float, gamma: float, state: np.ndarray, period
         Must be the exact analysis (the approximate one starts only from its equilibrium).
     samples : int
         Saved instants per forcing period.
+    support : float
+        The orbit's support motion multiplier s (the supports move by ``gamma s`` times the
+        amplitudes of ``supports:``).
 
     Returns
     -------
@@ -331,7 +334,7 @@ def plan_orbit(case: Case, omega: float, gamma: float, state: np.ndarray, period
         raise CablesimError("An orbit of the approximate analysis cannot be started away from its equilibrium; "
                             "continue in the exact analysis (--analysis exact) to animate its orbits, or animate "
                             "a history at the orbit's frequency.", field="analysis")
-    eom = build_equations(case, static, omega=omega, load_scale=gamma)
+    eom = build_equations(case, static, omega=omega, load_scale=gamma, support_scale=support)
     n = eom.n_dof
     state = np.asarray(state, dtype=float)
     if state.size < 2 * n:

@@ -76,7 +76,7 @@ def _continuation_text(case: Case, analysis) -> str:
         raise CablesimError("This case has no `continuation:` section (`cablesim example` shows one).")
     rng = spec.range
     stop = rng.start + PROBE_FRACTION * (rng.stop - rng.start)
-    key = "omega" if spec.parameter == "omega" else "gamma"
+    key = spec.parameter
     probe_case = parse_case(case.text, overrides=[f"continuation.{key}={{start: {rng.start!r}, stop: {stop!r}}}",
                                                   "continuation.switch_branches=false"])
     run_continuation(probe_case, analysis)  # loads the kernels

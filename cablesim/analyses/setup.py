@@ -30,6 +30,7 @@ def build_equations(
     load_scale: float = 1.0,
     damping_ratio: float | None = None,
     slack: str | None = None,
+    support_scale: float = 1.0,
 ) -> EquationsOfMotion:
     """The equations of motion of a case about its static equilibrium under F0.
 
@@ -47,6 +48,8 @@ def build_equations(
         Overrides the case's damping ratio (same two modes).
     slack : str, optional
         ``"continue"`` or ``"stop"``; overrides the case's ``slack``.
+    support_scale : float
+        Multiplies the supports' motion alone (the support multiplier s of a continuation).
 
     Returns
     -------
@@ -64,6 +67,11 @@ def build_equations(
     banded = static.K0_band is not None  # exact analysis: K0 is block-tridiagonal, so is C
     inext = static.inextensible
     uA, uB, phA, phB = case.support_motion()  # scaled with FL by load_scale, like the loads
+    if static.analysis != "exact" and load_scale * support_scale != 0.0 and (np.any(uA) or np.any(uB)):
+        raise CablesimError(  # (a case file with analysis: approximate is refused when read)
+            "supports: moving supports need the exact analysis, and the approximate one was asked for "
+            "(--analysis approximate); leave that flag out (or give --analysis exact) to run this case in the "
+            "exact analysis, or remove supports: to use the approximate one.", field="analysis")
     # A taut cable (exact analysis only) has no natural state x(F0): x0 = y0, no elastic split.
     x0 = inext.x if inext is not None else static.y0.copy()
     F1 = inext.segments.F[0].copy() if inext is not None else _segment_one_force(static)
@@ -85,8 +93,8 @@ def build_equations(
         slack=slack or case.slack,
         K0_band=static.K0_band.copy() if banded else None,
         K0_dense=None if banded else static.K0.copy(),
-        uA=uA * load_scale,
-        uB=uB * load_scale,
+        uA=uA * (load_scale * support_scale),
+        uB=uB * (load_scale * support_scale),
         phA=phA,
         phB=phB,
     )

@@ -13,6 +13,8 @@ from .sections import StrictModel
 
 #: A load factor gamma (scales FL and the support amplitudes).
 GAMMA = real(0.0, 1e6, lo_open=True)
+#: A support motion multiplier s (scales the amplitudes of ``supports:`` alone; 0: the supports at rest).
+SUPPORT = real(0.0, 1e6)
 
 
 class ParameterRange(StrictModel):
@@ -33,6 +35,15 @@ class OmegaRange(ParameterRange):
 
     start: OMEGA = Field(description="first frequency, rad/s")
     stop: OMEGA = Field(description="last frequency, rad/s")
+
+
+class SupportRange(ParameterRange):
+    """A range of the support motion multiplier s (``continuation.support``): dimensionless, the
+    amplitudes of ``supports:`` times s (s = 1: as written; s = 0: the cable at rest under its
+    static loads, when FL is zero)."""
+
+    start: SUPPORT = Field(description="first multiplier (may be 0)")
+    stop: SUPPORT = Field(description="last multiplier")
 
 
 class LociRange(ParameterRange):
@@ -60,12 +71,17 @@ def range_or_value(range_type, value_type):
 
 
 class ContinuationSpec(StrictModel):
-    """Periodic responses by shooting and pseudo-arclength continuation (``continuation:``)."""
+    """Periodic responses by shooting and pseudo-arclength continuation (``continuation:``), in the
+    forcing frequency omega, the load factor gamma (FL and the supports' motion) or the support
+    motion multiplier s (``support``: the amplitudes of ``supports:`` alone); the parameter is a
+    range ``{start, stop}``, the others single values."""
 
-    parameter: Literal[CONTINUATION_PARAMETERS] = Field(default="omega", description="omega | gamma")
+    parameter: Literal[CONTINUATION_PARAMETERS] = Field(default="omega", description="omega | gamma | support")
     omega: range_or_value(OmegaRange, OMEGA) = Field(description="range (parameter omega) or value, rad/s")
     gamma: range_or_value(LociRange, GAMMA) = Field(default=1.0, description=(
-        "range (parameter gamma, or loci) or value; scales FL"))
+        "range (parameter gamma, or loci) or value; scales FL and the supports' motion"))
+    support: range_or_value(SupportRange, SUPPORT) = Field(default=1.0, description=(
+        "range (parameter support) or value; multiplies the amplitudes of supports: alone"))
     period: integer(1, 16) = Field(default=1, description="period of the first branch, forcing periods")
     switch_branches: bool = Field(default=True, description="follow every period doubling onto its 2p branch")
     channels: tuple[str, ...] | None = Field(default=None, description="DOF reported, e.g. [z2, z4]")
@@ -80,36 +96,56 @@ class ContinuationSpec(StrictModel):
 
     @model_validator(mode="after")
     def _ranges(self):
-        ranged = {k: isinstance(getattr(self, k), ParameterRange) for k in ("omega", "gamma")}
+        names = CONTINUATION_PARAMETERS
+        ranged = {k: isinstance(getattr(self, k), ParameterRange) for k in names}
         if self.loci:
-            if self.parameter != "omega" or not (ranged["omega"] and ranged["gamma"]):
-                raise ValueError(
-                    "continuation.loci needs the response in omega (parameter: omega, the default) with "
-                    "continuation.omega a range {start: .., stop: ..} and continuation.gamma the range of "
-                    "the curves {start: .., stop: .., at: ..} (at: the gamma of the response, default stop)")
-            g = self.gamma
-            if g.at is not None and not min(g.start, g.stop) <= g.at <= max(g.start, g.stop):
-                raise ValueError(f"continuation.gamma.at ({g.at:g}) must lie between gamma.start ({g.start:g}) and "
-                                 f"gamma.stop ({g.stop:g}), the range the curves are continued over")
-            bad = [x for x in g.levels if not min(g.start, g.stop) <= x <= max(g.start, g.stop)]
-            if bad:
-                raise ValueError(f"continuation.gamma.levels: {', '.join(f'{x:g}' for x in bad)} outside the range "
-                                 f"gamma.start ({g.start:g}) to gamma.stop ({g.stop:g}); give levels inside it")
-            return self
-        other = "gamma" if self.parameter == "omega" else "omega"
+            return self._loci_ranges(ranged)
         if not ranged[self.parameter]:
             raise ValueError(
                 f"continuation.parameter is {self.parameter}, so continuation.{self.parameter} must be a "
                 f"range {{start: .., stop: ..}}"
             )
-        if ranged[other]:
-            hint = " (or add loci: true to continue the bifurcations over that gamma range)" if other == "gamma" else ""
-            raise ValueError(f"continuation.{other} must be a single value when the parameter is {self.parameter}"
-                             + hint)
+        for other in (k for k in names if k != self.parameter and ranged[k]):
+            raise ValueError(self._single_value_text(other))
         if isinstance(self.gamma, LociRange) and (self.gamma.at is not None or self.gamma.levels):
             raise ValueError("continuation.gamma.at and continuation.gamma.levels are used only with loci: true")
-        if not isinstance(getattr(self, other), ParameterRange) and not getattr(self, other) > 0:
-            raise ValueError(f"continuation.{other} must be positive")
+        for other in (k for k in ("omega", "gamma") if k != self.parameter):
+            if not getattr(self, other) > 0:
+                raise ValueError(f"continuation.{other} must be positive")
+        return self
+
+    def _single_value_text(self, other: str) -> str:
+        """The refusal of a range given for ``other``, which is not the parameter."""
+        if other == "support":
+            return (f"continuation.support is a range, but the parameter is {self.parameter}: continue in the "
+                    "support motion multiplier with parameter: support (omega and gamma then single values), "
+                    "or give continuation.support a single value (the multiplier of the amplitudes of "
+                    "supports:, default 1)")
+        hint = (" (or add loci: true to continue the bifurcations over that gamma range)"
+                if other == "gamma" and self.parameter == "omega" else "")
+        return f"continuation.{other} must be a single value when the parameter is {self.parameter}" + hint
+
+    def _loci_ranges(self, ranged: dict):
+        """The checks of ``loci: true`` (the response in omega, the curves over a gamma range)."""
+        if self.parameter == "support" or ranged["support"] or self.support != 1.0:
+            raise ValueError(
+                "continuation.loci with the support motion multiplier (continuation.support) is not supported: "
+                "the bifurcation curves are continued in omega and gamma only. Remove loci: true to continue "
+                "the responses in support (parameter: support), or remove continuation.support (gamma "
+                "scales the supports' motion with FL)")
+        if self.parameter != "omega" or not (ranged["omega"] and ranged["gamma"]):
+            raise ValueError(
+                "continuation.loci needs the response in omega (parameter: omega, the default) with "
+                "continuation.omega a range {start: .., stop: ..} and continuation.gamma the range of "
+                "the curves {start: .., stop: .., at: ..} (at: the gamma of the response, default stop)")
+        g = self.gamma
+        if g.at is not None and not min(g.start, g.stop) <= g.at <= max(g.start, g.stop):
+            raise ValueError(f"continuation.gamma.at ({g.at:g}) must lie between gamma.start ({g.start:g}) and "
+                             f"gamma.stop ({g.stop:g}), the range the curves are continued over")
+        bad = [x for x in g.levels if not min(g.start, g.stop) <= x <= max(g.start, g.stop)]
+        if bad:
+            raise ValueError(f"continuation.gamma.levels: {', '.join(f'{x:g}' for x in bad)} outside the range "
+                             f"gamma.start ({g.start:g}) to gamma.stop ({g.stop:g}); give levels inside it")
         return self
 
     @property
@@ -119,9 +155,20 @@ class ContinuationSpec(StrictModel):
 
     @property
     def fixed(self) -> float:
-        """The value of the other parameter (omega in rad/s, or gamma; with loci the gamma of the
-        response curve)."""
+        """The value of the other parameter: gamma when the parameter is omega (with loci the
+        gamma of the response curve), omega in rad/s when it is gamma or support."""
         if self.loci:
             g = self.gamma
             return float(g.at if g.at is not None else g.stop)
         return float(getattr(self, "gamma" if self.parameter == "omega" else "omega"))
+
+    @property
+    def fixed_gamma(self) -> float:
+        """The multiplier gamma of FL (and of the supports' motion) when it is not the parameter
+        (with loci, the gamma of the response curve)."""
+        return self.fixed if self.parameter == "omega" else 1.0 if self.parameter == "gamma" else float(self.gamma)
+
+    @property
+    def fixed_support(self) -> float:
+        """The support motion multiplier s when it is not the parameter (default 1)."""
+        return 1.0 if self.parameter == "support" else float(self.support)

@@ -153,6 +153,13 @@ class Case(StrictModel):
                                  "spatial: true, or remove it")
         if self.supports is not None and self.supports.moving and self.analysis != "exact":
             raise ValueError("supports: moving supports need the exact analysis; set analysis: exact")
+        moving = self.supports is not None and self.supports.moving
+        if self.continuation is not None and not moving and (self.continuation.parameter == "support"
+                                                             or self.continuation.support != 1.0):
+            raise ValueError(
+                "continuation.support multiplies the amplitudes of moving supports, but no support of this case "
+                "moves; add one, e.g. `supports: {A: {amplitude: [0.004, -0.003]}}` (m), or continue in omega "
+                "or gamma (continuation.parameter)")
         if self.backbone.mode > nd:
             raise ValueError(f"backbone.mode is {self.backbone.mode}; this cable has {dim}n = {nd} modes")
         for section in ("history", "free_vibration", "sweep", "outputs", "continuation", "backbone", "figure"):

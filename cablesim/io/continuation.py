@@ -2,14 +2,21 @@
 
 Layout (with the root attributes of every cablesim file, see :mod:`cablesim.io.hdf5`):
 
-- ``/continuation`` attributes ``parameter`` (``omega`` or ``gamma``), ``start``, ``stop``,
-  ``fixed`` (the other parameter's value), ``channels``, ``case_name``, ``complete`` (False: an
-  interrupted run, holding the orbits computed until then) and the cost counters;
-- ``/continuation/branches/<name>/{parameter, omega, gamma, amplitude (points x channels, max |z|
-  over the orbit), halfrange, stable, trusted, multipliers (complex), state}`` with attributes
-  ``period``, ``channels``, ``parent`` (-1: none) and ``end``;
-- ``/continuation/bifurcations/{kind, parameter, omega, branch, period, amplitude (x channels),
-  multiplier (complex), located, trusted, plane (in-plane, out-of-plane or coupled),
+- ``/continuation`` attributes ``parameter`` (``omega``, ``gamma`` or ``support``), ``start``,
+  ``stop``, ``fixed`` (the other parameter's value: gamma in omega, omega in rad/s in gamma or
+  support), ``gamma`` (the fixed gamma, unless it is the parameter), ``channels``,
+  ``components`` (per node: 2 planar, 3 spatial; the channels' DOF count in them),
+  ``case_name``, ``complete`` (False: an interrupted run, holding the orbits computed until
+  then) and the cost counters;
+- ``/continuation/branches/<name>/{parameter, omega, gamma, support, amplitude (points x channels,
+  max |z| over the orbit), halfrange, stable, trusted, multipliers (complex), state}`` with
+  attributes ``period``, ``channels``, ``parent`` (-1: none) and ``end``; ``support`` is the
+  support motion multiplier s (the supports move by gamma s times the amplitudes of
+  ``supports:``), with the attribute ``amplitude_<A|B>`` (m) of each moving support at s = 1;
+- ``/continuation/support_amplitude`` (moving supports, one row each, m), attribute ``supports``;
+- ``/continuation/bifurcations/{kind, parameter, omega, gamma, support, branch, period,
+  amplitude (x channels), multiplier (complex), located, trusted, plane (in-plane,
+  out-of-plane or coupled),
   frequency_ratio (``|arg(mu)| / 2 pi`` of the critical multiplier: the new frequency over the
   orbit's at a Neimark-Sacker point)}``; an out-of-plane
   multiplier of a planar orbit through +1 is a ``pitchfork`` (symmetry breaking);
@@ -40,18 +47,61 @@ from .hdf5 import atomic_h5, attr_text, open_result, put, stamp
 KINDS = ("fold", "period-doubling", "neimark-sacker", "branch-point", "pitchfork", "grazing")
 
 
+#: Each continuation parameter in words, with its unit (summaries, tables and figures).
+PARAMETER_WORDS = {"omega": "forcing frequency omega (rad/s)", "gamma": "load factor gamma",
+                   "support": "support motion multiplier s"}
+
+
+def length_text(metres: float) -> str:
+    """A support amplitude in words: ``"5.0 mm"`` below 1 m, else ``"1.25 m"``."""
+    if abs(metres) >= 1.0:
+        return f"{metres:.3g} m"
+    mm = abs(metres) * 1e3
+    return f"{mm:.0f} mm" if mm >= 10 else f"{mm:.1f} mm" if mm >= 0.1 else f"{mm:.2g} mm"
+
+
+def support_meaning(amplitudes: dict) -> str:
+    """What support multiplier s = 1 stands for: ``"s = 1: |u_A| = 5.0 mm"`` (the length of each
+    moving support's amplitude vector, m, as ``supports:`` gives it); "" without one."""
+    parts = [f"|u_{name}| = {length_text(float(np.linalg.norm(u)))}" for name, u in amplitudes.items()]
+    return f"s = 1: {', '.join(parts)}" if parts else ""
+
+
+#: Description of the support motion multiplier s in the files.
+SUPPORT_TEXT = ("support motion multiplier s: multiplies the amplitudes of supports: (s = 1: as written; "
+                "the supports move by gamma s times them)")
+
+
+def _put_support(group, values, amplitudes: dict):
+    """The support multiplier column, with the amplitude (m) of each moving support at s = 1."""
+    ds = put(group, "support", values, "1", SUPPORT_TEXT)
+    for name, u in amplitudes.items():
+        ds.attrs[f"amplitude_{name}"] = np.asarray(u, dtype=float)
+    if amplitudes:
+        ds.attrs["amplitude_units"] = "m"
+    return ds
+
+
 def write_continuation(path: str | Path, res) -> Path:
     """Write a :class:`~cablesim.analyses.continuation.ContinuationResult` atomically."""
     unit = "rad/s" if res.parameter == "omega" else "1"
+    amplitudes = dict(getattr(res, "support_amplitudes", {}) or {})
     with atomic_h5(path) as f:
         stamp(f, res.case_text, "continue", analysis=res.analysis)
         g = f.create_group("continuation")
         for k, v in dict(parameter=res.parameter, start=res.start, stop=res.stop, fixed=res.fixed,
                          case_name=res.case_name).items():
             g.attrs[k] = v
+        if res.parameter != "gamma":
+            g.attrs["gamma"] = float(getattr(res, "fixed_gamma", 1.0))  # the fixed gamma
+        if amplitudes:
+            ds = put(g, "support_amplitude", np.array(list(amplitudes.values()), dtype=float), "m",
+                     "amplitude of each moving support at support multiplier s = 1 and gamma = 1, as supports: gives it")
+            ds.attrs["supports"] = np.array(list(amplitudes), dtype="S")
         g.attrs["complete"] = bool(getattr(res, "complete", True))  # False: interrupted, the orbits until then
         g.attrs["warnings"] = json.dumps(list(getattr(res, "warnings", ())))  # plausibility warnings
         g.attrs["channels"] = np.array(res.channels, dtype="S")
+        g.attrs["components"] = int(getattr(res, "components", 2))  # per node: 2 planar, 3 spatial
         for k, v in res.stats.items():
             g.attrs[f"cost_{k}"] = v
         bg = g.create_group("branches")
@@ -61,7 +111,8 @@ def write_continuation(path: str | Path, res) -> Path:
             h.attrs["channels"] = np.array(res.channels, dtype="S")
             put(h, "parameter", b.parameter, unit, f"continuation parameter ({res.parameter})")
             put(h, "omega", b.omega, "rad/s", "forcing frequency")
-            put(h, "gamma", b.gamma, "1", "scale of the harmonic loads FL")
+            put(h, "gamma", b.gamma, "1", "scale of the harmonic loads FL and of the supports' motion")
+            _put_support(h, b.support if b.support is not None else np.ones(b.parameter.size), amplitudes)
             put(h, "amplitude", b.amplitude, "m", "largest |z| over the orbit, per channel")
             put(h, "halfrange", b.halfrange, "m", "half the peak-to-peak range over the orbit, per channel")
             put(h, "stable", b.stable, "1", "all Floquet multipliers inside the unit circle")
@@ -83,6 +134,9 @@ def write_continuation(path: str | Path, res) -> Path:
         put(fg, "kind", np.array([b.kind for b in bifs], dtype="S"), "1", "fold, period-doubling, neimark-sacker")
         put(fg, "parameter", np.array([b.parameter for b in bifs], dtype=float), unit, "where")
         put(fg, "omega", np.array([b.omega for b in bifs], dtype=float), "rad/s", "forcing frequency")
+        put(fg, "gamma", np.array([getattr(b, "gamma", 1.0) for b in bifs], dtype=float), "1",
+            "scale of the harmonic loads FL and of the supports' motion")
+        _put_support(fg, np.array([getattr(b, "support", 1.0) for b in bifs], dtype=float), amplitudes)
         put(fg, "branch", np.array([b.branch for b in bifs], dtype=int), "1", "index of the branch")
         put(fg, "period", np.array([b.period for b in bifs], dtype=int), "forcing periods", "of the orbit")
         put(fg, "amplitude", np.array([b.amplitude for b in bifs], dtype=float).reshape(len(bifs), len(res.channels)),
@@ -107,8 +161,11 @@ def read_continuation(path: str | Path) -> dict:
     Returns
     -------
     dict
-        ``parameter``, ``start``, ``stop``, ``fixed``, ``channels``, ``case_name``, ``analysis``, ``complete``,
-        ``modal`` (rad/s), ``branches`` (list of dicts with the datasets and ``name``, ``period``,
+        ``parameter``, ``start``, ``stop``, ``fixed``, ``gamma`` (the fixed gamma; 1 in gamma), ``channels``,
+        ``case_name``, ``analysis``, ``complete``, ``components``, ``modal`` (rad/s),
+        ``support_amplitudes`` (support
+        name -> amplitude, m, at support multiplier 1; empty if none moves, or a file written before
+        it was stored), ``branches`` (list of dicts with the datasets and ``name``, ``period``,
         ``parent``, ``end``, in file order), ``bifurcations`` (dict of arrays) and ``loci``
         (:func:`~cablesim.io.charts.read_loci`, None without bifurcation curves).
     """
@@ -147,6 +204,12 @@ def _read(f, path: Path) -> dict:
     g = f["continuation"]
     out = {k: g.attrs[k] for k in ("start", "stop", "fixed")}
     out["parameter"] = attr_text(g.attrs["parameter"])
+    out["gamma"] = float(g.attrs.get("gamma", out["fixed"] if out["parameter"] == "omega" else 1.0))
+    out["support_amplitudes"] = {}
+    if "support_amplitude" in g:
+        ds = g["support_amplitude"]
+        names = [attr_text(n) for n in np.asarray(ds.attrs["supports"]).ravel()]
+        out["support_amplitudes"] = dict(zip(names, np.asarray(ds[()], dtype=float).reshape(len(names), -1)))
     out["complete"] = bool(g.attrs.get("complete", True))
     out["case_name"] = attr_text(g.attrs.get("case_name", path.stem))
     out["channels"] = [attr_text(c) for c in np.asarray(g.attrs["channels"]).ravel()]
@@ -155,6 +218,7 @@ def _read(f, path: Path) -> dict:
     branches = []
     for name, h in g["branches"].items():
         b = {k: np.asarray(h[k][()]) for k in h}
+        b.setdefault("support", np.ones(np.asarray(b.get("parameter", ())).size))  # files before the support column
         if "multiplier_plane" in b:
             b["multiplier_plane"] = np.char.decode(b["multiplier_plane"].astype("S"))
         b["planar"] = bool(h.attrs.get("planar", False))
@@ -170,4 +234,6 @@ def _read(f, path: Path) -> dict:
         bif["plane"] = [attr_text(k) for k in bif["plane"]]
     out["bifurcations"] = bif
     out["loci"] = read_loci(g)
+    spatial = any("whirl_area" in b for b in branches)  # (files written before the attribute)
+    out["components"] = int(g.attrs.get("components", 3 if spatial else 2))
     return out

@@ -9,6 +9,7 @@ from ..case.placement import placements_text
 from ..dynamics.extremes import peak_and_half_range
 from ..dynamics.spectra import spectrum_peaks
 from ..version import __version__
+from .continuation import PARAMETER_WORDS, support_meaning
 
 
 def _table(header: list[str], rows: list[list[str]]) -> str:
@@ -315,14 +316,24 @@ def _whirling_lines(res) -> list:
     return ([""] + out) if out else []
 
 
+def continuation_conditions(res) -> str:
+    """The fixed parameters of a continuation in words: ``"omega = 12.08 rad/s, gamma = 1"``."""
+    if res.parameter == "omega":
+        return f"gamma = {res.fixed:g}"
+    fixed = f"omega = {res.fixed:g} rad/s"
+    return fixed + (f", gamma = {getattr(res, 'fixed_gamma', 1.0):g}" if res.parameter == "support" else "")
+
+
 def continuation_summary(case, res, wall: float) -> str:
     """Summary of a continuation: branches, their stable parts, and the bifurcations found."""
     unit = "rad/s" if res.parameter == "omega" else ""
-    fixed = f"gamma = {res.fixed:g}" if res.parameter == "omega" else f"omega = {res.fixed:g} rad/s"
     cost = res.stats
+    name = PARAMETER_WORDS["support"] if res.parameter == "support" else res.parameter
+    meaning = support_meaning(getattr(res, "support_amplitudes", {})) if res.parameter == "support" else ""
+    span = f"from {res.start:g} to {res.stop:g} {unit}".strip()
     lines = [
-        f"cablesim {__version__}: continuation of '{case.name}' in {res.parameter} from {res.start:g} to "
-        f"{res.stop:g} {unit} ({fixed}, {res.analysis} analysis)",
+        f"cablesim {__version__}: continuation of '{case.name}' in {name} {span} "
+        f"({continuation_conditions(res)}, {res.analysis} analysis{'; ' + meaning if meaning else ''})",
         f"{len(res.branches)} branch(es), {res.n_points} periodic orbits in {wall:.3g} s wall time"
         + (f" ({cost['evaluations']} shooting evaluations)" if "evaluations" in cost else ""),
         "",
@@ -345,6 +356,7 @@ def continuation_summary(case, res, wall: float) -> str:
                  ("" if b.located else "not located; ") + ("" if b.trusted else "multipliers not trusted")
                  + (f"frequency ratio {b.frequency_ratio:.4f}" if b.kind == "neimark-sacker" else "")]
                 for b in sorted(res.bifurcations, key=lambda b: (b.branch, b.parameter))]
-        lines.append(_table(["kind"] + (["plane"] if spatial else []) + [res.parameter, "branch", "period", f"{', '.join(res.channels)} (m)", "|mu|",
+        symbol = "s" if res.parameter == "support" else res.parameter
+        lines.append(_table(["kind"] + (["plane"] if spatial else []) + [symbol, "branch", "period", f"{', '.join(res.channels)} (m)", "|mu|",
                              "notes"], rows))
     return "\n".join(lines)

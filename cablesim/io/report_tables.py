@@ -18,7 +18,7 @@ import numpy as np
 from ..analyses.static import strain_warnings
 from ..case import parse_case
 from ..channels import channel_description
-from .continuation import read_continuation
+from .continuation import read_continuation, support_meaning
 from .hdf5 import attr_text, inspect_result
 from .sweeps import read_sweep, sweep_summary_rows
 
@@ -299,17 +299,26 @@ def continuation_tables(path: Path) -> tuple[list[Table], list[str]]:
         br.rows.append([text(b["name"]), num(b["period"], ".0f"), num(p.size, ".0f"), num(p.min() if p.size else np.nan),
                         num(p.max() if p.size else np.nan), num(int(np.sum(b["stable"])), ".0f"), text(b["end"])])
     bif = res["bifurcations"]
-    cols = ["kind", "ω (rad/s)", "branch", "period", *(f"|z| {ch} (m)" for ch in res["channels"]), "|μ|",
-            "located", "trusted"]
+    # in gamma or the support multiplier s: the parameter's column first (omega is fixed)
+    symbol = {"omega": None, "gamma": "γ", "support": "s"}[res["parameter"]]
+    planes = list(bif.get("plane", []))
+    spatial = any(p != "in-plane" for p in planes)  # the block of the critical multiplier, when it varies
+    cols = ["kind", *(["plane"] if spatial else []), *([symbol] if symbol else []), "ω (rad/s)", "branch", "period",
+            *(f"|z| {ch} (m)" for ch in res["channels"]), "|μ|", "located", "trusted"]
     bt = Table("bifurcations", "Bifurcations", cols)
+    if res["parameter"] == "support" and res.get("support_amplitudes"):
+        bt.note = f"s multiplies the amplitudes of the moving supports ({support_meaning(res['support_amplitudes'])})."
     warnings = []
     for k, kind in enumerate(bif.get("kind", [])):
         amp = np.atleast_2d(bif["amplitude"])[k]
-        bt.rows.append([text(kind), num(bif["omega"][k]), num(bif["branch"][k], ".0f"), num(bif["period"][k], ".0f"),
+        bt.rows.append([text(kind), *([text(planes[k])] if spatial else []), *([num(bif["parameter"][k])] if symbol else []),
+                        num(bif["omega"][k]),
+                        num(bif["branch"][k], ".0f"), num(bif["period"][k], ".0f"),
                         *(num(a) for a in amp), num(abs(bif["multiplier"][k]), ".6g"),
                         text("yes" if bif["located"][k] else "no"), text("yes" if bif["trusted"][k] else "no")])
         if not bif["located"][k] or not bif["trusted"][k]:
-            warnings.append(f"The {kind} near ω = {bif['omega'][k]:.6g} rad/s was "
+            where = f"ω = {bif['omega'][k]:.6g} rad/s" if not symbol else f"{symbol} = {bif['parameter'][k]:.6g}"
+            warnings.append(f"The {kind} near {where} was "
                             f"{'not located' if not bif['located'][k] else 'located with untrusted multipliers'}.")
     if not bt.rows:
         bt.note = "No bifurcation on the branches traced."

@@ -40,7 +40,8 @@ TRAILING_AXES = {"z": ("dof",), "v": ("dof",), "zc": ("dof",), "ze": ("dof",), "
 OWN_AXES = {"y0": ("dof",), "T0": ("segment",), "dof": ("dof",), "shapes": ("dof", "mode"),
             "inextensible_omega": ("inextensible_mode",), "P": ("dof",), "x": ("dof",), "u": ("dof",),
             "y": ("dof",), "l": ("segment",), "B": ("segment", "dof"), "D": ("dof", "dof_j"), "f": ("dof", "dof_j"),
-            "N": ("dof", "dof_j"), "K": ("dof", "dof_j"), "K_band": ("band", "dof")}
+            "N": ("dof", "dof_j"), "K": ("dof", "dof_j"), "K_band": ("band", "dof"),
+            "support_amplitude": ("moving_support", "component")}
 #: Where an axis's coordinate values are stored (datasets of the file), and their units.
 COORDINATES = {"time": ("history/t", "s"), "omega": ("sweep/omega", "rad/s"), "gamma": ("sweep/gamma", "1"),
                "dof": ("history/dof", "")}

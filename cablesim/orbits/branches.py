@@ -37,7 +37,7 @@ from .matrixfree import MatrixFreeShooting, orbit_leading, solve_orbit_mf
 from .mfproblem import MatrixFreeOrbitProblem, use_matrix_free
 from .diagram import Bifurcation, BranchEnd, BranchesInterrupted, OrbitBranch, OrbitPoint, ResponseDiagram
 from .shooting import Evaluation, FlowStatus, Shooting, solve_orbit
-from .starting import integrate_to_steady, linear_response, linear_response_state
+from .starting import cable_scales, integrate_to_steady, linear_response_state
 from .switching import (
     MergeWatch,
     PlaneWatch,
@@ -504,31 +504,6 @@ def trace_branches(
     return tracer.diagram
 
 
-def cable_scales(eom, parameter: str, start: float, stop: float, gamma: float = 1.0):
-    """State and parameter scales of the cable problem, properties of the case (not of the range
-    asked for, so that a branch is traced alike whatever part of it is requested).
-
-    Displacements: the largest linear-response amplitude at the largest load factor, over the
-    range (a grid of 64 values) and at every linear resonance (the modal frequencies), floored at
-    1e-6 of the chord: a nonlinear branch born far from resonance (a period doubling near
-    ``2 w1``) grows to amplitudes of the primary resonance, which a range-local scale would not
-    see. Velocities: that times the fundamental frequency. Parameter: its largest magnitude.
-    """
-    w1 = float(eom.frequencies[0])
-    if parameter == "omega":
-        g = gamma
-        freqs = np.concatenate([np.linspace(min(start, stop), max(start, stop), 64), eom.frequencies])
-    else:
-        g = max(abs(start), abs(stop))
-        freqs = np.concatenate([[eom.omega], eom.frequencies])
-    amp = max(float(np.abs(linear_response(eom, w, g)).max()) for w in freqs if w > 0)
-    amp = max(amp, 1e-6 * eom.cable.chord_length)
-    nd = eom.n_dof
-    scale = np.concatenate([np.full(nd, amp), np.full(nd, amp * w1)])
-    lam_scale = max(abs(start), abs(stop))
-    return scale, lam_scale
-
-
 def continue_branches(
     eom,
     parameter: str,
@@ -547,8 +522,10 @@ def continue_branches(
     step_rate: float | None = None,
     liouville_tol: float = 1e-3,
     matrix_free: bool | None = None,
+    support: float = 1.0,
 ) -> ResponseDiagram:
-    """Periodic responses of the cable over a range of forcing frequency or load factor.
+    """Periodic responses of the cable over a range of forcing frequency, load factor or support
+    motion multiplier.
 
     Parameters
     ----------
@@ -556,7 +533,9 @@ def continue_branches(
         Exact or approximate analysis. With ``parameter="gamma"`` its ``omega`` is the forcing
         frequency.
     parameter : str
-        ``"omega"`` (forcing frequency, rad/s) or ``"gamma"`` (multiplier of ``FL``).
+        ``"omega"`` (forcing frequency, rad/s), ``"gamma"`` (multiplier of ``FL`` and of the
+        supports' motion) or ``"support"`` (multiplier ``s`` of the supports' motion alone, the
+        amplitudes ``uA``, ``uB`` of ``eom``).
     start, stop : float
         Range of the parameter; continuation starts at ``start``.
     period : int
@@ -566,30 +545,29 @@ def continue_branches(
     callback : callable, optional
         Receives every converged :class:`OrbitPoint`; returning True ends that branch.
     gamma : float
-        Multiplier of ``FL`` when continuing in ``omega``.
+        Multiplier of ``FL`` (and of the supports' motion) unless it is the parameter.
     initial_state : ndarray, optional
         Guess of ``(z, y')`` (or ``(z, y', y'')``) at forcing phase 0 at ``start`` (default:
         the linear response).
     segments, max_period, settings, scheme, steps_per_period, step_rate, liouville_tol, matrix_free
         See :func:`trace_branches`.
+    support : float
+        Multiplier ``s`` of the supports' motion when continuing in ``omega`` or ``gamma``.
 
     Returns
     -------
     ResponseDiagram
         Amplitudes per DOF (``z``), in DOF order.
     """
-    if parameter not in ("omega", "gamma"):
-        raise ValueError("parameter must be 'omega' or 'gamma'")
+    if parameter not in ("omega", "gamma", "support") or (parameter == "support" and not eom.moving_supports):
+        raise ValueError("parameter must be 'omega', 'gamma' or (with a moving support) 'support'")
     g0 = start if parameter == "gamma" else gamma
-    system = cable_system(eom, gamma=g0)
+    system = cable_system(eom, gamma=g0, support=start if parameter == "support" else support)
     w0 = start if parameter == "omega" else eom.omega
     if not w0 > 0:
         raise ValueError("the forcing frequency must be positive")
     nd = eom.n_dof
-    if initial_state is None:
-        u0 = linear_response_state(eom, w0, g0)
-    else:
-        u0 = np.asarray(initial_state, dtype=float)[: 2 * nd]
+    u0 = linear_response_state(eom, w0, g0) if initial_state is None else np.asarray(initial_state, float)[: 2 * nd]
     scale, lam_scale = cable_scales(eom, parameter, start, stop, gamma)
     return trace_branches(
         system, u0, parameter, start, stop, period=period, segments=segments, state_scale=scale,

@@ -7,6 +7,7 @@
   a given state (transients decay; a stable orbit attracts it).
 - :func:`state_from_history`: the physical state ``(z, y')`` from the time integrators' third-order
   state ``(z, y', y'')`` (drops ``y''``, which eq. 15 determines).
+- :func:`cable_scales`: the scales of the state and of the parameter for a cable's continuation.
 """
 
 from __future__ import annotations
@@ -48,3 +49,31 @@ def integrate_to_steady(shooting: Shooting, x0: np.ndarray, lam: float, periods:
                 return None
             x = seg["x"]
     return x
+
+
+def cable_scales(eom, parameter: str, start: float, stop: float, gamma: float = 1.0):
+    """State and parameter scales of the cable problem, properties of the case (not of the range
+    asked for, so that a branch is traced alike whatever part of it is requested).
+
+    Displacements: the largest linear-response amplitude at the largest load factor, over the
+    range (a grid of 64 values) and at every linear resonance (the modal frequencies), floored at
+    1e-6 of the chord: a nonlinear branch born far from resonance (a period doubling near
+    ``2 w1``) grows to amplitudes of the primary resonance, which a range-local scale would not
+    see. Velocities: that times the fundamental frequency. Parameter: its largest magnitude.
+    In ``s`` (support): at least the supports' largest amplitude at the largest ``s`` (and 1).
+    """
+    w1 = float(eom.frequencies[0])
+    if parameter == "omega":
+        g = gamma
+        freqs = np.concatenate([np.linspace(min(start, stop), max(start, stop), 64), eom.frequencies])
+    else:
+        g = max(abs(start), abs(stop)) if parameter == "gamma" else gamma
+        freqs = np.concatenate([[eom.omega], eom.frequencies])
+    amp = max(float(np.abs(linear_response(eom, w, g)).max()) for w in freqs if w > 0)
+    if parameter == "support":
+        amp = max(amp, g * max(1.0, abs(start), abs(stop)) * float(np.abs(np.concatenate([eom.uA, eom.uB])).max()))
+    amp = max(amp, 1e-6 * eom.cable.chord_length)
+    nd = eom.n_dof
+    scale = np.concatenate([np.full(nd, amp), np.full(nd, amp * w1)])
+    lam_scale = max(abs(start), abs(stop))
+    return scale, lam_scale

@@ -149,7 +149,7 @@ def cable_mechanical(eom, model) -> Mechanical:
                       rayleigh_eigenvalues(eom.frequencies, eom.a0, eom.a1))
 
 
-def cable_system(eom, gamma: float = 1.0) -> OdeSystem:
+def cable_system(eom, gamma: float = 1.0, support: float = 1.0) -> OdeSystem:
     """The cable's equations of motion on ``(z, v)`` (:mod:`cablesim.orbits.cablefield`).
 
     Parameters
@@ -158,7 +158,9 @@ def cable_system(eom, gamma: float = 1.0) -> OdeSystem:
         Exact or approximate analysis; its ``omega`` is the default forcing frequency and its
         ``FL`` the harmonic load that ``gamma`` multiplies.
     gamma : float
-        Multiplier of ``FL``.
+        Multiplier of ``FL`` and of the supports' motion.
+    support : float
+        Multiplier ``s`` of the supports' motion alone (their amplitudes ``eom.uA``, ``eom.uB``).
 
     Returns
     -------
@@ -172,7 +174,7 @@ def cable_system(eom, gamma: float = 1.0) -> OdeSystem:
     nd = eom.n_dof
     model = eom.model(dense_damping=True)
     prm = np.zeros(2)
-    prm[cablefield.GAMMA], prm[cablefield.SUPPORT] = float(gamma), 1.0
+    prm[cablefield.GAMMA], prm[cablefield.SUPPORT] = float(gamma), float(support)
     if eom.analysis == "exact":
         fld, work = cablefield.exact_field, cablefield.exact_work(eom)
     else:

@@ -346,11 +346,11 @@ def orbit_history(path: Path, case, branch: str | None = None, omega: float | No
     ``(history, title, orbit period in s)``; the animation then loops over the second one."""
     res = read_continuation(path)
     b, k = pick_orbit(res["branches"], branch, omega)
-    w, gamma = float(b["omega"][k]), float(b["gamma"][k])
-    hist = plan_orbit(case, w, gamma, b["state"][k], b["period"], analysis=res["analysis"]).run()[1]
+    w, gamma, support = float(b["omega"][k]), float(b["gamma"][k]), float(b["support"][k])
+    hist = plan_orbit(case, w, gamma, b["state"][k], b["period"], analysis=res["analysis"], support=support).run()[1]
     stability = "stable" if bool(b["stable"][k]) else "unstable"
     title = (f"{case.name}: orbit {k + 1} of branch {b['name']} (period {b['period']}, {stability}), "
-             f"ω = {w:.6g} rad/s, γ = {gamma:g}")
+             f"ω = {w:.6g} rad/s, γ = {gamma:g}" + (f", s = {support:g}" if res["parameter"] == "support" else ""))
     return hist, title, b["period"] * 2.0 * np.pi / w
 
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io.continuation import read_continuation
+from ..io.continuation import read_continuation, support_meaning
 from ..io.sweeps import read_sweep
 from .base import figure_grid, legend_below, save_atomic, title_line
 from .style import COLOURS, SERIES, WORDS, styled
@@ -76,6 +76,20 @@ def _draw_overlay(ax, sweep, c_name: str) -> set:
     return drawn
 
 
+def parameter_axis(d: dict) -> tuple[str, str, str]:
+    """The x-axis label, the parameter's symbol and the fixed conditions in words of the
+    continuation file read as ``d`` (:func:`~cablesim.io.continuation.read_continuation`); in the
+    support multiplier s the label says what s = 1 stands for (the supports' amplitudes)."""
+    fixed_omega = f"$\\omega$ = {float(d['fixed']):g} rad/s"
+    if d["parameter"] == "omega":
+        return "forcing frequency $\\omega$ (rad/s)", "$\\omega$", f"$\\gamma$ = {float(d['fixed']):g}"
+    if d["parameter"] == "gamma":
+        return "load factor $\\gamma$ (multiplies $F_L$)", "$\\gamma$", fixed_omega
+    meaning = support_meaning(d.get("support_amplitudes", {})).replace("|u_A|", "$|u_A|$").replace("|u_B|", "$|u_B|$")
+    label = "support motion multiplier $s$" + (f" ({meaning})" if meaning else "")
+    return label, "$s$", f"{fixed_omega}, $\\gamma$ = {float(d.get('gamma', 1.0)):g}"
+
+
 @styled
 def plot_continuation(h5_path, png_path=None, overlay=None, title: str | None = None) -> Path:
     """Draw a continuation file as a PNG.
@@ -132,9 +146,10 @@ def plot_continuation(h5_path, png_path=None, overlay=None, title: str | None = 
             ax.axvline(w, color=COLOURS["reference"], ls=":", lw=0.9, alpha=0.8, zorder=1)
         ax.set_ylim(bottom=0.0)
         ax.set_ylim(top=ax.get_ylim()[1] * 1.12)  # room above the highest bifurcation for its label
-        ax.set_ylabel(channel_label(name))
+        ax.set_ylabel(channel_label(name, components=d.get("components", 2)))
     axes[-1, 0].set_xlim(lo - pad, hi + pad)
-    axes[-1, 0].set_xlabel("forcing frequency $\\omega$ (rad/s)" if is_omega else "load factor $\\gamma$ (multiplies $F_L$)")
+    xlabel, symbol, fixed = parameter_axis(d)
+    axes[-1, 0].set_xlabel(xlabel)
     handles = [Line2D([], [], color=colour[p], lw=2.0,
                       label=f"period ${p}T$ (subharmonic 1/{p})" if p > 1 else "period $T$ of the forcing")
                for p in periods]
@@ -160,9 +175,7 @@ def plot_continuation(h5_path, png_path=None, overlay=None, title: str | None = 
     for kind in bif["kind"]:
         counts[kind] = counts.get(kind, 0) + 1
     found = ", ".join(f"{n} {BIFURCATION_STYLE.get(k, ('', k, ''))[1]}" for k, n in counts.items()) or "none"
-    fixed = f"$\\gamma$ = {float(d['fixed']):g}" if is_omega else f"$\\omega$ = {float(d['fixed']):g} rad/s"
     first = title or f"{d['case_name']}: periodic responses"
-    symbol = "$\\omega$" if is_omega else "$\\gamma$"
     sub = (f"{d['analysis']} analysis; continuation in {symbol}, {fixed}; {len(d['branches'])} branch{'es' if len(d['branches']) != 1 else ''}, "
            f"{sum(b['parameter'].size for b in d['branches'])} orbits; bifurcations: {found}"
            + ("" if d.get("complete", True) else "; INTERRUPTED: only the orbits computed until then"))

@@ -132,3 +132,24 @@ def test_a_very_slow_support_motion_follows_the_moved_statics():
         y_static = exact_equilibrium(moved, F0_PAPER).y
         worst = max(worst, np.abs(eom.y0 + z - y_static).max())
     assert worst < 1e-2 * 1.0  # 1 % of the support's amplitude; measured below
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_linear_response_to_moving_supports_is_the_small_orbit(name):
+    """The supports' motion (and FL) made 1e-4 as large: the periodic orbit of the nonlinear
+    equations of motion, solved by shooting from rest, is the linear steady response
+    ``Im(Z exp(i w t))`` with the supports' linearised load (the first and last segments'
+    tangent blocks, with the stiffness-proportional damping's ``i w a1``), to the size of the
+    neglected quadratic terms, 1e-3 of the response."""
+    from cablesim.orbits import Shooting, cable_system, linear_response_state, solve_orbit
+
+    cable, F0, FL, omega, uA, uB, phA, phB = CASES[name]
+    small = 1e-4
+    eom, _ = equations(cable, F0, small * FL, omega, small * np.array(uA), small * np.array(uB), phA, phB)
+    linear = linear_response_state(eom, omega)
+    sol = solve_orbit(Shooting(cable_system(eom)), np.zeros_like(linear), omega)
+    assert sol.converged
+    nd = eom.n_dof
+    for part in (slice(0, nd), slice(nd, 2 * nd)):
+        size = np.abs(sol.u[part]).max()
+        assert np.abs(linear[part] - sol.u[part]).max() < 1e-3 * size, (linear[part], sol.u[part])

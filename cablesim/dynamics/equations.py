@@ -114,18 +114,38 @@ class EquationsOfMotion:
         """Whether a support moves."""
         return bool(np.any(self.uA != 0.0) or np.any(self.uB != 0.0))
 
-    def support_damping_blocks(self) -> tuple[tuple, tuple]:
-        """``a1`` times the tangent blocks of the first and last segments at the equilibrium
-        (the support part of the stiffness-proportional damping, ``docs/theory.md`` section 7),
-        flat tuples of dim x dim, N s/m."""
+    def support_stiffness_blocks(self) -> tuple[np.ndarray, np.ndarray]:
+        """The tangent blocks ``k_first``, ``k_last`` (dim x dim, N/m) of the first and last
+        segments at the equilibrium: ``K0s s = -k_first s_A`` at the first node and
+        ``-k_last s_B`` at the last (``docs/theory.md``, section 7)."""
         c, dim = self.cable, self.cable.dim
         blocks = []
         for k in (0, c.n_segments - 1):
             out = np.empty((dim, dim))
             sg.segment_block(np.ascontiguousarray(self.y0, dtype=float), k, np.ascontiguousarray(c.S, dtype=float),
                              float(c.EA), c.support_A, c.support_B, out)
-            blocks.append(tuple(float(x) for x in (self.a1 * out).ravel()))
+            blocks.append(out)
         return blocks[0], blocks[1]
+
+    def support_damping_blocks(self) -> tuple[tuple, tuple]:
+        """``a1`` times the tangent blocks of the first and last segments at the equilibrium
+        (the support part of the stiffness-proportional damping, ``docs/theory.md`` section 7),
+        flat tuples of dim x dim, N s/m."""
+        return tuple(tuple(float(x) for x in (self.a1 * b).ravel()) for b in self.support_stiffness_blocks())
+
+    def support_load(self, omega: float) -> np.ndarray:
+        """Complex amplitude of the linearised load of the supports' motion, N: the harmonic load
+        ``Im(G exp(i w t))`` on the nodes held still that moves them as the supports' motion does
+        to first order, ``(k + i w a1 k) u exp(i ph)`` at the first node (``k_first``, ``uA``,
+        ``phA``) and at the last (``k_last``, ``uB``, ``phB``); zero with the supports at rest."""
+        G = np.zeros(self.n_dof, dtype=complex)
+        if not self.moving_supports:
+            return G
+        dim = self.cable.dim
+        k_first, k_last = self.support_stiffness_blocks()
+        for k, u, ph, at in ((k_first, self.uA, self.phA, 0), (k_last, self.uB, self.phB, self.n_dof - dim)):
+            G[at : at + dim] += (1 + 1j * omega * self.a1) * (k @ np.asarray(u, dtype=float)) * np.exp(1j * ph)
+        return G
 
     @cached_property
     def K0(self) -> np.ndarray:

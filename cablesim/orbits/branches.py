@@ -567,8 +567,9 @@ def continue_branches(
     if not w0 > 0:
         raise ValueError("the forcing frequency must be positive")
     nd = eom.n_dof
-    u0 = linear_response_state(eom, w0, g0) if initial_state is None else np.asarray(initial_state, float)[: 2 * nd]
-    scale, lam_scale = cable_scales(eom, parameter, start, stop, gamma)
+    s0 = start if parameter == "support" else support
+    u0 = linear_response_state(eom, w0, g0, s0) if initial_state is None else np.asarray(initial_state, float)[: 2 * nd]
+    scale, lam_scale = cable_scales(eom, parameter, start, stop, gamma, support)
     return trace_branches(
         system, u0, parameter, start, stop, period=period, segments=segments, state_scale=scale,
         lam_scale=lam_scale, switch_branches=switch_branches, max_period=max_period, callback=callback,

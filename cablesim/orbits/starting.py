@@ -18,16 +18,21 @@ from . import kernels as ok
 from .shooting import Shooting
 
 
-def linear_response(eom, omega: float, gamma: float = 1.0) -> np.ndarray:
-    """Complex amplitude ``Z`` of the linear steady response to ``gamma FL sin(w t)``, m."""
+def linear_response(eom, omega: float, gamma: float = 1.0, support: float = 1.0) -> np.ndarray:
+    """Complex amplitude ``Z`` of the linear steady response (``z = Im(Z exp(i w t))``, m) to
+    ``gamma FL sin(w t)`` and the supports' motion times ``gamma support``
+    (:meth:`~cablesim.dynamics.equations.EquationsOfMotion.support_load`)."""
     M = np.diag(eom.mass)
     D = eom.K0 - omega**2 * M + 1j * omega * eom.C
-    return np.linalg.solve(D, gamma * np.asarray(eom.FL, dtype=float))
+    load = gamma * np.asarray(eom.FL, dtype=float)
+    if eom.moving_supports:
+        load = load + gamma * support * eom.support_load(omega)
+    return np.linalg.solve(D, load)
 
 
-def linear_response_state(eom, omega: float, gamma: float = 1.0) -> np.ndarray:
+def linear_response_state(eom, omega: float, gamma: float = 1.0, support: float = 1.0) -> np.ndarray:
     """``(z(0), v(0))`` of the linear steady response at forcing phase 0."""
-    Z = linear_response(eom, omega, gamma)
+    Z = linear_response(eom, omega, gamma, support)
     return np.concatenate([Z.imag, omega * Z.real])
 
 
@@ -51,11 +56,12 @@ def integrate_to_steady(shooting: Shooting, x0: np.ndarray, lam: float, periods:
     return x
 
 
-def cable_scales(eom, parameter: str, start: float, stop: float, gamma: float = 1.0):
+def cable_scales(eom, parameter: str, start: float, stop: float, gamma: float = 1.0, support: float = 1.0):
     """State and parameter scales of the cable problem, properties of the case (not of the range
     asked for, so that a branch is traced alike whatever part of it is requested).
 
-    Displacements: the largest linear-response amplitude at the largest load factor, over the
+    Displacements: the largest linear-response amplitude (to ``FL`` and to the supports' motion,
+    :func:`linear_response`) at the largest load factor, over the
     range (a grid of 64 values) and at every linear resonance (the modal frequencies), floored at
     1e-6 of the chord: a nonlinear branch born far from resonance (a period doubling near
     ``2 w1``) grows to amplitudes of the primary resonance, which a range-local scale would not
@@ -69,7 +75,8 @@ def cable_scales(eom, parameter: str, start: float, stop: float, gamma: float = 
     else:
         g = max(abs(start), abs(stop)) if parameter == "gamma" else gamma
         freqs = np.concatenate([[eom.omega], eom.frequencies])
-    amp = max(float(np.abs(linear_response(eom, w, g)).max()) for w in freqs if w > 0)
+    s = max(abs(start), abs(stop)) if parameter == "support" else support
+    amp = max(float(np.abs(linear_response(eom, w, g, s)).max()) for w in freqs if w > 0)
     if parameter == "support":
         amp = max(amp, g * max(1.0, abs(start), abs(stop)) * float(np.abs(np.concatenate([eom.uA, eom.uB])).max()))
     amp = max(amp, 1e-6 * eom.cable.chord_length)

@@ -7,7 +7,7 @@ PY     := $(VENV)/bin/python
 CLI    := $(VENV)/bin/cablesim
 STAMP  := $(VENV)/.installed
 
-.PHONY: install run test test-all bench clean
+.PHONY: install run test test-all bench clean out-of-plane
 
 $(STAMP): pyproject.toml
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -41,6 +41,10 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_spatial.py
 	$(PY) benchmarks/bench_heavy_orbits.py
 	$(if $(AGAINST),$(PY) benchmarks/bench_revisions.py --against $(AGAINST))
+
+# The chapter "Out of the plane" of docs/paper-reproduction.md: its figure and numbers (about 2 min).
+out-of-plane: $(STAMP)
+	$(PY) benchmarks/out_of_plane.py -o docs/out-of-plane.png --json docs/out-of-plane.json
 
 # numba's cache of the compiled kernels lives in cablesim/__pycache__/kernels-<hash of the compiled
 # sources> (cablesim/jit.py): an edited kernel starts a fresh cache by itself; `make clean` only

@@ -236,3 +236,20 @@ def test_every_full_scene_passes_the_cost_check_or_is_forced():
     for scene, args in sweeps.items():
         why = api.sweep_cost(fast_case(args)).excess()
         assert why is None or "--force" in args, (scene, why)
+
+
+def test_out_of_plane_chapter_quotes_its_computed_numbers():
+    """The chapter "Out of the plane" quotes the out-of-plane period doublings and the history
+    checks that ``make out-of-plane`` wrote to docs/out-of-plane.json, and those checks hold
+    (the history settles on the nonplanar orbit to 1e-4 in amplitude)."""
+    text = DOC.read_text().split("## Out of the plane")[1].split("\n## ")[0]
+    data = json.loads((ROOT / "docs" / "out-of-plane.json").read_text())
+    for case in ("paper", "stay"):
+        d = data[case]
+        for omega in d["out_of_plane_doublings_rad_s"]:
+            assert f"{omega:.5f}" in text, (case, omega)
+        assert d["max_w_error"] < 1e-4 and d["state_error"] < 1e-4
+        assert d["planar_out_of_plane_multiplier"] > 1 > d["orbit_largest_multiplier"]
+        for err in (d["state_error"], d["max_w_error"]):
+            assert f"{err:.1e}".replace("e-0", "e-") in text, (case, err)
+        assert f"{d['periods']} periods" in text

@@ -22,6 +22,7 @@ from ..modal import COUPLED, IN_PLANE
 from ..orbits import OrbitPoint, Settings, continue_branches
 from ..orbits.diagram import BranchEnd, BranchesInterrupted
 from ..orbits.stability import frequency_ratio
+from ..orbits.symmetry import rotation_sense
 from .charts import Interrupted, finish_loci, need_planar
 from .setup import build_equations, frequency_of_interest, make_integrator
 from .static import run_static
@@ -66,9 +67,17 @@ class BranchResult:
         A nonplanar branch born at a pitchfork: its mirror image ``w -> -w`` exists too.
     whirl_area : ndarray (points, n_nodes) or None
         Spatial cable: the signed area of each node's path in its cross-section plane ``(w, v)``
-        over the orbit, m^2 (positive counter-clockwise; zero on a planar orbit).
+        over the orbit, m^2 (positive counter-clockwise as seen from support A looking towards
+        B; zero on a planar orbit, NaN where not measured).
     tilt : ndarray (points,) or None
         Spatial cable: the angle of the orbit's mean plane of motion from the cable's plane, deg.
+    max_w : ndarray (points, n_nodes) or None
+        Spatial cable: each node's largest out-of-plane displacement ``|w|`` over the orbit
+        (along the normal of the equilibrium's plane), m.
+    whirl_sense : ndarray of str (points, n_nodes) or None
+        Spatial cable: the sense in which each node goes round, seen from support A looking
+        towards B: ``counter-clockwise``, ``clockwise`` or ``none``
+        (:func:`~cablesim.orbits.symmetry.rotation_sense`).
     """
 
     name: str
@@ -89,6 +98,13 @@ class BranchResult:
     mirror_image: bool = False
     whirl_area: np.ndarray | None = None
     tilt: np.ndarray | None = None
+    max_w: np.ndarray | None = None
+    whirl_sense: np.ndarray | None = None
+
+    @property
+    def nonplanar(self) -> bool:
+        """A branch of a spatial cable whose orbits leave the plane (whirling)."""
+        return self.tilt is not None and not self.planar
 
 
 @dataclass(frozen=True)
@@ -248,13 +264,17 @@ def _branch(k: int, br, parameter: str, fixed: float, idx: np.ndarray, dim: int 
 
 
 def _whirling(br, dim: int) -> dict:
-    """The whirling measures of a spatial branch's points (zero on planar orbits)."""
+    """The whirling measures of a spatial branch's points: zero on planar orbits, NaN where they
+    could not be measured (an equilibrium not in one plane, a matrix-free orbit)."""
     if dim == 2:
         return {}
     n = br.points[0].state.size // 6 if br.points else 0
-    area = np.array([p.whirl.area if p.whirl is not None else np.zeros(n) for p in br.points]).reshape(-1, n)
-    tilt = np.array([p.whirl.tilt if p.whirl is not None else 0.0 for p in br.points], dtype=float)
-    return {"whirl_area": area, "tilt": tilt}
+    none = 0.0 if getattr(br, "planar", False) else np.nan
+    whirls = [p.whirl for p in br.points]
+    area = np.array([q.area if q is not None else np.full(n, none) for q in whirls], dtype=float).reshape(-1, n)
+    max_w = np.array([q.max_w if q is not None else np.full(n, none) for q in whirls], dtype=float).reshape(-1, n)
+    tilt = np.array([q.tilt if q is not None else none for q in whirls], dtype=float)
+    return {"whirl_area": area, "max_w": max_w, "whirl_sense": rotation_sense(area, max_w), "tilt": tilt}
 
 
 def _integrated_start(case: Case, static, omega: float, gamma: float, names, idx) -> np.ndarray:

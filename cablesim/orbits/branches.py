@@ -133,9 +133,10 @@ def _orbit_point(system: OdeSystem, shooting: Shooting, cp, branch: int, index: 
     mu, planes, whirl = ev.multipliers, None, None
     if mirror is not None:
         mu, planes = labelled_multipliers(mirror, ev.monodromy)
-    elif system.mirror is not None and hasattr(shooting, "trajectory"):  # a nonplanar orbit of a symmetric system
+    elif getattr(system, "frame", None) is not None and hasattr(shooting, "trajectory"):
+        # a nonplanar orbit of a spatial cable (of a symmetric one, or one forced out of its plane)
         t, x = shooting.trajectory(cp.u, cp.lam, samples_per_period=WHIRL_SAMPLES)
-        whirl = whirling_measures(system.mirror, x, float(t[1] - t[0]))
+        whirl = whirling_measures(system.frame, x, float(t[1] - t[0]))
     # Liouville's formula needs the whole spectrum; the leading multipliers' eigenpair residuals
     # are the check of a matrix-free orbit
     check = ev.liouville <= liouville_tol if ev.monodromy is not None or ev.leading is None \

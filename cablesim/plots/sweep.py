@@ -124,9 +124,10 @@ def draw_curve(ax, omega, curve, c: int, quantity: str, color, marked: bool, lw:
     return bool(unsteady.any()), bool(sub.any()), bool(failed.any()), bool(went_slack.any())
 
 
-def channel_label(name: str, quantity: str = "amplitude") -> str:
-    """Axis label of a channel, e.g. ``"$z_{2}$: peak $|z|$ (m)\nnode 1, vertical (down +)"``."""
-    desc = f"\n{channel_description(int(name[1:]) - 1)}" if name[1:].isdigit() else ""
+def channel_label(name: str, quantity: str = "amplitude", dim: int = 2) -> str:
+    """Axis label of a channel, e.g. ``"$z_{2}$: peak $|z|$ (m)\nnode 1, vertical (down +)"``
+    (``dim``: components per node, 3 for a spatial cable)."""
+    desc = f"\n{channel_description(int(name[1:]) - 1, dim)}" if name[1:].isdigit() else ""
     return f"{channel_tex(name)}: {QUANTITIES[quantity]} (m){desc}"
 
 

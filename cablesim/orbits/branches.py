@@ -47,7 +47,7 @@ from .switching import (
     pitchfork_direction,
     start_factor,
 )
-from .symmetry import Mirror, split_multipliers, whirling_measures
+from .symmetry import Mirror, in_plane_whirling, split_multipliers, whirling_measures
 from .systems import OdeSystem, cable_system
 
 
@@ -252,8 +252,11 @@ class _Tracer:
             kind = origin.plane if origin is not None else None
             partners = [q for q in self.diagram.branches[parent].points if q.special == DOUBLINGS.get(kind)]
             watch = MergeWatch(partners, idx, sh.period, self.n, sh.segments // 2, self.state_scale, size)
-        for p in prefix:
+        for p in prefix:  # the parent's orbit where the branch is born: in the plane if the parent is
             p.branch, p.index = idx, len(br.points)
+            if p.whirl is None and parent is not None and self.diagram.branches[parent].planar \
+                    and getattr(self.system, "frame", None) is not None:
+                p.whirl = in_plane_whirling(self.n // 6)
             br.points.append(p)
 
         def deliver(op: OrbitPoint) -> bool:

@@ -156,6 +156,11 @@ class Whirling:
     max_w: np.ndarray | None = None
 
 
+def in_plane_whirling(n_nodes: int) -> Whirling:
+    """The whirling measures of an orbit in the plane: no area, no tilt, no ``|w|``."""
+    return Whirling(area=np.zeros(n_nodes), tilt=0.0, max_w=np.zeros(n_nodes))
+
+
 #: Senses of rotation of a node's path, as seen from support A looking towards B.
 COUNTER_CLOCKWISE, CLOCKWISE, NO_ROTATION, NOT_MEASURED = "counter-clockwise", "clockwise", "none", "not measured"
 #: Smallest enclosed area, relative to ``max_w^2``, that counts as going round (below it: a

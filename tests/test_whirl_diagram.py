@@ -312,3 +312,41 @@ def test_tiny_out_of_plane_parts_of_a_planar_orbit_are_zero_to_the_shooting_map(
     small = u.copy()
     small[w] = [1e-20, 0.0]
     assert not np.array_equal(sh.evaluate(small, 4.5).r, a.r)
+
+
+def test_readme_spatial_continuation_example_runs_and_says_what_it_prints(tmp_path, monkeypatch):
+    """The README's block on spatial continuation runs as written, and its numbers are the run's."""
+    import shlex
+    from pathlib import Path
+
+    from cablesim.case import example_text
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    section = readme.split("**Spatial cases: where the response leaves its plane.**")[1]
+    block = section.split("```sh\n")[1].split("```")[0]
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "my-case.yaml").write_text(example_text())
+    (command,) = [line for line in block.splitlines() if line.strip()]
+    args = shlex.split(command)
+    assert args[0] == ".venv/bin/cablesim"
+    res = CliRunner().invoke(app, args[1:])
+    assert res.exit_code == 0, (res.stdout, res.exception)
+    with h5py.File(tmp_path / "runs/my-case/spatial-continuation.h5") as f:
+        bif = f["continuation/bifurcations"]
+        found = sorted(zip(bif["kind"][()].astype(str), bif["plane"][()].astype(str), bif["parameter"][()]),
+                       key=lambda b: b[2])
+        whirl = [f["continuation/branches"][k] for k in f["continuation/branches"]
+                 if not f["continuation/branches"][k].attrs["planar"]]
+        assert len(whirl) == 1
+        max_w, area = whirl[0]["max_w"][()], whirl[0]["whirl_area"][()]
+    assert np.all(np.isfinite(max_w))  # its last orbit, the parent's period doubling it merges at, too
+    text = " ".join(section.split("```sh")[0].split())
+    (fold,) = [b for b in found if b[0] == "fold"]
+    doublings = [b for b in found if b[0] == "period-doubling" and b[1] == "out-of-plane"]
+    assert len(doublings) == 2
+    assert f"between {doublings[0][2]:.3f} and {doublings[1][2]:.3f} rad/s" in text
+    assert f"fold at {fold[2]:.3f} rad/s" in text
+    assert f"up to {np.max(max_w):.1f} m across the plane" in text
+    # a period-2 whirl with w(t + T) = -w(t) encloses no net area: the figure of eight
+    assert np.abs(area).max() < 1e-9 * np.max(max_w) ** 2
+    assert "no net rotation" in res.stdout

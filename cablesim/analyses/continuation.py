@@ -22,7 +22,7 @@ from ..modal import COUPLED, IN_PLANE
 from ..orbits import OrbitPoint, Settings, continue_branches
 from ..orbits.diagram import BranchEnd, BranchesInterrupted
 from ..orbits.stability import frequency_ratio
-from ..orbits.symmetry import rotation_sense
+from ..orbits.symmetry import in_plane_whirling, rotation_sense
 from .charts import Interrupted, finish_loci, need_planar
 from .setup import build_equations, frequency_of_interest, make_integrator
 from .static import run_static
@@ -269,11 +269,11 @@ def _whirling(br, dim: int) -> dict:
     if dim == 2:
         return {}
     n = br.points[0].state.size // 6 if br.points else 0
-    none = 0.0 if getattr(br, "planar", False) else np.nan
-    whirls = [p.whirl for p in br.points]
-    area = np.array([q.area if q is not None else np.full(n, none) for q in whirls], dtype=float).reshape(-1, n)
-    max_w = np.array([q.max_w if q is not None else np.full(n, none) for q in whirls], dtype=float).reshape(-1, n)
-    tilt = np.array([q.tilt if q is not None else none for q in whirls], dtype=float)
+    whirls = [p.whirl if p.whirl is not None or not (getattr(br, "planar", False) or p.planes is not None)
+              else in_plane_whirling(n) for p in br.points]  # (multipliers split in blocks: a planar orbit)
+    area = np.array([q.area if q is not None else np.full(n, np.nan) for q in whirls], dtype=float).reshape(-1, n)
+    max_w = np.array([q.max_w if q is not None else np.full(n, np.nan) for q in whirls], dtype=float).reshape(-1, n)
+    tilt = np.array([q.tilt if q is not None else np.nan for q in whirls], dtype=float)
     return {"whirl_area": area, "max_w": max_w, "whirl_sense": rotation_sense(area, max_w), "tilt": tilt}
 
 

@@ -299,6 +299,11 @@ def sweep_summary(case, res, wall: float, full: bool = False) -> str:
     return "\n".join(lines)
 
 
+#: The sense of a node whose path encloses no area: along a line, or a figure of eight whose
+#: lobes go round opposite ways (a period-2 whirl: w at half the frequency of v).
+NO_NET_ROTATION = "round with no net rotation (zero enclosed area: a line or a figure of eight)"
+
+
 def _senses_text(senses) -> str:
     """The senses of rotation of a branch's nodes (``whirl_sense`` of its points), in words: one
     sense for every node when they agree, else per node (the first and last few), each with
@@ -306,9 +311,11 @@ def _senses_text(senses) -> str:
     words = []
     for k in range(senses.shape[1]):
         seen = [x for x in dict.fromkeys(senses[:, k]) if x in ("counter-clockwise", "clockwise")]
-        words.append(" then ".join(seen) if seen else "on a line")
+        words.append(" then ".join(seen) if seen else NO_NET_ROTATION)
     if len(set(words)) == 1:
-        return f"{'the node goes' if len(words) == 1 else 'every node goes'} {'round ' * (words[0] != 'on a line')}{words[0]}"
+        if words[0] == NO_NET_ROTATION:
+            return f"{'the node goes' if len(words) == 1 else 'every node goes'} {NO_NET_ROTATION}"
+        return f"{'the node goes' if len(words) == 1 else 'every node goes'} round {words[0]}"
     shown = [f"node {k + 1} {w}" for k, w in enumerate(words)]
     if len(shown) > 2 * SUMMARY_ENDS:
         shown = shown[:SUMMARY_ENDS] + ["..."] + shown[-SUMMARY_ENDS:]

@@ -188,8 +188,9 @@ def rotation_sense(area, max_w) -> np.ndarray:
     Returns
     -------
     ndarray of str
-        ``"counter-clockwise"``, ``"clockwise"`` or ``"none"`` per entry (``"not measured"``
-        where the area is NaN).
+        ``"counter-clockwise"``, ``"clockwise"`` or ``"none"`` per entry (none: no net area,
+        a motion along a line or a figure of eight whose lobes go round opposite ways;
+        ``"not measured"`` where the area is NaN).
     """
     area = np.asarray(area, dtype=float)
     small = np.abs(area) <= ROTATION_TOL * np.square(np.asarray(max_w, dtype=float))

@@ -350,3 +350,21 @@ def test_readme_spatial_continuation_example_runs_and_says_what_it_prints(tmp_pa
     # a period-2 whirl with w(t + T) = -w(t) encloses no net area: the figure of eight
     assert np.abs(area).max() < 1e-9 * np.max(max_w) ** 2
     assert "no net rotation" in res.stdout
+
+
+def test_a_cable_forced_out_of_its_plane_has_its_whirling_measured_in_the_equilibrium_plane():
+    """With a harmonic load across the plane there is no mirror symmetry and no planar branch:
+    every orbit leaves the plane of the (planar) equilibrium, and its measures are taken there;
+    the largest |w| is the w channel's amplitude found by the flow kernel's own extremes."""
+    from cablesim import api
+    from cablesim.analyses.continuation import run_continuation
+
+    data = yaml.safe_load(WHIRL_CASE)
+    data["loads"]["point"] = [{"node": 1, "FL": [0.0, 0.05, 0.01]}]
+    data["continuation"] = {"omega": {"start": 4.4, "stop": 4.5}, "channels": ["node1.v", "node1.w"]}
+    res = run_continuation(api.load_case(data))
+    assert res.branches and not any(b.planar for b in res.branches)
+    b = res.branches[0]
+    assert b.nonplanar and np.all(np.isfinite(b.max_w)) and np.all(b.max_w > 0)
+    np.testing.assert_allclose(b.max_w[:, 0], b.amplitude[:, 1], rtol=1e-12)  # the same quintic interpolant
+    assert set(b.whirl_sense.ravel()) <= {"clockwise", "counter-clockwise", "none"}

@@ -317,27 +317,35 @@ class Shooting:
             S.append(seg["x"])
         return np.concatenate(S)
 
-    def trajectory(self, u: np.ndarray, lam: float, samples_per_period: int = 256):
+    def trajectory(self, u: np.ndarray, lam: float, samples_per_period: int = 256, steps=None):
         """The orbit sampled uniformly: ``(t, x)`` over one orbit period, from the cubic Hermite
-        interpolant between steps (``t`` in s from forcing phase 0, ``x`` of shape (N, n))."""
+        interpolant between steps (``t`` in s from forcing phase 0, ``x`` of shape (N, n));
+        ``steps``: the orbit's :meth:`steps`, if already integrated."""
         n, m = self.n, self.segments
-        S = np.asarray(u, dtype=float).reshape(m, n)
-        omega = self.omega_of(lam)
-        T = self.period * 2.0 * np.pi / omega
+        T = self.period * 2.0 * np.pi / self.omega_of(lam)
         N = samples_per_period * self.period
         t_all = np.arange(N + 1) * (T / N)
         x_all = np.empty((N + 1, n))
         dur = T / m
-        for k in range(m):
-            seg = self.segment(k, S[k], lam, jac=False, record=True)
-            if seg["status"] != ok.OK:
-                raise FloatingPointError(f"integration failed (status {seg['status']})")
-            ts, rec = seg["t"], seg["rec"]
+        for k, (ts, rec) in enumerate(self.steps(u, lam) if steps is None else steps):
             lo = k * dur
             sel = (t_all >= lo - 1e-12 * T) & (t_all <= lo + dur + 1e-12 * T)
             tt = np.clip(t_all[sel] - lo, 0.0, dur)
             x_all[sel] = hermite_sample(ts, rec[:, :n], rec[:, n:], tt)
         return t_all, x_all
+
+    def steps(self, u: np.ndarray, lam: float) -> list:
+        """The orbit at the integrator's steps: per segment ``(t, rec)``, ``t`` from the segment's
+        start (s), ``rec`` the state and its rate at every step (steps + 1, 2 n)."""
+        n, m = self.n, self.segments
+        S = np.asarray(u, dtype=float).reshape(m, n)
+        out = []
+        for k in range(m):
+            seg = self.segment(k, S[k], lam, jac=False, record=True)
+            if seg["status"] != ok.OK:
+                raise FloatingPointError(f"integration failed (status {seg['status']})")
+            out.append((seg["t"], seg["rec"]))
+        return out
 
 
 #: Components of a flow's start state below this fraction of its largest are taken as zero.

@@ -200,28 +200,54 @@ def rotation_sense(area, max_w) -> np.ndarray:
     return out.astype(str)
 
 
-def whirling_measures(mirror: Mirror, x: np.ndarray, dt: float) -> Whirling:
+def largest_w(mirror: Mirror, steps: list, period: float) -> np.ndarray:
+    """Each node's largest ``|w|`` over an orbit (m), ``w`` along the plane's normal, from the
+    orbit at its integration steps (:meth:`~cablesim.orbits.shooting.Shooting.steps`: per
+    segment the times and the state ``(z, y')`` with its rate ``(y', y'')``), located between
+    the steps on the quintic Hermite interpolant of ``w``, ``w'``, ``w''`` as the orbit's
+    amplitudes are (:mod:`cablesim.dynamics.extremes`)."""
+    dur = period / len(steps)
+    t = np.concatenate([k * dur + ts[:-1] for k, (ts, _) in enumerate(steps)])  # one period, each step once
+    rec = np.concatenate([r[:-1] for _, r in steps])
+    nd = rec.shape[1] // 4
+    normal = mirror.frame[:, 2]
+    w, dw, ddw = (rec[:, a : a + nd].reshape(len(t), -1, 3) @ normal for a in (0, nd, 3 * nd))
+    return np.asarray(peak_and_half_range(t, w, dw, ddw, period=period)[0], dtype=float)
+
+
+def whirling_measures(mirror: Mirror, x: np.ndarray, dt: float, max_w: np.ndarray | None = None) -> Whirling:
     """Whirling measures of an orbit sampled uniformly in time at ``x`` (samples, 6 n): states
     ``(z, y')`` over one closed orbit (first and last samples the same state), ``dt`` s apart.
 
     The area is ``1/2 oint (w v' - v w') dt`` by the trapezoidal rule, which is spectrally
     accurate for a smooth periodic integrand (a polygon through the samples would be short by
-    about ``(2 pi / N)^2 / 6`` of it); the largest ``|w|`` is located between the samples on
-    the Hermite interpolant of ``(w, w')``."""
+    about ``(2 pi / N)^2 / 6`` of it); the largest ``|w|`` is ``max_w`` if given
+    (:func:`largest_w`), else located between the samples on the Hermite interpolant of
+    ``(w, w')``."""
     n = x.shape[1] // 6
     R = mirror.frame
     q = np.asarray(x, dtype=float).reshape(x.shape[0], 2, n, 3) @ R  # (chord, across, normal) per node
     v, w, dv, dw = q[:, 0, :, 1], q[:, 0, :, 2], q[:, 1, :, 1], q[:, 1, :, 2]
     integrand = w * dv - v * dw
     area = 0.5 * dt * np.sum(integrand[:-1], axis=0)
-    t = np.arange(x.shape[0] - 1) * dt  # one period, without the repeated last sample
-    max_w, _ = peak_and_half_range(t, w[:-1], dw[:-1], period=(x.shape[0] - 1) * dt)
+    if max_w is None:
+        t = np.arange(x.shape[0] - 1) * dt  # one period, without the repeated last sample
+        max_w, _ = peak_and_half_range(t, w[:-1], dw[:-1], period=(x.shape[0] - 1) * dt)
     dv, dw = v - v.mean(axis=0), w - w.mean(axis=0)
     cov = np.array([[np.sum(dv * dv), np.sum(dv * dw)], [np.sum(dv * dw), np.sum(dw * dw)]])
     vals, vecs = np.linalg.eigh(cov)
     e = vecs[:, -1]
     tilt = float(np.degrees(np.arctan2(abs(e[1]), abs(e[0])))) if vals[-1] > 0 else 0.0
     return Whirling(area=area, tilt=tilt, max_w=np.asarray(max_w, dtype=float))
+
+
+def orbit_whirling(frame: Mirror, shooting, u: np.ndarray, lam: float, samples: int = 256) -> Whirling:
+    """The whirling measures of the orbit through the shooting unknowns ``u`` at parameter
+    ``lam`` (a :class:`~cablesim.orbits.shooting.Shooting`), integrated once: ``samples`` per
+    forcing period for the area and tilt, the steps themselves for the largest ``|w|``."""
+    steps = shooting.steps(u, lam)
+    t, x = shooting.trajectory(u, lam, samples_per_period=samples, steps=steps)
+    return whirling_measures(frame, x, float(t[1] - t[0]), largest_w(frame, steps, float(t[-1])))
 
 
 def cable_frame(eom) -> Mirror | None:

@@ -25,6 +25,7 @@ from typer.testing import CliRunner
 
 from cablesim.cli import app
 from cablesim.orbits.symmetry import rotation_sense, state_mirror, whirling_measures
+from helpers_figures import text_problems
 from helpers_whirl_cases import WHIRL_CASE
 
 RANGE = {"start": 4.55, "stop": 4.75}  # rad/s: both pitchforks (4.591, 4.713)
@@ -130,6 +131,7 @@ def run_continue(tmp, spatial: bool, monkeypatch):
     real = Figure.savefig
 
     def keep(self, *args, **kwargs):
+        self.text_problems = text_problems(self)  # while its canvas can draw (helpers_figures)
         saved.append(self)
         return real(self, *args, **kwargs)
 
@@ -273,6 +275,7 @@ def test_spatial_diagram_has_an_out_of_plane_panel_and_its_own_style_for_nonplan
     assert "mirror image" in label
     assert entries[label].get_color() in {ln.get_color() for ln in off_zero}
     assert "nonplanar" in fig.get_suptitle()
+    assert not fig.text_problems, fig.text_problems  # no label over another or off the figure
 
 
 def test_planar_diagram_keeps_its_single_panel(flat):

@@ -371,3 +371,18 @@ def test_a_cable_forced_out_of_its_plane_has_its_whirling_measured_in_the_equili
     assert b.nonplanar and np.all(np.isfinite(b.max_w)) and np.all(b.max_w > 0)
     np.testing.assert_allclose(b.max_w[:, 0], b.amplitude[:, 1], rtol=1e-12)  # the same quintic interpolant
     assert set(b.whirl_sense.ravel()) <= {"clockwise", "counter-clockwise", "none"}
+
+
+def test_whirling_measures_read_as_arrays_over_point_and_node(whirl):
+    import cablesim
+
+    _, out, _, _ = whirl
+    r = cablesim.load_result(out)
+    with h5py.File(out) as f:
+        name = next(k for k in f["continuation/branches"] if not f["continuation/branches"][k].attrs["planar"])
+        stored = f["continuation/branches"][name]["max_w"][()]
+    x = r.to_xarray(f"continuation/branches/{name}")
+    for key in ("max_w", "whirl_area", "whirl_sense"):
+        assert x[key].dims == ("point", "node"), key
+    assert list(x["node"].values) == [1] and x["max_w"].attrs["units"] == "m"
+    np.testing.assert_array_equal(x["max_w"].values, stored)

@@ -39,6 +39,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_adaptive.py
 	$(PY) benchmarks/bench_tolerances.py
 	$(PY) benchmarks/bench_spatial.py
+	$(PY) benchmarks/bench_spatial_continuation.py
 	$(PY) benchmarks/bench_heavy_orbits.py
 	$(if $(AGAINST),$(PY) benchmarks/bench_revisions.py --against $(AGAINST))
 

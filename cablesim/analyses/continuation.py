@@ -23,6 +23,7 @@ from ..modal import COUPLED, IN_PLANE
 from ..orbits import OrbitPoint, Settings, continue_branches
 from ..orbits.diagram import BranchEnd, BranchesInterrupted
 from ..orbits.stability import frequency_ratio
+from ..orbits.symmetry import in_plane_whirling, rotation_sense
 from .charts import Interrupted, finish_loci, need_planar
 from .setup import build_equations, frequency_of_interest, make_integrator
 from .static import run_static
@@ -67,12 +68,20 @@ class BranchResult:
         A nonplanar branch born at a pitchfork: its mirror image ``w -> -w`` exists too.
     whirl_area : ndarray (points, n_nodes) or None
         Spatial cable: the signed area of each node's path in its cross-section plane ``(w, v)``
-        over the orbit, m^2 (positive counter-clockwise; zero on a planar orbit).
+        over the orbit, m^2 (positive counter-clockwise as seen from support A looking towards
+        B; zero on a planar orbit, NaN where not measured).
     tilt : ndarray (points,) or None
         Spatial cable: the angle of the orbit's mean plane of motion from the cable's plane, deg.
     support : ndarray (points,) or None
         The support motion multiplier s: the supports move by ``gamma s`` times the amplitudes of
         ``supports:`` (None: 1 throughout).
+    max_w : ndarray (points, n_nodes) or None
+        Spatial cable: each node's largest out-of-plane displacement ``|w|`` over the orbit
+        (along the normal of the equilibrium's plane), m.
+    whirl_sense : ndarray of str (points, n_nodes) or None
+        Spatial cable: the sense in which each node goes round, seen from support A looking
+        towards B: ``counter-clockwise``, ``clockwise`` or ``none``
+        (:func:`~cablesim.orbits.symmetry.rotation_sense`).
     """
 
     name: str
@@ -94,6 +103,13 @@ class BranchResult:
     whirl_area: np.ndarray | None = None
     tilt: np.ndarray | None = None
     support: np.ndarray | None = None
+    max_w: np.ndarray | None = None
+    whirl_sense: np.ndarray | None = None
+
+    @property
+    def nonplanar(self) -> bool:
+        """A branch of a spatial cable whose orbits leave the plane (whirling)."""
+        return self.tilt is not None and not self.planar
 
 
 @dataclass(frozen=True)
@@ -282,13 +298,17 @@ def _branch(k: int, br, spec, idx: np.ndarray, dim: int = 2) -> BranchResult:
 
 
 def _whirling(br, dim: int) -> dict:
-    """The whirling measures of a spatial branch's points (zero on planar orbits)."""
+    """The whirling measures of a spatial branch's points: zero on planar orbits, NaN where they
+    could not be measured (an equilibrium not in one plane, a matrix-free orbit)."""
     if dim == 2:
         return {}
     n = br.points[0].state.size // 6 if br.points else 0
-    area = np.array([p.whirl.area if p.whirl is not None else np.zeros(n) for p in br.points]).reshape(-1, n)
-    tilt = np.array([p.whirl.tilt if p.whirl is not None else 0.0 for p in br.points], dtype=float)
-    return {"whirl_area": area, "tilt": tilt}
+    whirls = [p.whirl if p.whirl is not None or not (getattr(br, "planar", False) or p.planes is not None)
+              else in_plane_whirling(n) for p in br.points]  # (multipliers split in blocks: a planar orbit)
+    area = np.array([q.area if q is not None else np.full(n, np.nan) for q in whirls], dtype=float).reshape(-1, n)
+    max_w = np.array([q.max_w if q is not None else np.full(n, np.nan) for q in whirls], dtype=float).reshape(-1, n)
+    tilt = np.array([q.tilt if q is not None else np.nan for q in whirls], dtype=float)
+    return {"whirl_area": area, "max_w": max_w, "whirl_sense": rotation_sense(area, max_w), "tilt": tilt}
 
 
 def _integrated_start(case: Case, static, omega: float, gamma: float, names, idx, support: float = 1.0) -> np.ndarray:

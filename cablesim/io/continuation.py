@@ -24,8 +24,11 @@ Layout (with the root attributes of every cablesim file, see :mod:`cablesim.io.h
   the attributes ``planar`` (orbits in the mirror plane of a symmetric spatial cable) and
   ``mirror_image`` (a nonplanar branch born at a pitchfork, whose mirror image ``w -> -w`` is a
   branch too) and, for a spatial cable, ``whirl_area`` (points x nodes, m^2: the signed area of
-  each node's path in its ``(w, v)`` plane) and ``tilt`` (deg: the orbit's mean plane of motion
-  from the cable's plane);
+  each node's path in its ``(w, v)`` plane, positive counter-clockwise as seen from support A
+  looking towards B), ``whirl_sense`` (points x nodes: ``counter-clockwise``, ``clockwise`` or
+  ``none``, that sign in words), ``max_w`` (points x nodes, m: each node's largest out-of-plane
+  ``|w|`` over the orbit; zero on a planar orbit) and ``tilt`` (deg: the orbit's mean plane of
+  motion from the cable's plane);
 - with ``continuation.loci``: ``/continuation/loci/<name>/...`` and ``/continuation/codim2/...``,
   the bifurcation curves (:mod:`cablesim.io.charts`);
 - ``/modal/omega``: the linear modal frequencies, rad/s.
@@ -127,8 +130,15 @@ def write_continuation(path: str | Path, res) -> Path:
             h.attrs["mirror_image"] = bool(b.mirror_image)
             if b.whirl_area is not None:
                 put(h, "whirl_area", b.whirl_area, "m^2", "signed area of each node's path in its (w, v) "
-                    "cross-section plane over the orbit (positive counter-clockwise)")
-                put(h, "tilt", b.tilt, "deg", "angle of the orbit's mean plane of motion from the cable's plane")
+                    "cross-section plane over the orbit (positive counter-clockwise as seen from support A "
+                    "looking towards B; NaN: not measured)", allow_nan=True)
+                put(h, "tilt", b.tilt, "deg", "angle of the orbit's mean plane of motion from the cable's plane",
+                    allow_nan=True)
+            if getattr(b, "max_w", None) is not None:
+                put(h, "max_w", b.max_w, "m", "largest out-of-plane displacement |w| of each node over the orbit "
+                    "(NaN: not measured)", allow_nan=True)
+                put(h, "whirl_sense", np.asarray(b.whirl_sense, dtype="S"), "1", "sense in which each node goes "
+                    "round, seen from support A looking towards B: counter-clockwise, clockwise or none")
         fg = g.create_group("bifurcations")
         bifs = res.bifurcations
         put(fg, "kind", np.array([b.kind for b in bifs], dtype="S"), "1", "fold, period-doubling, neimark-sacker")
@@ -219,8 +229,9 @@ def _read(f, path: Path) -> dict:
     for name, h in g["branches"].items():
         b = {k: np.asarray(h[k][()]) for k in h}
         b.setdefault("support", np.ones(np.asarray(b.get("parameter", ())).size))  # files before the support column
-        if "multiplier_plane" in b:
-            b["multiplier_plane"] = np.char.decode(b["multiplier_plane"].astype("S"))
+        for key in ("multiplier_plane", "whirl_sense"):
+            if key in b:
+                b[key] = np.char.decode(b[key].astype("S"))
         b["planar"] = bool(h.attrs.get("planar", False))
         b["mirror_image"] = bool(h.attrs.get("mirror_image", False))
         b.update(name=name, period=int(h.attrs["period"]), parent=int(h.attrs["parent"]),

@@ -300,19 +300,49 @@ def sweep_summary(case, res, wall: float, full: bool = False) -> str:
     return "\n".join(lines)
 
 
+#: The sense of a node whose path encloses no area: along a line, or a figure of eight whose
+#: lobes go round opposite ways (a period-2 whirl: w at half the frequency of v).
+NO_NET_ROTATION = "round with no net rotation (zero enclosed area: a line or a figure of eight)"
+
+
+def _senses_text(senses) -> str:
+    """The senses of rotation of a branch's nodes (``whirl_sense`` of its points), in words: one
+    sense for every node when they agree, else per node (the first and last few), each with
+    "changes along the branch" where a node's points go round both ways."""
+    words = []
+    for k in range(senses.shape[1]):
+        seen = [x for x in dict.fromkeys(senses[:, k]) if x in ("counter-clockwise", "clockwise")]
+        words.append(" then ".join(seen) if seen else NO_NET_ROTATION)
+    if len(set(words)) == 1:
+        if words[0] == NO_NET_ROTATION:
+            return f"{'the node goes' if len(words) == 1 else 'every node goes'} {NO_NET_ROTATION}"
+        return f"{'the node goes' if len(words) == 1 else 'every node goes'} round {words[0]}"
+    shown = [f"node {k + 1} {w}" for k, w in enumerate(words)]
+    if len(shown) > 2 * SUMMARY_ENDS:
+        shown = shown[:SUMMARY_ENDS] + ["..."] + shown[-SUMMARY_ENDS:]
+    return ", ".join(shown)
+
+
 def _whirling_lines(res) -> list:
-    """One line per nonplanar branch of a spatial cable: its mirror image, the largest tilt of its
-    orbits' mean plane and the sense in which each node goes round."""
+    """One line per nonplanar branch of a spatial cable: its largest out-of-plane displacement
+    ``|w|`` (which node, where), the sense in which its nodes go round as seen from support A
+    looking towards B, and the range of the tilt of its orbits' mean plane; nothing for planar
+    branches."""
     out = []
+    unit = " rad/s" if res.parameter == "omega" else ""
     for b in res.branches:
-        if getattr(b, "tilt", None) is None or b.planar or not b.tilt.size:
+        if not getattr(b, "nonplanar", False) or not b.tilt.size:
             continue
-        k = int(np.argmax(b.tilt))
-        area = b.whirl_area[k]
-        sense = ", ".join(f"node {i + 1} {'counter-clockwise' if a > 0 else 'clockwise' if a < 0 else 'on a line'}"
-                          f" ({abs(a):.3g} m^2)" for i, a in enumerate(area))
-        out.append(f"  {b.name}: nonplanar{' (its mirror image w -> -w is a branch too)' if b.mirror_image else ''}; "
-                   f"mean plane tilted up to {b.tilt[k]:.3g} deg from the cable's plane, there {sense} in (w, v)")
+        head = f"  {b.name}: nonplanar (whirling){'; its mirror image w -> -w is a branch too' if b.mirror_image else ''}"
+        max_w = getattr(b, "max_w", None)
+        if max_w is None or not np.any(np.isfinite(max_w)):
+            out.append(head + "; its whirling measures could not be computed (no plane of equilibrium)")
+            continue
+        k, node = np.unravel_index(int(np.nanargmax(max_w)), max_w.shape)
+        tilt = b.tilt[np.isfinite(b.tilt)]
+        out.append(f"{head}: largest |w| {max_w[k, node]:.4g} m (node {node + 1}, at {res.parameter} "
+                   f"{b.parameter[k]:.5g}{unit}); seen from A looking towards B, {_senses_text(b.whirl_sense)}; mean plane "
+                   f"tilted {tilt.min():.3g} - {tilt.max():.3g} deg from the cable's plane")
     return ([""] + out) if out else []
 
 

@@ -35,7 +35,8 @@ MAIN_AXES = (("history/events", "event"), ("history/segments", "segment"), ("his
 TRAILING_AXES = {"z": ("dof",), "v": ("dof",), "zc": ("dof",), "ze": ("dof",), "T": ("segment",),
                  "amplitude": ("channel",), "halfrange": ("channel",), "response_frequency": ("channel",),
                  "peak_tension": ("segment",), "slack_fraction": ("segment",), "multipliers": ("multiplier",),
-                 "multiplier_plane": ("multiplier",), "state": ("component",), "ratios": ("ratio",)}
+                 "multiplier_plane": ("multiplier",), "state": ("component",), "ratios": ("ratio",),
+                 "whirl_area": ("node",), "max_w": ("node",), "whirl_sense": ("node",)}
 #: Datasets whose axes are not the group's main axis, by dataset name.
 OWN_AXES = {"y0": ("dof",), "T0": ("segment",), "dof": ("dof",), "shapes": ("dof", "mode"),
             "inextensible_omega": ("inextensible_mode",), "P": ("dof",), "x": ("dof",), "u": ("dof",),
@@ -169,7 +170,7 @@ class ResultFile:
             for value in (names, top):
                 if value is not None and np.size(value) == size:
                     return np.array([attr_text(v) for v in np.ravel(value)]), ""
-        first = 1 if axis in ("dof", "dof_j", "segment", "mode", "inextensible_mode", "channel") else 0
+        first = 1 if axis in ("dof", "dof_j", "segment", "mode", "inextensible_mode", "channel", "node") else 0
         return np.arange(first, first + size), ""
 
     def to_xarray(self, group: str | None = None):

@@ -47,7 +47,7 @@ from .switching import (
     pitchfork_direction,
     start_factor,
 )
-from .symmetry import Mirror, split_multipliers, whirling_measures
+from .symmetry import Mirror, in_plane_whirling, orbit_whirling, split_multipliers
 from .systems import OdeSystem, cable_system
 
 
@@ -133,9 +133,9 @@ def _orbit_point(system: OdeSystem, shooting: Shooting, cp, branch: int, index: 
     mu, planes, whirl = ev.multipliers, None, None
     if mirror is not None:
         mu, planes = labelled_multipliers(mirror, ev.monodromy)
-    elif system.mirror is not None and hasattr(shooting, "trajectory"):  # a nonplanar orbit of a symmetric system
-        t, x = shooting.trajectory(cp.u, cp.lam, samples_per_period=WHIRL_SAMPLES)
-        whirl = whirling_measures(system.mirror, x, float(t[1] - t[0]))
+    elif getattr(system, "frame", None) is not None and hasattr(shooting, "trajectory"):
+        # a nonplanar orbit of a spatial cable (of a symmetric one, or one forced out of its plane)
+        whirl = orbit_whirling(system.frame, shooting, cp.u, cp.lam, WHIRL_SAMPLES)
     # Liouville's formula needs the whole spectrum; the leading multipliers' eigenpair residuals
     # are the check of a matrix-free orbit
     check = ev.liouville <= liouville_tol if ev.monodromy is not None or ev.leading is None \
@@ -311,7 +311,7 @@ class _Tracer:
         dirn, eps = pitchfork_direction(ev, self.system.mirror, br.segments, self.state_scale, self.switch_size)
         size = self.switch_size
         for _ in range(SWITCH_ATTEMPTS):
-            first = replace(p, planes=None)
+            first = replace(p, planes=None, whirl=in_plane_whirling(self.n // 6))  # the planar orbit
             child = self.run_branch(sh, p.u + eps * dirn, p.parameter, np.concatenate([dirn, [0.0]]), br.index,
                                     bif, [first], size)
             odd = self.system.mirror.odd_size(child.points[-1].state, self.state_scale) if child.points else 0.0

@@ -73,9 +73,9 @@ class OrbitPoint:
         also ``"pitchfork"``, ``"out-of-plane period-doubling"`` or
         ``"out-of-plane neimark-sacker"``.
     whirl : Whirling or None
-        On a nonplanar orbit of a mirror-symmetric system: the signed area of every node's path
-        across the plane and the tilt of the orbit's mean plane
-        (:func:`~cablesim.orbits.symmetry.whirling_measures`).
+        On a nonplanar orbit of a spatial cable whose equilibrium lies in a plane: the signed
+        area of every node's path across the plane, its largest ``|w|`` and the tilt of the
+        orbit's mean plane (:func:`~cablesim.orbits.symmetry.whirling_measures`).
     """
 
     branch: int

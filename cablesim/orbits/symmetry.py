@@ -31,7 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..modal import IN_PLANE, OUT_OF_PLANE, mirror_plane, plane_basis
+from ..dynamics.extremes import peak_and_half_range
+from ..modal import IN_PLANE, OUT_OF_PLANE, equilibrium_plane, mirror_plane, plane_basis
 from .stability import sort_multipliers
 
 #: Largest scaled out-of-plane state of an orbit that counts as lying in the plane.
@@ -138,37 +139,127 @@ class Whirling:
     area : ndarray (n_nodes,)
         Signed area enclosed by each node's path in its cross-section plane ``(w, v)`` (``w``
         along the normal, ``v`` the in-plane axis across the chord), m^2: positive when the node
-        goes round counter-clockwise in those axes, zero for a motion in the plane or along a
-        line.
+        goes round counter-clockwise in those axes, which is counter-clockwise as seen from
+        support A looking towards B (:func:`rotation_sense`); zero for a motion in the plane or
+        along a line.
     tilt : float
         Angle between the plane of symmetry and the orbit's mean plane of motion, degrees: the
         principal direction of all nodes' ``(v, w)`` displacements over the orbit, from the
         ``v`` axis (0 for a planar orbit, 90 for a motion straight across the plane).
+    max_w : ndarray (n_nodes,)
+        Largest out-of-plane displacement ``|w|`` of each node over the orbit, m (located
+        between the samples on the cubic Hermite interpolant of ``w`` and ``w'``).
     """
 
     area: np.ndarray
     tilt: float
+    max_w: np.ndarray | None = None
 
 
-def whirling_measures(mirror: Mirror, x: np.ndarray, dt: float) -> Whirling:
+def in_plane_whirling(n_nodes: int) -> Whirling:
+    """The whirling measures of an orbit in the plane: no area, no tilt, no ``|w|``."""
+    return Whirling(area=np.zeros(n_nodes), tilt=0.0, max_w=np.zeros(n_nodes))
+
+
+#: Senses of rotation of a node's path, as seen from support A looking towards B.
+COUNTER_CLOCKWISE, CLOCKWISE, NO_ROTATION, NOT_MEASURED = "counter-clockwise", "clockwise", "none", "not measured"
+#: Smallest enclosed area, relative to ``max_w^2``, that counts as going round (below it: a
+#: motion along a line or in the plane, its area round-off).
+ROTATION_TOL = 1e-9
+
+
+def rotation_sense(area, max_w) -> np.ndarray:
+    """The sense in which each node goes round, seen from support A looking towards B.
+
+    The right-handed frame of the plane is ``(e1, e2, n)``, ``e1`` along the chord from A to B,
+    so a viewer at A looking along ``e1`` sees the ``(w, v)`` axes turned by half a turn from
+    the usual drawing (``w`` to the left, ``v`` down), which keeps the sense: a positive area
+    ``1/2 oint (w dv - v dw)`` (angular momentum along ``-e1``, towards the viewer) is
+    counter-clockwise.
+
+    Parameters
+    ----------
+    area : array_like
+        Signed enclosed areas :attr:`Whirling.area`, m^2.
+    max_w : array_like
+        The nodes' largest ``|w|``, m (same shape): an area below :data:`ROTATION_TOL`
+        ``max_w^2`` is no rotation.
+
+    Returns
+    -------
+    ndarray of str
+        ``"counter-clockwise"``, ``"clockwise"`` or ``"none"`` per entry (none: no net area,
+        a motion along a line or a figure of eight whose lobes go round opposite ways;
+        ``"not measured"`` where the area is NaN).
+    """
+    area = np.asarray(area, dtype=float)
+    small = np.abs(area) <= ROTATION_TOL * np.square(np.asarray(max_w, dtype=float))
+    out = np.where(area > 0.0, COUNTER_CLOCKWISE, CLOCKWISE).astype(object)
+    out[small | (area == 0.0)] = NO_ROTATION
+    out[~np.isfinite(area)] = NOT_MEASURED
+    return out.astype(str)
+
+
+def largest_w(mirror: Mirror, steps: list, period: float) -> np.ndarray:
+    """Each node's largest ``|w|`` over an orbit (m), ``w`` along the plane's normal, from the
+    orbit at its integration steps (:meth:`~cablesim.orbits.shooting.Shooting.steps`: per
+    segment the times and the state ``(z, y')`` with its rate ``(y', y'')``), located between
+    the steps on the quintic Hermite interpolant of ``w``, ``w'``, ``w''`` as the orbit's
+    amplitudes are (:mod:`cablesim.dynamics.extremes`)."""
+    dur = period / len(steps)
+    t = np.concatenate([k * dur + ts[:-1] for k, (ts, _) in enumerate(steps)])  # one period, each step once
+    rec = np.concatenate([r[:-1] for _, r in steps])
+    nd = rec.shape[1] // 4
+    normal = mirror.frame[:, 2]
+    w, dw, ddw = (rec[:, a : a + nd].reshape(len(t), -1, 3) @ normal for a in (0, nd, 3 * nd))
+    return np.asarray(peak_and_half_range(t, w, dw, ddw, period=period)[0], dtype=float)
+
+
+def whirling_measures(mirror: Mirror, x: np.ndarray, dt: float, max_w: np.ndarray | None = None) -> Whirling:
     """Whirling measures of an orbit sampled uniformly in time at ``x`` (samples, 6 n): states
     ``(z, y')`` over one closed orbit (first and last samples the same state), ``dt`` s apart.
 
     The area is ``1/2 oint (w v' - v w') dt`` by the trapezoidal rule, which is spectrally
     accurate for a smooth periodic integrand (a polygon through the samples would be short by
-    about ``(2 pi / N)^2 / 6`` of it)."""
+    about ``(2 pi / N)^2 / 6`` of it); the largest ``|w|`` is ``max_w`` if given
+    (:func:`largest_w`), else located between the samples on the Hermite interpolant of
+    ``(w, w')``."""
     n = x.shape[1] // 6
     R = mirror.frame
     q = np.asarray(x, dtype=float).reshape(x.shape[0], 2, n, 3) @ R  # (chord, across, normal) per node
     v, w, dv, dw = q[:, 0, :, 1], q[:, 0, :, 2], q[:, 1, :, 1], q[:, 1, :, 2]
     integrand = w * dv - v * dw
     area = 0.5 * dt * np.sum(integrand[:-1], axis=0)
+    if max_w is None:
+        t = np.arange(x.shape[0] - 1) * dt  # one period, without the repeated last sample
+        max_w, _ = peak_and_half_range(t, w[:-1], dw[:-1], period=(x.shape[0] - 1) * dt)
     dv, dw = v - v.mean(axis=0), w - w.mean(axis=0)
     cov = np.array([[np.sum(dv * dv), np.sum(dv * dw)], [np.sum(dv * dw), np.sum(dw * dw)]])
     vals, vecs = np.linalg.eigh(cov)
     e = vecs[:, -1]
     tilt = float(np.degrees(np.arctan2(abs(e[1]), abs(e[0])))) if vals[-1] > 0 else 0.0
-    return Whirling(area=area, tilt=tilt)
+    return Whirling(area=area, tilt=tilt, max_w=np.asarray(max_w, dtype=float))
+
+
+def orbit_whirling(frame: Mirror, shooting, u: np.ndarray, lam: float, samples: int = 256) -> Whirling:
+    """The whirling measures of the orbit through the shooting unknowns ``u`` at parameter
+    ``lam`` (a :class:`~cablesim.orbits.shooting.Shooting`), integrated once: ``samples`` per
+    forcing period for the area and tilt, the steps themselves for the largest ``|w|``."""
+    steps = shooting.steps(u, lam)
+    t, x = shooting.trajectory(u, lam, samples_per_period=samples, steps=steps)
+    return whirling_measures(frame, x, float(t[1] - t[0]), largest_w(frame, steps, float(t[-1])))
+
+
+def cable_frame(eom) -> Mirror | None:
+    """The :class:`Mirror` of the plane of a spatial cable's equilibrium, whether or not its
+    loads lie in it (the frame of the whirling measures of a cable without the symmetry), or
+    None (a planar cable, or an equilibrium not in one plane)."""
+    cable = eom.cable
+    if cable.dim != 3:
+        return None
+    points = np.vstack([cable.support_A, np.reshape(eom.y0, (-1, 3)), cable.support_B])
+    normal = equilibrium_plane(points, np.asarray(cable.chord, dtype=float))
+    return None if normal is None else state_mirror(normal, cable.chord, cable.n_nodes)
 
 
 def cable_mirror(eom) -> Mirror | None:

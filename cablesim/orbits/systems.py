@@ -20,7 +20,7 @@ from ..mechanics.banded import band_rows
 from ..modal import fastest_rate
 from . import cablefield
 from . import mechanical as mech
-from .symmetry import cable_mirror
+from .symmetry import cable_frame, cable_mirror
 from .kernels import copy_work
 
 
@@ -42,6 +42,10 @@ class OdeSystem:
     mirror : Mirror or None
         The state's mirror symmetry (:mod:`cablesim.orbits.symmetry`), if the system has one:
         the monodromy of an orbit fixed by it splits into two blocks.
+    frame : Mirror or None
+        The plane of a spatial cable's equilibrium (the mirror itself when the system has one,
+        else that plane with loads out of it): the frame of the whirling measures of its orbits
+        that leave the plane.
     model : object
         The field's constants (for the cable, a :class:`~cablesim.mechanics.model.CableModel`;
         an empty tuple for a system whose constants are all in ``prm``).
@@ -83,6 +87,7 @@ class OdeSystem:
     model: object = ()
     mechanical: object = None
     mirror: object = None
+    frame: object = None
 
     def __post_init__(self):
         object.__setattr__(self, "prm", np.ascontiguousarray(self.prm, dtype=float).copy())
@@ -222,4 +227,5 @@ def cable_system(eom, gamma: float = 1.0, support: float = 1.0) -> OdeSystem:
         names=names,
         mechanical=mechanical,
         mirror=cable_mirror(eom),
+        frame=cable_frame(eom),
     )

@@ -15,7 +15,8 @@ def flat(text: str) -> str:
 def error_paragraph(err: str) -> str:
     """Standard error without the notice that kernels are compiling on first use (printed, on a
     cold cache, before a refusal that the statics find)."""
-    return "\n".join(line for line in err.strip().splitlines() if not line.startswith("compiling the numerical kernels"))
+    notices = ("compiling the numerical kernels", "compiling ", "compiled ")
+    return "\n".join(line for line in err.strip().splitlines() if not line.startswith(notices))
 
 
 def result_like_files(root: Path) -> list[Path]:

@@ -166,8 +166,6 @@ def test_plot_redraws_the_response_and_its_chart(loci_run, invoke_cli, tmp_path)
     ("continuation={omega: {start: 4.9, stop: 5.2}, gamma: {start: 0.5, stop: 1.0}}", "add loci: true"),
     ("continuation={omega: {start: 4.9, stop: 5.2}, loci: true, gamma: {start: 0.5, stop: 1.0, levels: [3]}}",
      "continuation.gamma.levels"),
-    ("continuation={omega: {start: 4.9, stop: 5.2}, loci: true, gamma: {start: 0.5, stop: 1.0}};spatial=true",
-     "planar cables only"),
 ])
 def test_bad_loci_settings_are_refused_cleanly(invoke_cli, setting, words):
     sets = [a for part in setting.split(";") for a in ("--set", part)]

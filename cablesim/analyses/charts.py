@@ -81,6 +81,10 @@ class LocusResult:
         Why the curve ends at its first and last point.
     origin : (float, float)
         (omega, gamma) of the bifurcation it was started from.
+    plane : str
+        ``out-of-plane`` for a curve of a planar response's out-of-plane bifurcation (a spatial
+        cable symmetric about its plane, the critical multiplier in the out-of-plane block of the
+        monodromy), else ``in-plane``.
     """
 
     name: str
@@ -97,6 +101,7 @@ class LocusResult:
     special: list
     ends: tuple
     origin: tuple
+    plane: str = "in-plane"
 
 
 @dataclass(frozen=True)
@@ -124,10 +129,19 @@ def need_planar(case: Case, what: str) -> None:
             "for the in-plane curves.", field="spatial")
 
 
-def _locus_result(loc: Locus, idx: np.ndarray) -> LocusResult:
+def _locus_plane(loc: Locus, diagram) -> str:
+    """The block of the critical multiplier of the bifurcation a curve was started from."""
+    for b in diagram.bifurcations:
+        if b.kind == loc.kind and b.period == loc.period and abs(b.parameter - loc.origin[0]) <= 1e-9 * abs(
+                loc.origin[0]):
+            return b.plane or "in-plane"
+    return "in-plane"
+
+
+def _locus_result(loc: Locus, idx: np.ndarray, plane: str = "in-plane") -> LocusResult:
     pts = loc.points
     nch = idx.size
-    return LocusResult(
+    return LocusResult(plane=plane,
         name=f"{SHORT[loc.kind]}{loc.index}-p{loc.period}", kind=loc.kind, period=int(loc.period),
         omega=loc.values("p1").astype(float), gamma=loc.values("p2").astype(float),
         kappa=loc.values("kappa").astype(float) if loc.kind == "neimark-sacker" else None,
@@ -185,7 +199,7 @@ def case_loci(case: Case, eom, diagram, idx: np.ndarray, progress: Callable | No
                       callback=progress)
     stats = {"loci_evaluations": sum(L.evaluations for L in loci), "loci_points": sum(len(L.points) for L in loci),
              "loci_seconds": sum(L.seconds for L in loci)}
-    return [_locus_result(L, idx) for L in loci], _codim2(loci, idx), stats
+    return [_locus_result(L, idx, _locus_plane(L, diagram)) for L in loci], _codim2(loci, idx), stats
 
 
 def finish_loci(case: Case, eom, diagram, idx: np.ndarray, progress=None):
@@ -194,7 +208,7 @@ def finish_loci(case: Case, eom, diagram, idx: np.ndarray, progress=None):
     try:
         return (*case_loci(case, eom, diagram, idx, progress), False)
     except LociInterrupted as exc:
-        return [_locus_result(L, idx) for L in exc.loci], _codim2(exc.loci, idx), {}, True
+        return [_locus_result(L, idx, _locus_plane(L, diagram)) for L in exc.loci], _codim2(exc.loci, idx), {}, True
 
 
 # ----------------------------------------------------------------------------------------------

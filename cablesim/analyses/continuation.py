@@ -24,7 +24,7 @@ from ..orbits import OrbitPoint, Settings, continue_branches
 from ..orbits.diagram import BranchEnd, BranchesInterrupted
 from ..orbits.stability import frequency_ratio
 from ..orbits.symmetry import in_plane_whirling, rotation_sense
-from .charts import Interrupted, finish_loci, need_planar
+from .charts import Interrupted, finish_loci
 from .setup import build_equations, frequency_of_interest, make_integrator
 from .static import run_static
 
@@ -365,8 +365,6 @@ def run_continuation(
             "`continuation: {omega: {start: 0.5, stop: 6.0}, channels: [z2, z4]}`.",
             field="continuation",
         )
-    if spec.loci:
-        need_planar(case, "Bifurcation curves (continuation.loci)")
     if not case.forced:
         raise CablesimError("loads.FL is zero and no support moves, so there is no forced response to continue; "
                             "give peak harmonic loads FL or a support amplitude (supports:).", field="loads.FL")

@@ -6,7 +6,8 @@ Bifurcation curves (``cablesim continue`` with ``continuation.loci``), beside th
   of the response curve whose bifurcations started them), ``complete``;
 - ``/continuation/loci/<name>/{omega, gamma, amplitude, halfrange, multipliers, state, trusted,
   special}`` (``kappa`` too on Neimark-Sacker curves), attributes ``kind``, ``period``,
-  ``channels``, ``end_first``, ``end_last``, ``origin_omega``, ``origin_gamma``, ``index``;
+  ``channels``, ``end_first``, ``end_last``, ``origin_omega``, ``origin_gamma``, ``index``,
+  ``plane`` (``out-of-plane``: a curve of a planar response's out-of-plane bifurcation);
 - ``/continuation/codim2/{kind, omega, gamma, locus, amplitude, located}``: cusps, fold-flip
   points, strong resonances, generalized period doublings.
 
@@ -41,7 +42,7 @@ def write_loci(g: h5py.Group, res) -> None:
     for k, L in enumerate(res.loci):
         h = lg.create_group(L.name)
         h.attrs.update(kind=L.kind, period=L.period, end_first=L.ends[0], end_last=L.ends[1],
-                       origin_omega=L.origin[0], origin_gamma=L.origin[1], index=k)
+                       origin_omega=L.origin[0], origin_gamma=L.origin[1], index=k, plane=L.plane)
         h.attrs["channels"] = chans
         put(h, "omega", L.omega, "rad/s", "forcing frequency along the curve")
         put(h, "gamma", L.gamma, "1", "load factor (scale of FL) along the curve")
@@ -79,7 +80,8 @@ def read_loci(g: h5py.Group) -> dict | None:
         d["special"] = [attr_text(s) for s in d["special"]]
         d.update(name=name, kind=attr_text(h.attrs["kind"]), period=int(h.attrs["period"]),
                  ends=(attr_text(h.attrs["end_first"]), attr_text(h.attrs["end_last"])),
-                 origin=(float(h.attrs["origin_omega"]), float(h.attrs["origin_gamma"])), index=int(h.attrs["index"]))
+                 origin=(float(h.attrs["origin_omega"]), float(h.attrs["origin_gamma"])), index=int(h.attrs["index"]),
+                 plane=attr_text(h.attrs.get("plane", "in-plane")))
         loci.append(d)
     out["loci"] = sorted(loci, key=lambda d: d["index"])
     cg = g["codim2"]

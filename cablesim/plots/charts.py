@@ -32,6 +32,11 @@ KIND_STYLE = {
                         "harmonic response unstable: 1/2 subharmonic", 0.22, None),
     "neimark-sacker": ("#7b3fa0", "Neimark-Sacker curve (complex pair)",
                        "harmonic response unstable: quasi-periodic", 0.18, "//"),
+    # a planar response's out-of-plane bifurcations (spatial cables symmetric about their plane)
+    "out-of-plane period-doubling": ("#1b9e77", "out-of-plane period-doubling curve (-1 across the plane)",
+                                     "planar response unstable across its plane: swings at 1/2", 0.2, "\\\\"),
+    "out-of-plane neimark-sacker": ("#e7298a", "out-of-plane Neimark-Sacker curve",
+                                    "planar response unstable across its plane: quasi-periodic", 0.16, ".."),
 }
 #: Marker and short label of each codimension-two point.
 CODIM2_STYLE = {
@@ -50,9 +55,16 @@ CODIM2_STYLE = {
 PERIOD_LINES = ("-", "--", ":", "-.")
 
 
-def _closed_polygon(x: np.ndarray, y: np.ndarray, box):
-    """The curve closed along the chart's boundary when both its ends lie on it (the shorter
-    way round, by enclosed area), else None."""
+def style_key(kind: str, plane: str) -> str:
+    """The :data:`KIND_STYLE` entry of a curve of ``kind`` whose critical multiplier lies in
+    ``plane`` (``in-plane`` or ``out-of-plane``)."""
+    key = f"out-of-plane {kind}" if plane == "out-of-plane" else kind
+    return key if key in KIND_STYLE else kind
+
+
+def _closed_polygons(x: np.ndarray, y: np.ndarray, box) -> list:
+    """The curve closed along the chart's boundary both ways round when both its ends lie on it,
+    the smaller enclosed area first (empty otherwise)."""
     x0, x1, y0, y1 = box
     tol = 1e-6
 
@@ -64,7 +76,7 @@ def _closed_polygon(x: np.ndarray, y: np.ndarray, box):
         return None
 
     if x.size < 3 or side(x[-1], y[-1]) is None or side(x[0], y[0]) is None:
-        return None
+        return []
     corners = [(x1, y0), (x1, y1), (x0, y1), (x0, y0)]  # ends of sides 0 (bottom), 1, 2, 3 going round
 
     def walk(k_from, k_to, step):
@@ -75,13 +87,12 @@ def _closed_polygon(x: np.ndarray, y: np.ndarray, box):
         return out
 
     a, b = side(x[-1], y[-1]), side(x[0], y[0])
-    best = None
+    out = []
     for step in (1, -1):
         pts = np.vstack([np.column_stack([x, y]), np.array(walk(a, b, step)).reshape(-1, 2)])
         area = 0.5 * abs(np.dot(pts[:, 0], np.roll(pts[:, 1], -1)) - np.dot(pts[:, 1], np.roll(pts[:, 0], -1)))
-        if best is None or area < best[0]:
-            best = (area, pts)
-    return best[1]
+        out.append((area, step, pts))
+    return [pts for _, _, pts in sorted(out, key=lambda t: (t[0], t[1]))]
 
 
 def _inside(poly: np.ndarray, px: np.ndarray, py: float) -> np.ndarray:
@@ -114,14 +125,18 @@ def _draw_loci(ax, d: dict, box) -> tuple[set, set]:
     """Curves, shaded regions and codimension-two points; the kinds and the shadings drawn."""
     kinds, shaded = set(), set()
     for L in d["loci"]["loci"]:
-        colour, _, region, alpha, hatch = KIND_STYLE[L["kind"]]
+        key = style_key(L["kind"], L.get("plane", "in-plane"))
+        colour, _, region, alpha, hatch = KIND_STYLE[key]
         ls = PERIOD_LINES[min(int(np.log2(L["period"])), len(PERIOD_LINES) - 1)]
         ax.plot(L["omega"], L["gamma"], ls, color=colour, lw=1.6, zorder=3)
-        kinds.add((L["kind"], L["period"]))
-        poly = _closed_polygon(L["omega"], L["gamma"], box) if L["period"] == 1 else None
-        if poly is not None and _confirmed(L["kind"], poly, d):
+        kinds.add((key, L["period"]))
+        # the region the curve closes: the smaller way round unless the computed response
+        # says otherwise (a tongue reaching both sides of the chart is closed over its top)
+        polys = _closed_polygons(L["omega"], L["gamma"], box) if L["period"] == 1 else []
+        poly = next((q for q in polys if _confirmed(L["kind"], q, d)), None)
+        if poly is not None:
             ax.fill(poly[:, 0], poly[:, 1], color=colour, alpha=alpha, hatch=hatch, lw=0, zorder=1)
-            shaded.add(L["kind"])
+            shaded.add(key)
     return kinds, shaded
 
 
@@ -147,7 +162,8 @@ def _draw_thresholds(ax, d: dict) -> bool:
         for k, sp in enumerate(L["special"]):
             if sp == "turning point" and L["gamma"][k] <= L["gamma"].min() * (1 + 1e-9):
                 x, y = float(L["omega"][k]), float(L["gamma"][k])
-                ax.plot(x, y, "v", color=KIND_STYLE[L["kind"]][0], mfc="white", ms=6, zorder=6)
+                ax.plot(x, y, "v", color=KIND_STYLE[style_key(L["kind"], L.get("plane", "in-plane"))][0], mfc="white",
+                        ms=6, zorder=6)
                 # left of the point and below: codimension-two labels go to its right
                 ax.annotate(f"least $\\gamma$ = {y:.3g}\nat {x:.4g} rad/s", (x, y), textcoords="offset points",
                             xytext=(-6, -6), ha="right", va="top", fontsize=8, zorder=7)
@@ -160,9 +176,10 @@ def _draw_response_line(ax, d: dict, lo: float, hi: float) -> None:
     g0 = float(d["fixed"])
     ax.axhline(g0, color=COLOURS["reference"], lw=1.0, ls=(0, (5, 2)), zorder=2)
     bif = d["bifurcations"]
+    planes = bif.get("plane", ["in-plane"] * len(bif["kind"]))
     for k, kind in enumerate(bif["kind"]):
         if kind in KIND_STYLE:
-            ax.plot(float(bif["omega"][k]), g0, "o", ms=3.5, color=KIND_STYLE[kind][0], zorder=5)
+            ax.plot(float(bif["omega"][k]), g0, "o", ms=3.5, color=KIND_STYLE[style_key(kind, planes[k])][0], zorder=5)
 
 
 @styled
@@ -231,7 +248,7 @@ def plot_stability_chart(h5_path, png_path=None, title: str | None = None) -> Pa
                               label="least $\\gamma$ of a tongue"))
     handles.append(Line2D([], [], color=COLOURS["reference"], ls=(0, (5, 2)), marker="o", ms=3.5,
                           label=f"frequency response computed ($\\gamma$ = {float(d['fixed']):g}) and its bifurcations"))
-    legend_below(fig, handles, ncol=2)
+    legend_below(fig, handles, ncol=2 if max(len(h.get_label()) for h in handles) <= 60 else 1)
     notes = [] if lc["complete"] else ["interrupted: the curves traced until then are drawn"]
     bottom_notes(fig, notes, warn=bool(notes))
     n = len(lc["loci"])

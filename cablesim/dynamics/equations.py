@@ -114,6 +114,7 @@ class EquationsOfMotion:
         """Whether a support moves."""
         return bool(np.any(self.uA != 0.0) or np.any(self.uB != 0.0))
 
+    @cached_property
     def support_stiffness_blocks(self) -> tuple[np.ndarray, np.ndarray]:
         """The tangent blocks ``k_first``, ``k_last`` (dim x dim, N/m) of the first and last
         segments at the equilibrium: ``K0s s = -k_first s_A`` at the first node and
@@ -131,7 +132,7 @@ class EquationsOfMotion:
         """``a1`` times the tangent blocks of the first and last segments at the equilibrium
         (the support part of the stiffness-proportional damping, ``docs/theory.md`` section 7),
         flat tuples of dim x dim, N s/m."""
-        return tuple(tuple(float(x) for x in (self.a1 * b).ravel()) for b in self.support_stiffness_blocks())
+        return tuple(tuple(float(x) for x in (self.a1 * b).ravel()) for b in self.support_stiffness_blocks)
 
     def support_load(self, omega: float) -> np.ndarray:
         """Complex amplitude of the linearised load of the supports' motion, N: the harmonic load
@@ -142,7 +143,7 @@ class EquationsOfMotion:
         if not self.moving_supports:
             return G
         dim = self.cable.dim
-        k_first, k_last = self.support_stiffness_blocks()
+        k_first, k_last = self.support_stiffness_blocks
         for k, u, ph, at in ((k_first, self.uA, self.phA, 0), (k_last, self.uB, self.phB, self.n_dof - dim)):
             G[at : at + dim] += (1 + 1j * omega * self.a1) * (k @ np.asarray(u, dtype=float)) * np.exp(1j * ph)
         return G

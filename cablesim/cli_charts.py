@@ -37,12 +37,13 @@ def branch_status(status):
 
 def loci_status(status):
     """A progress callback that shows the point of the bifurcation curve being traced."""
-    return lambda L, p: status(f"bifurcation curve {L.index} ({L.kind}): omega {p.p1:.5g} rad/s, gamma {p.p2:.5g}")
+    return lambda L, p: status(f"bifurcation curve {L.index} ({L.kind}): omega {p.p1:.5g} rad/s, "
+                               f"{'s' if L.parameters[1] == 'support' else L.parameters[1]} {p.p2:.5g}")
 
 
 def loci_text(result) -> str:
     """The summary of the bifurcation curves of a continuation result ("" without them)."""
-    if result.gamma_range is None:
+    if result.loci_range is None:
         return ""
     from .io.chart_report import loci_summary
 
@@ -51,7 +52,7 @@ def loci_text(result) -> str:
 
 def chart_text(out: Path, result) -> str:
     """Draw the stability chart of ``out`` if the result has curves: ``" and <png>"``, else ""."""
-    if result.gamma_range is None:
+    if result.loci_range is None:
         return ""
     from .plots.charts import plot_stability_chart
 

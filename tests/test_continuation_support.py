@@ -233,16 +233,25 @@ MOVING = "supports={A: {amplitude: [0.1, 0.2]}}"
     (STAY, ["--set", "continuation.gamma={start: 0.5, stop: 1.0}"],
      ["continuation.gamma must be a single value when the parameter is support"]),
     (STAY, ["--set", "continuation.support={start: -0.5, stop: 0.5}"], ["continuation.support.start", "from 0"]),
-    (STAY, ["--set", "continuation.loci=true"], ["continuation.loci with the support motion multiplier",
-                                                  "is not supported"]),
+    (STAY, ["--set", "continuation.loci=true"], ["continuation.loci needs the response in omega",
+                                                  "continuation.support"]),
     (PAPER, ["--set", MOVING, "--set", "continuation={omega: {start: 2.0, stop: 2.1}, gamma: {start: 0.5, "
-             "stop: 1.0}, support: 0.5, loci: true}"], ["continuation.loci with the support motion multiplier"]),
+             "stop: 1.0}, support: {start: 0.1, stop: 0.5}, loci: true}"],
+     ["continuation.loci: both continuation.gamma and continuation.support are ranges", "single value"]),
+    (PAPER, ["--set", "continuation={omega: {start: 2.0, stop: 2.1}, support: {start: 0.1, stop: 0.5}, "
+             "loci: true}"], ["continuation.loci with continuation.support a range", "no support of this case moves",
+                              "continuation.gamma"]),
+    (STAY, ["--set", "continuation={omega: {start: 11.0, stop: 13.0}, support: {start: 0.1, stop: 0.5, at: 0.7}, "
+            "loci: true}"], ["continuation.support.at (0.7) must lie between"]),
+    (STAY, ["--set", "continuation.support={start: 0.1, stop: 0.5, levels: [0.3]}"],
+     ["continuation.support.at and continuation.support.levels are used only with loci: true"]),
     (PAPER, ["--set", MOVING, "--set", CONT, "--analysis", "approximate"],
      ["supports: moving supports need the exact analysis", "--analysis approximate"]),
     (PAPER, ["--set", MOVING, "--set", CONT, "--set", "analysis=approximate"],
      ["supports: moving supports need the exact analysis; set analysis: exact"]),
-], ids=["no-moving-support", "support-range-in-omega", "gamma-range-in-support", "negative", "loci",
-        "loci-support-value", "approximate-flag", "approximate-case"])
+], ids=["no-moving-support", "support-range-in-omega", "gamma-range-in-support", "negative", "loci-in-support",
+        "loci-both-ranges", "loci-support-no-moving-support", "loci-support-at-outside", "support-levels-without-loci",
+        "approximate-flag", "approximate-case"])
 def test_refusals_name_the_field_and_the_fix(invoke_cli, tmp_path, case_file, args, needles):
     res = invoke_cli("continue", case_file, "-o", tmp_path / "c.h5", *args)
     assert_refused(res, tmp_path, *needles)

@@ -1,8 +1,9 @@
-"""Design charts of a case: bifurcation curves in (omega, gamma) and backbone curves.
+"""Design charts of a case: bifurcation curves in (omega, gamma) or (omega, s) and backbone curves.
 
 - :func:`case_loci`: every fold, period doubling and Neimark-Sacker point of a case's frequency
-  response, continued in the forcing frequency omega and the load factor gamma over
-  ``continuation.gamma`` (:func:`cablesim.orbits.curves.trace_loci`), with the
+  response, continued in the forcing frequency omega and a second parameter: the load factor
+  gamma over ``continuation.gamma``, or the support motion multiplier s over
+  ``continuation.support`` (:func:`cablesim.orbits.curves.trace_loci`), with the
   codimension-two points found on the curves; :func:`~cablesim.analyses.continuation.run_continuation`
   calls it when ``continuation.loci`` is set.
 - :func:`run_backbone`: the backbone of a linear mode, the unforced, undamped cable's periodic
@@ -55,7 +56,7 @@ class Interrupted(KeyboardInterrupt):
 
 @dataclass(frozen=True)
 class LocusResult:
-    """A bifurcation curve in (omega, gamma).
+    """A bifurcation curve in (omega, gamma) or (omega, s).
 
     Attributes
     ----------
@@ -65,8 +66,9 @@ class LocusResult:
         ``fold``, ``period-doubling`` or ``neimark-sacker``.
     period : int
         Period of the bifurcating orbits, in forcing periods.
-    omega, gamma : ndarray (points,)
-        Forcing frequency (rad/s) and load factor along the curve.
+    omega, gamma, support : ndarray (points,)
+        Forcing frequency (rad/s), load factor gamma and support motion multiplier s along the
+        curve (the one that is not :attr:`second` constant, at its value in the response).
     kappa : ndarray (points,) or None
         Neimark-Sacker curves: ``cos`` of the angle of the critical multipliers.
     amplitude, halfrange : ndarray (points, channels)
@@ -80,11 +82,13 @@ class LocusResult:
     ends : (str, str)
         Why the curve ends at its first and last point.
     origin : (float, float)
-        (omega, gamma) of the bifurcation it was started from.
+        (omega, second parameter) of the bifurcation it was started from.
     plane : str
         ``out-of-plane`` for a curve of a planar response's out-of-plane bifurcation (a spatial
         cable symmetric about its plane, the critical multiplier in the out-of-plane block of the
         monodromy), else ``in-plane``.
+    second : str
+        The second parameter of the curve, ``gamma`` or ``support`` (s).
     """
 
     name: str
@@ -102,6 +106,13 @@ class LocusResult:
     ends: tuple
     origin: tuple
     plane: str = "in-plane"
+    support: np.ndarray | None = None
+    second: str = "gamma"
+
+    @property
+    def values2(self) -> np.ndarray:
+        """The second parameter along the curve (:attr:`gamma` or :attr:`support`)."""
+        return getattr(self, self.second)
 
 
 @dataclass(frozen=True)
@@ -109,8 +120,9 @@ class Codim2Result:
     """A codimension-two point on a curve: ``kind`` (``cusp``, ``fold-flip``, ``1:1 resonance``,
     ``1:2 resonance``, ``1:3 resonance``, ``1:4 resonance``, ``fold-neimark-sacker``,
     ``flip-neimark-sacker``, ``generalized period doubling``), where (``omega`` rad/s,
-    ``gamma``), on which ``locus`` (index), the orbit's ``amplitude`` per channel (m) and
-    whether it was ``located`` (the secant converged)."""
+    ``gamma``, ``support`` s), on which ``locus`` (index), the orbit's ``amplitude`` per channel
+    (m) and whether it was ``located`` (the secant converged); ``second``: the curve's second
+    parameter (``gamma`` or ``support``)."""
 
     kind: str
     omega: float
@@ -118,6 +130,13 @@ class Codim2Result:
     locus: int
     amplitude: np.ndarray
     located: bool
+    support: float = 1.0
+    second: str = "gamma"
+
+    @property
+    def value2(self) -> float:
+        """The second parameter there (:attr:`gamma` or :attr:`support`)."""
+        return getattr(self, self.second)
 
 
 def need_planar(case: Case, what: str) -> None:
@@ -138,12 +157,21 @@ def _locus_plane(loc: Locus, diagram) -> str:
     return "in-plane"
 
 
-def _locus_result(loc: Locus, idx: np.ndarray, plane: str = "in-plane") -> LocusResult:
+def _along(loc: Locus, second: str, fixed: dict) -> dict:
+    """``omega``, ``gamma`` and ``support`` along a curve whose second parameter is ``second``
+    (the other at its value ``fixed`` in the response)."""
+    p2 = loc.values("p2").astype(float)
+    out = {k: np.full(p2.size, float(v)) for k, v in fixed.items()}
+    out[second] = p2
+    out["omega"] = loc.values("p1").astype(float)
+    return out
+
+
+def _locus_result(loc: Locus, idx: np.ndarray, plane: str, second: str, fixed: dict) -> LocusResult:
     pts = loc.points
     nch = idx.size
-    return LocusResult(plane=plane,
+    return LocusResult(plane=plane, second=second, **_along(loc, second, fixed),
         name=f"{SHORT[loc.kind]}{loc.index}-p{loc.period}", kind=loc.kind, period=int(loc.period),
-        omega=loc.values("p1").astype(float), gamma=loc.values("p2").astype(float),
         kappa=loc.values("kappa").astype(float) if loc.kind == "neimark-sacker" else None,
         amplitude=np.array([p.amplitude[idx] for p in pts]).reshape(len(pts), nch),
         halfrange=np.array([p.halfrange[idx] for p in pts]).reshape(len(pts), nch),
@@ -152,13 +180,24 @@ def _locus_result(loc: Locus, idx: np.ndarray, plane: str = "in-plane") -> Locus
         ends=tuple(loc.ends), origin=tuple(float(x) for x in loc.origin))
 
 
-def _codim2(loci: list, idx: np.ndarray) -> list:
+def _codim2(loci: list, idx: np.ndarray, second: str, fixed: dict) -> list:
     out = []
     for k, loc in enumerate(loci):
         for p in loc.codim2 + [p for p in loc.points if p.special == "generalized period doubling"]:
-            out.append(Codim2Result(kind=p.special, omega=float(p.p1), gamma=float(p.p2), locus=k,
-                                    amplitude=np.asarray(p.amplitude)[idx], located=bool(p.located)))
+            at = {**fixed, second: float(p.p2)}
+            out.append(Codim2Result(kind=p.special, omega=float(p.p1), gamma=at["gamma"], support=at["support"],
+                                    second=second, locus=k, amplitude=np.asarray(p.amplitude)[idx],
+                                    located=bool(p.located)))
     return out
+
+
+def _results(case: Case, loci: list, diagram, idx: np.ndarray) -> tuple[list, list]:
+    """The curves and their codimension-two points as results, in the case's channels."""
+    spec = case.continuation
+    second = spec.loci_parameter
+    fixed = {"gamma": spec.fixed_gamma, "support": spec.fixed_support}
+    return ([_locus_result(L, idx, _locus_plane(L, diagram), second, fixed) for L in loci],
+            _codim2(loci, idx, second, fixed))
 
 
 def case_loci(case: Case, eom, diagram, idx: np.ndarray, progress: Callable | None = None):
@@ -167,12 +206,14 @@ def case_loci(case: Case, eom, diagram, idx: np.ndarray, progress: Callable | No
     Parameters
     ----------
     case : Case
-        ``continuation.loci`` set; ``continuation.gamma`` the range of the curves (its
-        ``levels``: the values of gamma whose crossings are located on every curve).
+        ``continuation.loci`` set; ``continuation.gamma`` or ``continuation.support`` the range
+        of the curves' second parameter (its ``levels``: the values whose crossings are located
+        on every curve).
     eom : EquationsOfMotion
-        Of the case (its ``FL`` is what gamma multiplies).
+        Of the case (its ``FL`` is what gamma multiplies; its support amplitudes ``uA``, ``uB``
+        what gamma and s multiply).
     diagram : ResponseDiagram
-        The frequency response at ``gamma = continuation.fixed``.
+        The frequency response at the second parameter's ``at`` (the other at its value).
     idx : ndarray of int
         DOF indices of the channels reported.
     progress : callable, optional
@@ -189,17 +230,20 @@ def case_loci(case: Case, eom, diagram, idx: np.ndarray, progress: Callable | No
         On Ctrl-C or SIGTERM, with the curves traced until then (the last one partial).
     """
     spec = case.continuation
-    g, w = spec.gamma, spec.omega
-    g0 = spec.fixed
-    system = cable_system(eom, gamma=g0)
-    scale, w_scale = cable_scales(eom, "omega", w.start, w.stop, max(g.start, g.stop))
+    second, g, w = spec.loci_parameter, spec.loci_range, spec.omega
+    g0, s0 = spec.fixed_gamma, spec.fixed_support
+    system = cable_system(eom, gamma=g0, support=s0)
+    top = max(g.start, g.stop)
+    # the state scale at the largest forcing the curves may reach
+    scale, w_scale = (cable_scales(eom, "omega", w.start, w.stop, top, s0) if second == "gamma" else
+                      cable_scales(eom, "omega", w.start, w.stop, g0, top))
     g_scale = max(abs(g.start), abs(g.stop))
-    loci = trace_loci(system, diagram, g0, (w.start, w.stop), (g.start, g.stop), state_scale=scale,
-                      scales=(w_scale, g_scale), levels=g.levels, settings=Settings(max_points=spec.max_points),
-                      callback=progress)
+    loci = trace_loci(system, diagram, spec.loci_response, (w.start, w.stop), (g.start, g.stop),
+                      parameters=("omega", second), state_scale=scale, scales=(w_scale, g_scale), levels=g.levels,
+                      settings=Settings(max_points=spec.max_points), callback=progress)
     stats = {"loci_evaluations": sum(L.evaluations for L in loci), "loci_points": sum(len(L.points) for L in loci),
              "loci_seconds": sum(L.seconds for L in loci)}
-    return [_locus_result(L, idx, _locus_plane(L, diagram)) for L in loci], _codim2(loci, idx), stats
+    return (*_results(case, loci, diagram, idx), stats)
 
 
 def finish_loci(case: Case, eom, diagram, idx: np.ndarray, progress=None):
@@ -208,7 +252,7 @@ def finish_loci(case: Case, eom, diagram, idx: np.ndarray, progress=None):
     try:
         return (*case_loci(case, eom, diagram, idx, progress), False)
     except LociInterrupted as exc:
-        return [_locus_result(L, idx, _locus_plane(L, diagram)) for L in exc.loci], _codim2(exc.loci, idx), {}, True
+        return (*_results(case, exc.loci, diagram, idx), {}, True)
 
 
 # ----------------------------------------------------------------------------------------------

@@ -155,11 +155,13 @@ class ContinuationResult:
     case_name: str
     case_text: str
     stats: dict = field(default_factory=dict)
-    #: With ``continuation.loci``: the bifurcation curves in (omega, gamma), their
-    #: codimension-two points (:mod:`cablesim.analyses.charts`) and the range of gamma.
+    #: With ``continuation.loci``: the bifurcation curves in (omega, gamma) or (omega, s), their
+    #: codimension-two points (:mod:`cablesim.analyses.charts`), the curves' second parameter
+    #: (``gamma`` or ``support``) and its range.
     loci: list = field(default_factory=list)
     codim2: list = field(default_factory=list)
-    gamma_range: tuple | None = None
+    loci_range: tuple | None = None
+    loci_parameter: str = "gamma"
     #: False when an interruption came while the branches or the curves were traced (what was
     #: done is kept).
     complete: bool = True
@@ -172,6 +174,8 @@ class ContinuationResult:
     start_cause: str = ""
     #: gamma when it is not the parameter (with the support parameter, ``fixed`` is omega).
     fixed_gamma: float = 1.0
+    #: The support multiplier s when it is not the parameter (with loci in s: the response's).
+    fixed_support: float = 1.0
     #: The amplitude (m, one component per axis) of each moving support at support multiplier
     #: s = 1 and gamma = 1, as ``supports:`` gives it: ``{"A": array, ...}``.
     support_amplitudes: dict = field(default_factory=dict)
@@ -410,7 +414,8 @@ def run_continuation(
         parameter=spec.parameter, start=rng.start, stop=rng.stop, fixed=fixed, channels=names, branches=branches,
         bifurcations=bifs, analysis=static.analysis, modal_omega=static.modes.omega.copy(), case_name=case.name,
         case_text=case.text, stats=stats, start_failure=_start_failure(diagram), warnings=list(static.warnings),
-        fixed_gamma=spec.fixed_gamma, support_amplitudes=support_amplitudes(case), components=case.dim,
+        fixed_gamma=spec.fixed_gamma, fixed_support=spec.fixed_support, support_amplitudes=support_amplitudes(case),
+        components=case.dim,
     )
     result.start_cause = _start_cause(diagram) if result.start_failure else ""
     if interrupted:
@@ -419,7 +424,8 @@ def run_continuation(
         raise Interrupted(result)
     if spec.loci:
         result.loci, result.codim2, more, interrupted = finish_loci(case, eom, diagram, idx, loci_progress)
-        result.gamma_range = (spec.gamma.start, spec.gamma.stop)
+        result.loci_parameter = spec.loci_parameter
+        result.loci_range = (spec.loci_range.start, spec.loci_range.stop)
         stats.update(more)
         if interrupted:
             result.complete = False

@@ -40,10 +40,14 @@ class OmegaRange(ParameterRange):
 class SupportRange(ParameterRange):
     """A range of the support motion multiplier s (``continuation.support``): dimensionless, the
     amplitudes of ``supports:`` times s (s = 1: as written; s = 0: the cable at rest under its
-    static loads, when FL is zero)."""
+    static loads, when FL is zero). With ``loci: true``, the range over which bifurcation curves
+    are continued in (omega, s), with ``at`` and ``levels`` as for gamma."""
 
     start: SUPPORT = Field(description="first multiplier (may be 0)")
     stop: SUPPORT = Field(description="last multiplier")
+    at: SUPPORT | None = Field(default=None, description="loci: s of the response curve (default: stop)")
+    levels: tuple[SUPPORT, ...] = Field(default=(), description=(
+        "loci: values of s at which each curve's crossings are located (special: level), e.g. [0.2, 0.3]"))
 
 
 class LociRange(ParameterRange):
@@ -53,6 +57,10 @@ class LociRange(ParameterRange):
     at: GAMMA | None = Field(default=None, description="gamma of the response curve (default: stop)")
     levels: tuple[GAMMA, ...] = Field(default=(), description=(
         "values of gamma at which each curve's crossings are located (special: level), e.g. [0.5, 2]"))
+
+
+#: The parameters a bifurcation curve can be continued in beside omega (``loci: true``).
+LOCI_PARAMETERS = ("gamma", "support")
 
 
 #: Marks a tag of a union in the location of a validation error; the messages leave it out.
@@ -81,7 +89,7 @@ class ContinuationSpec(StrictModel):
     gamma: range_or_value(LociRange, GAMMA) = Field(default=1.0, description=(
         "range (parameter gamma, or loci) or value; scales FL and the supports' motion"))
     support: range_or_value(SupportRange, SUPPORT) = Field(default=1.0, description=(
-        "range (parameter support) or value; multiplies the amplitudes of supports: alone"))
+        "range (parameter support, or loci) or value; multiplies the amplitudes of supports: alone"))
     period: integer(1, 16) = Field(default=1, description="period of the first branch, forcing periods")
     switch_branches: bool = Field(default=True, description="follow every period doubling onto its 2p branch")
     channels: tuple[str, ...] | None = Field(default=None, description="DOF reported, e.g. [z2, z4]")
@@ -92,7 +100,8 @@ class ContinuationSpec(StrictModel):
     max_points: integer(2, 100_000) = Field(default=2000, description="most points per branch")
     loci: bool = Field(default=False, description=(
         "continue every fold, period doubling and Neimark-Sacker point found in omega and gamma "
-        "(gamma: {start, stop, at}): the stability chart"))
+        "(gamma: {start, stop, at}) or, with moving supports, in omega and the support multiplier s "
+        "(support: {start, stop, at}): the stability chart"))
 
     @model_validator(mode="after")
     def _ranges(self):
@@ -107,8 +116,10 @@ class ContinuationSpec(StrictModel):
             )
         for other in (k for k in names if k != self.parameter and ranged[k]):
             raise ValueError(self._single_value_text(other))
-        if isinstance(self.gamma, LociRange) and (self.gamma.at is not None or self.gamma.levels):
-            raise ValueError("continuation.gamma.at and continuation.gamma.levels are used only with loci: true")
+        for k in LOCI_PARAMETERS:
+            rng = getattr(self, k)
+            if isinstance(rng, ParameterRange) and (rng.at is not None or rng.levels):
+                raise ValueError(f"continuation.{k}.at and continuation.{k}.levels are used only with loci: true")
         for other in (k for k in ("omega", "gamma") if k != self.parameter):
             if not getattr(self, other) > 0:
                 raise ValueError(f"continuation.{other} must be positive")
@@ -119,34 +130,58 @@ class ContinuationSpec(StrictModel):
         if other == "support":
             return (f"continuation.support is a range, but the parameter is {self.parameter}: continue in the "
                     "support motion multiplier with parameter: support (omega and gamma then single values), "
-                    "or give continuation.support a single value (the multiplier of the amplitudes of "
-                    "supports:, default 1)")
+                    "give continuation.support a single value (the multiplier of the amplitudes of "
+                    "supports:, default 1), or add loci: true to continue the bifurcations over that range of s")
         hint = (" (or add loci: true to continue the bifurcations over that gamma range)"
                 if other == "gamma" and self.parameter == "omega" else "")
         return f"continuation.{other} must be a single value when the parameter is {self.parameter}" + hint
 
     def _loci_ranges(self, ranged: dict):
-        """The checks of ``loci: true`` (the response in omega, the curves over a gamma range)."""
-        if self.parameter == "support" or ranged["support"] or self.support != 1.0:
+        """The checks of ``loci: true``: the response in omega, the curves over a range of gamma
+        or of the support multiplier s (one of the two; the other a single value)."""
+        if ranged["gamma"] and ranged["support"]:
             raise ValueError(
-                "continuation.loci with the support motion multiplier (continuation.support) is not supported: "
-                "the bifurcation curves are continued in omega and gamma only. Remove loci: true to continue "
-                "the responses in support (parameter: support), or remove continuation.support (gamma "
-                "scales the supports' motion with FL)")
-        if self.parameter != "omega" or not (ranged["omega"] and ranged["gamma"]):
+                "continuation.loci: both continuation.gamma and continuation.support are ranges; the curves are "
+                "continued in omega and one second parameter. Give the range of the one to continue them in "
+                "(gamma: the scale of FL and the supports' motion; support: the supports' motion alone) and a "
+                "single value for the other")
+        if self.parameter != "omega" or not (ranged["omega"] and (ranged["gamma"] or ranged["support"])):
             raise ValueError(
                 "continuation.loci needs the response in omega (parameter: omega, the default) with "
-                "continuation.omega a range {start: .., stop: ..} and continuation.gamma the range of "
-                "the curves {start: .., stop: .., at: ..} (at: the gamma of the response, default stop)")
-        g = self.gamma
-        if g.at is not None and not min(g.start, g.stop) <= g.at <= max(g.start, g.stop):
-            raise ValueError(f"continuation.gamma.at ({g.at:g}) must lie between gamma.start ({g.start:g}) and "
-                             f"gamma.stop ({g.stop:g}), the range the curves are continued over")
-        bad = [x for x in g.levels if not min(g.start, g.stop) <= x <= max(g.start, g.stop)]
+                "continuation.omega a range {start: .., stop: ..} and the range of the curves in "
+                "continuation.gamma {start: .., stop: .., at: ..} or, with moving supports, in "
+                "continuation.support (at: the value of the response, default stop)")
+        name = self.loci_parameter
+        g = getattr(self, name)
+        lo, hi = min(g.start, g.stop), max(g.start, g.stop)
+        if g.at is not None and not lo <= g.at <= hi:
+            raise ValueError(f"continuation.{name}.at ({g.at:g}) must lie between {name}.start ({g.start:g}) and "
+                             f"{name}.stop ({g.stop:g}), the range the curves are continued over")
+        bad = [x for x in g.levels if not lo <= x <= hi]
         if bad:
-            raise ValueError(f"continuation.gamma.levels: {', '.join(f'{x:g}' for x in bad)} outside the range "
-                             f"gamma.start ({g.start:g}) to gamma.stop ({g.stop:g}); give levels inside it")
+            raise ValueError(f"continuation.{name}.levels: {', '.join(f'{x:g}' for x in bad)} outside the range "
+                             f"{name}.start ({g.start:g}) to {name}.stop ({g.stop:g}); give levels inside it")
         return self
+
+    @property
+    def loci_parameter(self) -> str | None:
+        """With ``loci: true``, the second parameter of the curves (``gamma`` or ``support``, the
+        one given as a range); else None."""
+        if not self.loci:
+            return None
+        return "support" if isinstance(self.support, ParameterRange) else "gamma"
+
+    @property
+    def loci_range(self) -> ParameterRange | None:
+        """With ``loci: true``, the range of the curves' second parameter (:attr:`loci_parameter`)."""
+        return getattr(self, self.loci_parameter) if self.loci else None
+
+    @property
+    def loci_response(self) -> float | None:
+        """With ``loci: true``, the value of the second parameter at which the response in omega
+        is traced (``at``, default ``stop``)."""
+        g = self.loci_range
+        return None if g is None else float(g.at if g.at is not None else g.stop)
 
     @property
     def range(self) -> ParameterRange:
@@ -157,18 +192,20 @@ class ContinuationSpec(StrictModel):
     def fixed(self) -> float:
         """The value of the other parameter: gamma when the parameter is omega (with loci the
         gamma of the response curve), omega in rad/s when it is gamma or support."""
-        if self.loci:
-            g = self.gamma
-            return float(g.at if g.at is not None else g.stop)
+        if self.loci_parameter == "gamma":
+            return self.loci_response
         return float(getattr(self, "gamma" if self.parameter == "omega" else "omega"))
 
     @property
     def fixed_gamma(self) -> float:
         """The multiplier gamma of FL (and of the supports' motion) when it is not the parameter
-        (with loci, the gamma of the response curve)."""
+        (with loci in gamma, the gamma of the response curve)."""
         return self.fixed if self.parameter == "omega" else 1.0 if self.parameter == "gamma" else float(self.gamma)
 
     @property
     def fixed_support(self) -> float:
-        """The support motion multiplier s when it is not the parameter (default 1)."""
+        """The support motion multiplier s when it is not the parameter (default 1; with loci in
+        s, the s of the response curve)."""
+        if self.loci_parameter == "support":
+            return self.loci_response
         return 1.0 if self.parameter == "support" else float(self.support)

@@ -154,6 +154,12 @@ class Case(StrictModel):
         if self.supports is not None and self.supports.moving and self.analysis != "exact":
             raise ValueError("supports: moving supports need the exact analysis; set analysis: exact")
         moving = self.supports is not None and self.supports.moving
+        if self.continuation is not None and not moving and self.continuation.loci_parameter == "support":
+            raise ValueError(
+                "continuation.loci with continuation.support a range continues the bifurcation curves in the "
+                "support motion multiplier s, but no support of this case moves; add one, e.g. `supports: {A: "
+                "{amplitude: [0.004, -0.003]}}` (m), or give the curves a range of gamma (continuation.gamma "
+                "{start: .., stop: ..}) and continuation.support a single value")
         if self.continuation is not None and not moving and (self.continuation.parameter == "support"
                                                              or self.continuation.support != 1.0):
             raise ValueError(

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..version import __version__
+from .continuation import support_meaning
 
 
 def _table(header: list[str], rows: list[list[str]]) -> str:
@@ -12,30 +13,40 @@ def _table(header: list[str], rows: list[list[str]]) -> str:
     return "\n".join("  " + "  ".join(c.rjust(w) for c, w in zip(cells, widths)) for cells in [header] + rows)
 
 
+#: The curves' second parameters in the summary: (name in the text, symbol in the tables).
+SECOND_WORDS = {"gamma": ("gamma", "gamma"), "support": ("support motion multiplier s", "s")}
+
+
 def loci_summary(res) -> str:
     """The bifurcation curves of a :class:`~cablesim.analyses.continuation.ContinuationResult`:
-    each curve's kind, the range of gamma and omega it spans, how it ends, and the
-    codimension-two points."""
-    lo, hi = res.gamma_range
-    lines = ["", f"Bifurcation curves in (omega, gamma), gamma from {lo:g} to {hi:g}, started from the "
-             f"response at gamma = {res.fixed:g}:" if res.loci else
-             f"No bifurcation curves: the response at gamma = {res.fixed:g} has no fold, period doubling or "
+    each curve's kind, the range of the second parameter (gamma or the support motion multiplier
+    s) and of omega it spans, how it ends, and the codimension-two points."""
+    second = res.loci_parameter
+    words, sym = SECOND_WORDS[second]
+    lo, hi = res.loci_range
+    at = res.fixed_support if second == "support" else res.fixed
+    meaning = support_meaning(res.support_amplitudes) if second == "support" else ""
+    where = f"{sym} = {at:g}" + (f", gamma = {res.fixed:g}" if second == "support" else "")
+    lines = ["", f"Bifurcation curves in (omega, {sym}), {words} from {lo:g} to {hi:g}"
+             + (f" ({meaning})" if meaning else "") + f", started from the response at {where}:" if res.loci else
+             f"No bifurcation curves: the response at {where} has no fold, period doubling or "
              "Neimark-Sacker point in the range."]
     if res.loci:
         rows = []
         for L in res.loci:
-            k = int(np.argmin(L.gamma))
-            rows.append([L.name, L.kind, str(L.period), f"{L.gamma.min():.4g} - {L.gamma.max():.4g}",
-                         f"{L.omega.min():.5g} - {L.omega.max():.5g}", f"{L.gamma[k]:.5g} at {L.omega[k]:.5g} rad/s",
+            y = L.values2
+            k = int(np.argmin(y))
+            rows.append([L.name, L.kind, str(L.period), f"{y.min():.4g} - {y.max():.4g}",
+                         f"{L.omega.min():.5g} - {L.omega.max():.5g}", f"{y[k]:.5g} at {L.omega[k]:.5g} rad/s",
                          str(L.omega.size), f"{L.ends[0]}; {L.ends[1]}"])
-        lines.append(_table(["curve", "kind", "period", "gamma", "omega (rad/s)", "least gamma", "points", "ends"],
+        lines.append(_table(["curve", "kind", "period", sym, "omega (rad/s)", f"least {sym}", "points", "ends"],
                             rows))
     if res.codim2:
         lines += ["", "Codimension-two points:"]
-        rows = [[p.kind, f"{p.omega:.6g}", f"{p.gamma:.6g}", res.loci[p.locus].name,
+        rows = [[p.kind, f"{p.omega:.6g}", f"{p.value2:.6g}", res.loci[p.locus].name,
                  ", ".join(f"{a:.4g}" for a in p.amplitude), "" if p.located else "approximate"]
                 for p in res.codim2]
-        lines.append(_table(["kind", "omega (rad/s)", "gamma", "curve", f"{', '.join(res.channels)} (m)", "notes"],
+        lines.append(_table(["kind", "omega (rad/s)", sym, "curve", f"{', '.join(res.channels)} (m)", "notes"],
                             rows))
     if not res.complete:
         lines += ["", "Interrupted: the curves traced until then are kept (the last one as far as it got)."]

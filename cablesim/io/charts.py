@@ -2,14 +2,18 @@
 
 Bifurcation curves (``cablesim continue`` with ``continuation.loci``), beside the branches:
 
-- ``/continuation/loci`` attributes ``gamma_start``, ``gamma_stop``, ``gamma_response`` (the gamma
-  of the response curve whose bifurcations started them), ``complete``;
-- ``/continuation/loci/<name>/{omega, gamma, amplitude, halfrange, multipliers, state, trusted,
-  special}`` (``kappa`` too on Neimark-Sacker curves), attributes ``kind``, ``period``,
-  ``channels``, ``end_first``, ``end_last``, ``origin_omega``, ``origin_gamma``, ``index``,
-  ``plane`` (``out-of-plane``: a curve of a planar response's out-of-plane bifurcation);
-- ``/continuation/codim2/{kind, omega, gamma, locus, amplitude, located}``: cusps, fold-flip
-  points, strong resonances, generalized period doublings.
+- ``/continuation/loci`` attributes ``parameter`` (the curves' second parameter: ``gamma``, or
+  ``support`` for the support motion multiplier s), ``units`` (its unit: 1), ``<parameter>_start``,
+  ``<parameter>_stop``, ``<parameter>_response`` (its value in the response curve whose
+  bifurcations started them), ``complete``; in s also ``amplitude_<A|B>`` (m, each moving
+  support's amplitude at s = 1) and ``amplitude_units`` (m);
+- ``/continuation/loci/<name>/{omega, gamma, support, amplitude, halfrange, multipliers, state,
+  trusted, special}`` (``kappa`` too on Neimark-Sacker curves; the parameter that is not the
+  second constant), attributes ``kind``, ``period``, ``parameter``, ``channels``, ``end_first``,
+  ``end_last``, ``origin_omega``, ``origin_<parameter>``, ``index``, ``plane`` (``out-of-plane``:
+  a curve of a planar response's out-of-plane bifurcation);
+- ``/continuation/codim2/{kind, omega, gamma, support, locus, amplitude, located}``: cusps,
+  fold-flip points, strong resonances, generalized period doublings.
 
 Backbone files (``cablesim backbone``): ``/backbone/{omega, amplitude, halfrange, multipliers,
 ratios, stable, trusted, state, delta}`` with attributes ``mode``, ``linear_omega``, ``channels``,
@@ -27,25 +31,50 @@ import numpy as np
 from ..errors import CablesimError
 from .hdf5 import atomic_h5, attr_text, open_result, put, stamp
 
+#: The curves' second parameters: (description in the files, unit).
+SECOND = {"gamma": ("load factor gamma (scale of FL and of the supports' motion) along the curve", "1"),
+          "support": ("support motion multiplier s along the curve: the supports move by gamma s times the "
+                      "amplitudes of supports:", "1")}
+
 
 def _strings(values) -> np.ndarray:
     return np.array([str(v) for v in values], dtype="S")
+
+
+def _amplitudes(obj, amplitudes: dict) -> None:
+    """Attributes ``amplitude_<A|B>`` (m): what the support multiplier s = 1 stands for."""
+    for support, u in amplitudes.items():
+        obj.attrs[f"amplitude_{support}"] = np.asarray(u, dtype=float)
+    if amplitudes:
+        obj.attrs["amplitude_units"] = "m"
 
 
 def write_loci(g: h5py.Group, res) -> None:
     """The curves and codimension-two points of a
     :class:`~cablesim.analyses.continuation.ContinuationResult` into its ``/continuation`` group."""
     lg = g.create_group("loci")
-    lo, hi = res.gamma_range
-    lg.attrs.update(gamma_start=lo, gamma_stop=hi, gamma_response=res.fixed, complete=bool(res.complete))
+    lo, hi = res.loci_range
+    name = res.loci_parameter
+    at = res.fixed_support if name == "support" else res.fixed
+    lg.attrs.update({"parameter": name, "units": SECOND[name][1], f"{name}_start": lo, f"{name}_stop": hi,
+                     f"{name}_response": at, "complete": bool(res.complete)})
+    amplitudes = dict(getattr(res, "support_amplitudes", {}) or {})
+    if name == "support":
+        _amplitudes(lg, amplitudes)
     chans = _strings(res.channels)
     for k, L in enumerate(res.loci):
         h = lg.create_group(L.name)
-        h.attrs.update(kind=L.kind, period=L.period, end_first=L.ends[0], end_last=L.ends[1],
-                       origin_omega=L.origin[0], origin_gamma=L.origin[1], index=k, plane=L.plane)
+        h.attrs.update({"kind": L.kind, "period": L.period, "end_first": L.ends[0], "end_last": L.ends[1],
+                        "origin_omega": L.origin[0], f"origin_{name}": L.origin[1], "index": k, "plane": L.plane,
+                        "parameter": name})
         h.attrs["channels"] = chans
         put(h, "omega", L.omega, "rad/s", "forcing frequency along the curve")
-        put(h, "gamma", L.gamma, "1", "load factor (scale of FL) along the curve")
+        for key in ("gamma", "support"):
+            values = getattr(L, key)
+            ds = put(h, key, values if values is not None else np.ones(L.omega.size), SECOND[key][1],
+                     SECOND[key][0] + ("" if key == name else " (constant: the response's)"))
+            if key == "support":
+                _amplitudes(ds, amplitudes)
         if L.kappa is not None:
             put(h, "kappa", L.kappa, "1", "cos of the angle of the critical multipliers")
         put(h, "amplitude", L.amplitude, "m", "largest |z| over the bifurcating orbit, per channel")
@@ -59,6 +88,7 @@ def write_loci(g: h5py.Group, res) -> None:
     put(cg, "kind", _strings(p.kind for p in pts), "1", "cusp, fold-flip, 1:1 ... 1:4 resonance, ...")
     put(cg, "omega", np.array([p.omega for p in pts], dtype=float), "rad/s", "forcing frequency")
     put(cg, "gamma", np.array([p.gamma for p in pts], dtype=float), "1", "load factor")
+    put(cg, "support", np.array([p.support for p in pts], dtype=float), "1", "support motion multiplier s")
     put(cg, "locus", np.array([p.locus for p in pts], dtype=int), "1", "index of the curve")
     put(cg, "amplitude", np.array([p.amplitude for p in pts], dtype=float).reshape(len(pts), len(res.channels)),
         "m", "largest |z| over the orbit, per channel")
@@ -67,26 +97,33 @@ def write_loci(g: h5py.Group, res) -> None:
 
 def read_loci(g: h5py.Group) -> dict | None:
     """The curves of a continuation file's ``/continuation`` group (None without them):
-    ``gamma_start``, ``gamma_stop``, ``gamma_response``, ``complete``, ``loci`` (list of dicts
-    in curve order) and ``codim2`` (dict of arrays)."""
+    ``parameter`` (the second: ``gamma`` or ``support``), ``start``, ``stop``, ``response`` (its
+    range and its value in the response), the same as ``<parameter>_start`` ..., ``complete``,
+    ``loci`` (list of dicts in curve order; ``values2``: the second parameter along the curve)
+    and ``codim2`` (dict of arrays)."""
     if "loci" not in g:
         return None
     lg = g["loci"]
-    out = {k: lg.attrs[k] for k in ("gamma_start", "gamma_stop", "gamma_response")}
-    out["complete"] = bool(lg.attrs.get("complete", True))
+    second = attr_text(lg.attrs.get("parameter", "gamma"))  # (files before the support curves: gamma)
+    out = {f"{second}_{k}": lg.attrs[f"{second}_{k}"] for k in ("start", "stop", "response")}
+    out.update(parameter=second, start=float(out[f"{second}_start"]), stop=float(out[f"{second}_stop"]),
+               response=float(out[f"{second}_response"]), complete=bool(lg.attrs.get("complete", True)))
     loci = []
     for name, h in lg.items():
         d = {k: np.asarray(h[k][()]) for k in h}
         d["special"] = [attr_text(s) for s in d["special"]]
+        d.setdefault("support", np.ones(d["omega"].size))
         d.update(name=name, kind=attr_text(h.attrs["kind"]), period=int(h.attrs["period"]),
                  ends=(attr_text(h.attrs["end_first"]), attr_text(h.attrs["end_last"])),
-                 origin=(float(h.attrs["origin_omega"]), float(h.attrs["origin_gamma"])), index=int(h.attrs["index"]),
-                 plane=attr_text(h.attrs.get("plane", "in-plane")))
+                 origin=(float(h.attrs["origin_omega"]), float(h.attrs[f"origin_{second}"])),
+                 index=int(h.attrs["index"]), plane=attr_text(h.attrs.get("plane", "in-plane")), values2=d[second])
         loci.append(d)
     out["loci"] = sorted(loci, key=lambda d: d["index"])
     cg = g["codim2"]
     c2 = {k: np.asarray(cg[k][()]) for k in cg}
     c2["kind"] = [attr_text(k) for k in c2.get("kind", [])]
+    c2.setdefault("support", np.ones(len(c2["kind"])))
+    c2["values2"] = c2[second]
     out["codim2"] = c2
     return out
 

@@ -158,7 +158,7 @@ def write_continuation(path: str | Path, res) -> Path:
             "block of the critical multiplier: in-plane, out-of-plane or coupled")
         put(fg, "frequency_ratio", np.array([b.frequency_ratio for b in bifs], dtype=float), "1",
             "|arg(mu)| / 2 pi of the critical multiplier (0: fold, pitchfork; 1/2: period doubling)")
-        if getattr(res, "gamma_range", None) is not None:
+        if getattr(res, "loci_range", None) is not None:
             write_loci(g, res)  # bifurcation curves (cablesim.io.charts)
         m = f.create_group("modal")
         put(m, "omega", res.modal_omega, "rad/s", "linear modal frequencies about the equilibrium")

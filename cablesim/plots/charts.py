@@ -1,11 +1,13 @@
-"""Design charts: the stability chart in (omega, gamma) and backbone curves.
+"""Design charts: the stability chart in (omega, gamma) or (omega, s) and backbone curves.
 
 - :func:`plot_stability_chart`: every bifurcation curve of a continuation file with loci, one
   colour per kind (line style per orbit period), the regions they close shaded by what happens
   inside (hysteresis between two fold curves; the harmonic response unstable inside a
   period-doubling tongue or a Neimark-Sacker curve), the codimension-two points marked and named
   (cusps, fold-flip points, strong resonances), and the line of the computed frequency response
-  with its bifurcations across the chart.
+  with its bifurcations across the chart. The second parameter is the load factor gamma or the
+  support motion multiplier s (its axis then says what s = 1 stands for, and a second axis gives
+  the first moving support's amplitude in m).
 - :func:`plot_backbone`: a backbone's frequency against its amplitude per channel, stable solid
   and unstable dashed, its internal resonances marked, the linear frequency and the other modes'
   frequencies divided by small integers dotted (where the family can meet them); optionally over
@@ -22,6 +24,7 @@ from ..io.charts import read_backbone
 from ..io.continuation import read_continuation
 from ..errors import CablesimError
 from .base import bottom_notes, figure_grid, legend_below, save_atomic, title_line
+from .continuation import parameter_axis
 from .style import COLOURS, SERIES, styled
 from .sweep import channel_label
 
@@ -111,7 +114,7 @@ def _confirmed(kind: str, poly: np.ndarray, d: dict) -> bool:
     """Whether the frequency response confirms what the shading of a region says where its line
     crosses the region (unstable harmonic orbits inside it); a region it does not cross is
     shaded on the curves' word."""
-    g0 = float(d["fixed"])
+    g0 = float(d["loci"]["response"])
     b1 = [b for b in d["branches"] if b["period"] == 1]
     if not b1 or not (poly[:, 1].min() < g0 < poly[:, 1].max()):
         return True
@@ -128,11 +131,11 @@ def _draw_loci(ax, d: dict, box) -> tuple[set, set]:
         key = style_key(L["kind"], L.get("plane", "in-plane"))
         colour, _, region, alpha, hatch = KIND_STYLE[key]
         ls = PERIOD_LINES[min(int(np.log2(L["period"])), len(PERIOD_LINES) - 1)]
-        ax.plot(L["omega"], L["gamma"], ls, color=colour, lw=1.6, zorder=3)
+        ax.plot(L["omega"], L["values2"], ls, color=colour, lw=1.6, zorder=3)
         kinds.add((key, L["period"]))
         # the region the curve closes: the smaller way round unless the computed response
         # says otherwise (a tongue reaching both sides of the chart is closed over its top)
-        polys = _closed_polygons(L["omega"], L["gamma"], box) if L["period"] == 1 else []
+        polys = _closed_polygons(L["omega"], L["values2"], box) if L["period"] == 1 else []
         poly = next((q for q in polys if _confirmed(L["kind"], q, d)), None)
         if poly is not None:
             ax.fill(poly[:, 0], poly[:, 1], color=colour, alpha=alpha, hatch=hatch, lw=0, zorder=1)
@@ -140,32 +143,33 @@ def _draw_loci(ax, d: dict, box) -> tuple[set, set]:
     return kinds, shaded
 
 
-def _draw_codim2(ax, c2: dict) -> set:
+def _draw_codim2(ax, c2: dict, sym: str) -> set:
     drawn = set()
     for k, kind in enumerate(c2["kind"]):
         marker, short, _ = CODIM2_STYLE.get(kind, ("o", kind, kind))
-        x, y = float(c2["omega"][k]), float(c2["gamma"][k])
+        x, y = float(c2["omega"][k]), float(c2["values2"][k])
         ax.plot(x, y, marker, color=COLOURS["annotation"], mfc="white", ms=7, mew=1.0, zorder=6)
-        ax.annotate(f"{short}\n{x:.4g} rad/s, $\\gamma$ {y:.3g}", (x, y), textcoords="offset points", xytext=(6, -4),
+        ax.annotate(f"{short}\n{x:.4g} rad/s, {sym} {y:.3g}", (x, y), textcoords="offset points", xytext=(6, -4),
                     fontsize=8, va="top", zorder=7)
         drawn.add(kind)
     return drawn
 
 
-def _draw_thresholds(ax, d: dict) -> bool:
-    """The least gamma of each period-1 period-doubling or Neimark-Sacker curve (its turning
-    point: the least forcing at which the harmonic response loses stability there)."""
+def _draw_thresholds(ax, d: dict, sym: str) -> bool:
+    """The least gamma (or s) of each period-1 period-doubling or Neimark-Sacker curve (its
+    turning point: the least forcing at which the harmonic response loses stability there)."""
     drawn = False
     for L in d["loci"]["loci"]:
         if L["kind"] == "fold" or L["period"] != 1:
             continue
+        y2 = L["values2"]
         for k, sp in enumerate(L["special"]):
-            if sp == "turning point" and L["gamma"][k] <= L["gamma"].min() * (1 + 1e-9):
-                x, y = float(L["omega"][k]), float(L["gamma"][k])
+            if sp == "turning point" and y2[k] <= y2.min() * (1 + 1e-9):
+                x, y = float(L["omega"][k]), float(y2[k])
                 ax.plot(x, y, "v", color=KIND_STYLE[style_key(L["kind"], L.get("plane", "in-plane"))][0], mfc="white",
                         ms=6, zorder=6)
                 # left of the point and below: codimension-two labels go to its right
-                ax.annotate(f"least $\\gamma$ = {y:.3g}\nat {x:.4g} rad/s", (x, y), textcoords="offset points",
+                ax.annotate(f"least {sym} = {y:.3g}\nat {x:.4g} rad/s", (x, y), textcoords="offset points",
                             xytext=(-6, -6), ha="right", va="top", fontsize=8, zorder=7)
                 drawn = True
     return drawn
@@ -173,13 +177,48 @@ def _draw_thresholds(ax, d: dict) -> bool:
 
 def _draw_response_line(ax, d: dict, lo: float, hi: float) -> None:
     """The frequency response's line across the chart, with its bifurcations."""
-    g0 = float(d["fixed"])
+    g0 = float(d["loci"]["response"])
     ax.axhline(g0, color=COLOURS["reference"], lw=1.0, ls=(0, (5, 2)), zorder=2)
     bif = d["bifurcations"]
     planes = bif.get("plane", ["in-plane"] * len(bif["kind"]))
     for k, kind in enumerate(bif["kind"]):
         if kind in KIND_STYLE:
             ax.plot(float(bif["omega"][k]), g0, "o", ms=3.5, color=KIND_STYLE[style_key(kind, planes[k])][0], zorder=5)
+
+
+def _second_axis(d: dict) -> tuple[str, str, str]:
+    """The y-axis label, the symbol of the curves' second parameter and the response's
+    conditions in words."""
+    lc = d["loci"]
+    at = float(lc["response"])
+    if lc["parameter"] == "support":
+        label, sym, _ = parameter_axis({**d, "parameter": "support"})
+        return label, sym, f"{sym} = {at:g}, $\\gamma$ = {float(d['fixed']):g}"
+    return "load factor $\\gamma$ (multiplies $F_L$)", "$\\gamma$", f"$\\gamma$ = {at:g}"
+
+
+def _metres_axis(ax, d: dict) -> None:
+    """A right-hand axis of a chart in s: the first moving support's amplitude, ``s |u|`` in m."""
+    amplitudes = d.get("support_amplitudes", {})
+    if not amplitudes:
+        return
+    name, u = next(iter(amplitudes.items()))
+    a = float(np.linalg.norm(u))
+    right = ax.secondary_yaxis("right", functions=(lambda s: s * a, lambda y: y / a))
+    right.set_ylabel(f"support amplitude $s\\,|u_{name}|$ (m)")
+
+
+def _draw_modal_lines(ax, d: dict, lo: float, hi: float, top: float) -> None:
+    """The natural frequencies and their doubles within the chart (primary and principal
+    parametric resonances)."""
+    for k, w in enumerate(d["modal"]):
+        if lo <= w <= hi:
+            ax.axvline(w, color=COLOURS["reference"], ls=":", lw=0.9, zorder=1)
+            ax.annotate(f"$\\omega_{{{k + 1}}}$", (w, top), textcoords="offset points", xytext=(2, -10), fontsize=8)
+        if lo <= 2 * w <= hi:
+            ax.axvline(2 * w, color=COLOURS["reference"], ls=":", lw=0.9, zorder=1)
+            ax.annotate(f"$2\\omega_{{{k + 1}}}$", (2 * w, top), textcoords="offset points", xytext=(2, -10),
+                        fontsize=8)
 
 
 @styled
@@ -212,30 +251,27 @@ def plot_stability_chart(h5_path, png_path=None, title: str | None = None) -> Pa
     lc = d["loci"]
     if lc is None:
         raise CablesimError(f"{h5_path} holds no bifurcation curves; run cablesim continue with "
-                            "continuation.loci: true and a gamma range {start, stop} to draw a stability chart.")
+                            "continuation.loci: true and a range {start, stop} of gamma (or, with moving supports, "
+                            "of support) to draw a stability chart.")
     png_path = h5_path.with_name(h5_path.stem + "-chart.png") if png_path is None else Path(png_path)
     lo, hi = sorted((float(d["start"]), float(d["stop"])))
-    g_lo, g_hi = sorted((float(lc["gamma_start"]), float(lc["gamma_stop"])))
+    g_lo, g_hi = sorted((float(lc["start"]), float(lc["stop"])))
+    ylabel, sym, response = _second_axis(d)
     box = (lo, hi, g_lo, g_hi)
     fig, axes = figure_grid(1, 1, 4.2, extra_height=1.9)
     ax = axes[0, 0]
     kinds, shaded = _draw_loci(ax, d, box)
-    marks = _draw_codim2(ax, lc["codim2"])
-    thresholds = _draw_thresholds(ax, d)
+    marks = _draw_codim2(ax, lc["codim2"], sym)
+    thresholds = _draw_thresholds(ax, d, sym)
     _draw_response_line(ax, d, lo, hi)
-    for k, w in enumerate(d["modal"]):
-        if lo <= w <= hi:
-            ax.axvline(w, color=COLOURS["reference"], ls=":", lw=0.9, zorder=1)
-            ax.annotate(f"$\\omega_{{{k + 1}}}$", (w, g_hi), textcoords="offset points", xytext=(2, -10), fontsize=8)
-        if lo <= 2 * w <= hi:
-            ax.axvline(2 * w, color=COLOURS["reference"], ls=":", lw=0.9, zorder=1)
-            ax.annotate(f"$2\\omega_{{{k + 1}}}$", (2 * w, g_hi), textcoords="offset points", xytext=(2, -10),
-                        fontsize=8)
+    _draw_modal_lines(ax, d, lo, hi, g_hi)
     ax.set_xlim(lo, hi)
-    pad = 0.04 * (g_hi - g_lo)  # so that a response line on a bound of gamma shows
+    pad = 0.04 * (g_hi - g_lo)  # so that a response line on a bound of the range shows
     ax.set_ylim(g_lo - pad, g_hi + pad)
     ax.set_xlabel("forcing frequency $\\omega$ (rad/s)")
-    ax.set_ylabel("load factor $\\gamma$ (multiplies $F_L$)")
+    ax.set_ylabel(ylabel)
+    if lc["parameter"] == "support":
+        _metres_axis(ax, d)
     handles = [Line2D([], [], color=KIND_STYLE[k][0], ls=PERIOD_LINES[min(int(np.log2(p)), 3)], lw=1.8,
                       label=KIND_STYLE[k][1] + (f", orbits of period {p}T" if p > 1 else ""))
                for k, p in sorted(kinds, key=lambda kp: (list(KIND_STYLE).index(kp[0]), kp[1]))]
@@ -245,15 +281,15 @@ def plot_stability_chart(h5_path, png_path=None, title: str | None = None) -> Pa
                        label=f"{CODIM2_STYLE[k][1]}: {CODIM2_STYLE[k][2]}") for k in CODIM2_STYLE if k in marks]
     if thresholds:
         handles.append(Line2D([], [], ls="none", marker="v", color=COLOURS["annotation"], mfc="white", ms=6,
-                              label="least $\\gamma$ of a tongue"))
+                              label=f"least {sym} of a tongue"))
     handles.append(Line2D([], [], color=COLOURS["reference"], ls=(0, (5, 2)), marker="o", ms=3.5,
-                          label=f"frequency response computed ($\\gamma$ = {float(d['fixed']):g}) and its bifurcations"))
+                          label=f"frequency response computed ({response}) and its bifurcations"))
     legend_below(fig, handles, ncol=2 if max(len(h.get_label()) for h in handles) <= 60 else 1)
     notes = [] if lc["complete"] else ["interrupted: the curves traced until then are drawn"]
     bottom_notes(fig, notes, warn=bool(notes))
     n = len(lc["loci"])
-    sub = (f"{d['analysis']} analysis; curves continued over $\\gamma$ = {g_lo:g} to {g_hi:g} from the bifurcations "
-           f"of the response at $\\gamma$ = {float(d['fixed']):g}; {n} curve{'s' if n != 1 else ''}, "
+    sub = (f"{d['analysis']} analysis; curves continued over {sym} = {g_lo:g} to {g_hi:g} from the bifurcations "
+           f"of the response at {response}; {n} curve{'s' if n != 1 else ''}, "
            f"{len(lc['codim2']['kind'])} codimension-two point{'s' if len(lc['codim2']['kind']) != 1 else ''}")
     title_line(fig, title or f"{d['case_name']}: stability chart", sub)
     return save_atomic(fig, png_path)

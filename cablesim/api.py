@@ -334,8 +334,8 @@ class ContinuationRun(LabelledArrays):
 
 
     def chart(self, path: str | Path, h5_path: str | Path) -> Path:
-        """Draw the stability chart (bifurcation curves in omega and gamma, with
-        ``continuation.loci``) of the stored file ``h5_path`` as the PNG ``path``."""
+        """Draw the stability chart (bifurcation curves in omega and gamma or the support
+        multiplier s, with ``continuation.loci``) of the stored file ``h5_path`` as the PNG ``path``."""
         return plot_stability_chart(h5_path, path)
 
 
@@ -354,8 +354,9 @@ def continuation(
     alone; ``result.branches[k].support``); folds, period doublings and Neimark-Sacker points
     are located, and every period doubling is followed onto its period-2p branch. With
     ``continuation.loci`` every fold, period doubling and Neimark-Sacker point is then continued
-    in omega and gamma over ``continuation.gamma`` (``result.loci``, ``result.codim2``: cusps,
-    fold-flip points, strong resonances).
+    in omega and gamma over ``continuation.gamma``, or in omega and the support multiplier s over
+    ``continuation.support`` (``result.loci``, ``result.codim2``: cusps, fold-flip points, strong
+    resonances; ``result.loci_parameter`` names the second parameter).
 
     Parameters
     ----------

@@ -30,7 +30,7 @@ Layout (with the root attributes of every cablesim file, see :mod:`cablesim.io.h
   ``|w|`` over the orbit; zero on a planar orbit) and ``tilt`` (deg: the orbit's mean plane of
   motion from the cable's plane);
 - with ``continuation.loci``: ``/continuation/loci/<name>/...`` and ``/continuation/codim2/...``,
-  the bifurcation curves (:mod:`cablesim.io.charts`);
+  the bifurcation curves in (omega, gamma) or (omega, s) (:mod:`cablesim.io.charts`);
 - ``/modal/omega``: the linear modal frequencies, rad/s.
 """
 

@@ -51,7 +51,7 @@ class LocusPoint:
     index : int
         Position on the curve.
     p1, p2 : float
-        The two parameters (for the cable ``omega`` in rad/s and ``gamma``).
+        The two parameters (for the cable ``omega`` in rad/s and ``gamma`` or ``support``).
     kappa : float
         ``cos`` of the critical pair's angle (Neimark-Sacker), else NaN.
     state : ndarray (n,)

@@ -17,8 +17,9 @@ doublings: the segment maps along the null vector, for ``p1`` and ``p2``; four m
 Neimark-Sacker); the tests in ``tests/test_orbits_loci.py`` measure it.
 
 The first parameter ``p1`` is differentiated by the flow kernel itself, ``omega`` included
-(through the time scale); ``p2`` must be a parameter of the system's ``prm`` (``gamma``, later
-a support amplitude), differentiated by a second pass of the kernel. Nothing here knows what the
+(through the time scale); ``p2`` must be a parameter of the system's ``prm`` (for the cable
+``gamma`` or ``support``, the multiplier s of the supports' motion), differentiated by a second
+pass of the kernel. Nothing here knows what the
 system is.
 
 Codimension-two points located on a curve (sign changes of test functions, secant method):

@@ -487,6 +487,7 @@ def continue_(
     analysis: Optional[Analysis] = ANALYSIS_OPT,
     overlay: Optional[Path] = typer.Option(None, "--overlay", metavar="SWEEP.h5", help="Draw a sweep file's points on the plot."),
     plot: bool = typer.Option(True, "--plot/--no-plot", help="Draw the response diagram."),
+    force: bool = FORCE_OPT,
 ):
     """Every periodic response over the continuation: range, stable and unstable, with Floquet
     multipliers and the bifurcations (folds, period doublings, Neimark-Sacker) where responses
@@ -504,7 +505,8 @@ def continue_(
                  need_bytes=cli_guard.continue_room(len(pngs(out))))
     say_warnings(cli_guard.check_overlay(overlay, case))
     _effective(ctx, output=out)
-    cli_guard.run_continue(case, out, analysis.value if analysis else None, overlay, plot, _note, _echo, _OUT["quiet"])
+    cli_guard.run_continue(case, out, analysis.value if analysis else None, overlay, plot, _note, _echo, _OUT["quiet"],
+                           force)
 
 
 @app.command()

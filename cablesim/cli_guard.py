@@ -4,6 +4,8 @@
   (a missing, damaged or truncated file, a file of another kind, or a sweep of another cable is
   refused before the continuation runs; a sweep of other loads or damping is drawn with a note).
 - :func:`continue_inputs`: every file ``continue`` reads, which no output may be.
+- :func:`guard_continue`: the cost of ``continue`` estimated before it starts, printed for a
+  long run and refused above the limits unless ``--force`` (:mod:`cablesim.analyses.estimates`).
 - :func:`empty_continuation`: the refusal of a continuation that found no orbit (slack from the
   first orbit), saying why and what to try.
 
@@ -125,14 +127,44 @@ def empty_continuation(result, case) -> CablesimError | None:
 
 def kept_text(result) -> str:
     """What an interrupted continuation kept, in words."""
-    n = result.n_points
-    text = f"the {n} periodic orbit{'s' if n != 1 else ''} on {len(result.branches)} branch(es) computed"
-    return text + (" and the bifurcation curves traced" if result.loci else "")
+    n, k = result.n_points, sum(b.kind != "grazing" for b in result.bifurcations)
+    parts = [f"the {n} periodic orbit{'s' if n != 1 else ''} on {len(result.branches)} branch(es) computed"]
+    parts += [f"the {k} bifurcation{'s' if k != 1 else ''} located on them"] if k else []
+    parts += ["the bifurcation curves traced"] if result.loci else []
+    return ", ".join(parts[:-1]) + (" and " if len(parts) > 1 else "") + parts[-1]
 
 
-def run_continue(case, out: Path, analysis, overlay, plot: bool, note, echo, quiet: bool) -> None:
-    """The computing part of ``cablesim continue``, its inputs and outputs checked: continue, keep
-    what an interruption leaves, refuse an empty result, write, report and draw."""
+#: What to change when a continuation is above the cost limits.
+CONTINUE_FIX = ("Give a shorter range (continuation.omega, .gamma or .support: start and stop nearer each other, or "
+                "away from the lowest frequencies, whose long forcing periods take the most steps), a smaller "
+                "limit of orbits per branch (continuation.max_points), fewer nodes (cable.nodes, or fewer "
+                "segments in cable.S) or fewer shooting segments (continuation.segments)")
+
+
+def guard_continue(case, analysis, force: bool, note) -> None:
+    """Estimate the continuation's cost (:func:`cablesim.api.continuation_cost`), print it for
+    a long run and refuse one above the limits unless ``force``; Ctrl-C or SIGTERM while it is
+    estimated ends the command with nothing written."""
+    from . import api
+    from .dynamics import interrupts
+    from .io.finish import guard
+    from .io.terminal import say_error
+
+    import typer
+
+    try:
+        cost = api.continuation_cost(case, analysis)
+    except KeyboardInterrupt:
+        say_error(f"interrupted ({interrupts.signal_name()}) before any orbit was computed (while the cost of the "
+                  "continuation was estimated); nothing was written.")
+        raise typer.Exit(interrupts.exit_status()) from None
+    guard(cost, force, CONTINUE_FIX, None, note)
+
+
+def run_continue(case, out: Path, analysis, overlay, plot: bool, note, echo, quiet: bool, force: bool = False) -> None:
+    """The computing part of ``cablesim continue``, its inputs and outputs checked: bound its
+    cost, continue, keep what an interruption leaves, refuse an empty result, write, report and
+    draw."""
     import time
 
     from . import api, cli_charts
@@ -141,8 +173,9 @@ def run_continue(case, out: Path, analysis, overlay, plot: bool, note, echo, qui
     from .io.terminal import StatusLine, compiling, say_warnings
     from .plots.continuation import plot_continuation
 
-    t0 = time.perf_counter()
     with compiling(note) as notice, StatusLine(quiet=quiet) as status:
+        guard_continue(case, analysis, force, note)
+        t0, c0 = time.perf_counter(), notice.seconds()  # the estimate's time left out
         run = cli_charts.interruptible(lambda: api.continuation(
             case, analysis, progress=cli_charts.branch_status(status), loci_progress=cli_charts.loci_status(status)),
             case, out, kept_text)
@@ -152,7 +185,7 @@ def run_continue(case, out: Path, analysis, overlay, plot: bool, note, echo, qui
     say_warnings(run.result.warnings)
     replace_result(out, "continuation", note)
     run.to_hdf5(out)
-    echo(continuation_summary(case, run.result, time.perf_counter() - t0 - notice.seconds())
+    echo(continuation_summary(case, run.result, time.perf_counter() - t0 - (notice.seconds() - c0))
          + cli_charts.loci_text(run.result))
     drawn = f" and {plot_continuation(out, out.with_suffix('.png'), overlay=overlay)}" if plot else ""
     echo(f"\nWrote {out}" + drawn + (cli_charts.chart_text(out, run.result) if plot else ""))

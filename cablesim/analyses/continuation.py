@@ -25,8 +25,9 @@ from ..orbits.diagram import BranchEnd, BranchesInterrupted
 from ..orbits.stability import frequency_ratio
 from ..orbits.symmetry import in_plane_whirling, rotation_sense
 from .charts import Interrupted, finish_loci
+from .orbit_strain import orbit_strains, strain_warning
 from .setup import build_equations, frequency_of_interest, make_integrator
-from .static import run_static
+from .static import beyond_small_strains, run_static
 
 
 @dataclass(frozen=True)
@@ -82,6 +83,9 @@ class BranchResult:
         Spatial cable: the sense in which each node goes round, seen from support A looking
         towards B: ``counter-clockwise``, ``clockwise`` or ``none``
         (:func:`~cablesim.orbits.symmetry.rotation_sense`).
+    strain : ndarray (points,) or None
+        The largest strain ``(l - S) / S`` over each orbit (:mod:`cablesim.analyses.orbit_strain`;
+        NaN: not measured), which :attr:`strained` judges.
     """
 
     name: str
@@ -105,6 +109,15 @@ class BranchResult:
     support: np.ndarray | None = None
     max_w: np.ndarray | None = None
     whirl_sense: np.ndarray | None = None
+    strain: np.ndarray | None = None
+
+    @property
+    def strained(self) -> np.ndarray:
+        """Orbits whose largest strain is beyond the model's small strains
+        (:func:`~cablesim.analyses.static.beyond_small_strains`; False where not measured)."""
+        if self.strain is None:
+            return np.zeros(self.parameter.size, dtype=bool)
+        return beyond_small_strains(np.nan_to_num(self.strain, nan=0.0))
 
     @property
     def nonplanar(self) -> bool:
@@ -273,7 +286,7 @@ def _planes(br, dim: int) -> np.ndarray:
                     dtype=str).reshape(len(br.points), -1)
 
 
-def _branch(k: int, br, spec, idx: np.ndarray, dim: int = 2) -> BranchResult:
+def _branch(k: int, br, spec, idx: np.ndarray, dim: int = 2, strain: np.ndarray | None = None) -> BranchResult:
     pts = br.points
     values = np.array([p.parameter for p in pts], dtype=float)
     omega = np.array([p.omega for p in pts], dtype=float)
@@ -297,6 +310,7 @@ def _branch(k: int, br, spec, idx: np.ndarray, dim: int = 2) -> BranchResult:
         planes=_planes(br, dim),
         planar=bool(getattr(br, "planar", False)),
         mirror_image=bool(getattr(br, "mirror_image", False)),
+        strain=np.full(len(pts), np.nan) if strain is None else strain,
         **_whirling(br, dim),
     )
 
@@ -332,6 +346,62 @@ def _integrated_start(case: Case, static, omega: float, gamma: float, names, idx
     return point.final_state[: 2 * eom.n_dof]
 
 
+@dataclass(frozen=True)
+class ContinuationStart:
+    """What a continuation starts from: the ``continuation:`` section ``spec``, the statics, the
+    equations of motion at the start of the range, the channels (``names``, DOF ``idx``) and the
+    first orbit's guess ``initial`` (None: the linear response)."""
+
+    spec: object
+    static: object
+    eom: object
+    names: list
+    idx: np.ndarray
+    initial: np.ndarray | None
+
+
+def prepare_continuation(case: Case, analysis: str | None = None) -> ContinuationStart:
+    """Check that the case can be continued and build what its continuation starts from.
+
+    Raises
+    ------
+    CablesimError
+        No ``continuation:`` section, nothing forcing the cable, or a start that cannot be
+        integrated (``start_from: history``).
+    """
+    spec = case.continuation
+    if spec is None:
+        raise CablesimError(
+            "This case has no `continuation:` section. Add one, for example "
+            "`continuation: {omega: {start: 0.5, stop: 6.0}, channels: [z2, z4]}`.",
+            field="continuation",
+        )
+    if not case.forced:
+        raise CablesimError("loads.FL is zero and no support moves, so there is no forced response to continue; "
+                            "give peak harmonic loads FL or a support amplitude (supports:).", field="loads.FL")
+    static = run_static(case, analysis, all_models=False)
+    at_start = parameter_values(spec, spec.range.start)
+    eom = build_equations(case, static, omega=at_start["omega"], load_scale=1.0)
+    names, idx = continuation_channels(case)
+    initial = None
+    if spec.start_from == "history":
+        initial = _integrated_start(case, static, at_start["omega"], at_start["gamma"], names, idx, at_start["support"])
+    return ContinuationStart(spec, static, eom, names, idx, initial)
+
+
+def trace(start: ContinuationStart, callback, max_points: int | None = None, switch_branches: bool | None = None):
+    """:func:`~cablesim.orbits.continue_branches` over the range of ``start`` (``max_points`` and
+    ``switch_branches``: the section's unless given)."""
+    spec = start.spec
+    return continue_branches(
+        start.eom, spec.parameter, spec.range.start, spec.range.stop, period=spec.period,
+        switch_branches=spec.switch_branches if switch_branches is None else switch_branches,
+        callback=callback, gamma=spec.fixed_gamma, support=spec.fixed_support, initial_state=start.initial,
+        segments=spec.segments, max_period=spec.max_period,
+        settings=Settings(max_points=spec.max_points if max_points is None else max_points),
+    )
+
+
 def run_continuation(
     case: Case,
     analysis: str | None = None,
@@ -362,25 +432,9 @@ def run_continuation(
         Ctrl-C or SIGTERM while the branches or the bifurcation curves were traced: ``result``
         holds the orbits and the curves traced so far (``complete`` False).
     """
-    spec = case.continuation
-    if spec is None:
-        raise CablesimError(
-            "This case has no `continuation:` section. Add one, for example "
-            "`continuation: {omega: {start: 0.5, stop: 6.0}, channels: [z2, z4]}`.",
-            field="continuation",
-        )
-    if not case.forced:
-        raise CablesimError("loads.FL is zero and no support moves, so there is no forced response to continue; "
-                            "give peak harmonic loads FL or a support amplitude (supports:).", field="loads.FL")
-    static = run_static(case, analysis, all_models=False)
+    start = prepare_continuation(case, analysis)
+    spec, static, eom, names, idx = start.spec, start.static, start.eom, start.names, start.idx
     rng, fixed = spec.range, spec.fixed
-    at_start = parameter_values(spec, rng.start)
-    omega0 = at_start["omega"]
-    eom = build_equations(case, static, omega=omega0, load_scale=1.0)
-    names, idx = continuation_channels(case)
-    initial = None
-    if spec.start_from == "history":
-        initial = _integrated_start(case, static, omega0, at_start["gamma"], names, idx, at_start["support"])
     t0 = time.perf_counter()
 
     def callback(point):
@@ -390,14 +444,15 @@ def run_continuation(
 
     interrupted = False
     try:
-        diagram = continue_branches(
-            eom, spec.parameter, rng.start, rng.stop, period=spec.period, switch_branches=spec.switch_branches,
-            callback=callback, gamma=spec.fixed_gamma, support=spec.fixed_support, initial_state=initial,
-            segments=spec.segments, max_period=spec.max_period, settings=Settings(max_points=spec.max_points),
-        )
+        diagram = trace(start, callback)
     except BranchesInterrupted as exc:  # keep the orbits computed so far
         diagram, interrupted = exc.diagram, True
-    branches = [_branch(k, br, spec, idx, case.dim) for k, br in enumerate(diagram.branches) if br.points]
+    kept = [(k, br) for k, br in enumerate(diagram.branches) if br.points]
+    try:
+        strains = [orbit_strains(eom, br, spec.parameter, spec.fixed_gamma, spec.fixed_support) for _, br in kept]
+    except KeyboardInterrupt:  # the orbits are kept, their strains not measured
+        strains, interrupted = [None] * len(kept), True
+    branches = [_branch(k, br, spec, idx, case.dim, st) for (k, br), st in zip(kept, strains)]
     other = IN_PLANE if case.dim == 2 else COUPLED
     bifs = [
         BifurcationResult(
@@ -413,7 +468,9 @@ def run_continuation(
     result = ContinuationResult(
         parameter=spec.parameter, start=rng.start, stop=rng.stop, fixed=fixed, channels=names, branches=branches,
         bifurcations=bifs, analysis=static.analysis, modal_omega=static.modes.omega.copy(), case_name=case.name,
-        case_text=case.text, stats=stats, start_failure=_start_failure(diagram), warnings=list(static.warnings),
+        case_text=case.text, stats=stats, start_failure=_start_failure(diagram),
+        warnings=[*static.warnings, *strain_warning([b.name for b in branches], [b.strain for b in branches],
+                                                    spec.parameter, [b.parameter for b in branches])],
         fixed_gamma=spec.fixed_gamma, fixed_support=spec.fixed_support, support_amplitudes=support_amplitudes(case),
         components=case.dim,
     )

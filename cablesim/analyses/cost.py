@@ -33,6 +33,15 @@ MAX_STEPS = 1e8
 MAX_SWEEP_STEPS = 1e9
 #: Most bytes a run may hold in memory without ``--force``.
 MAX_MEMORY = 4e9
+#: Most Runge-Kutta steps the flows of a continuation's first branch may take without
+#: ``--force`` (variational equations included). Measured: the paper example's whole continuation
+#: over 0.5-6 rad/s takes 1.2e5 (estimated 2.2e5 for its first branch); the stiff cable of Fig. 8
+#: takes 4.2e6 over 1.3-2 rad/s, and is estimated at 2.5e8 over 0.4-2 rad/s (refused without it).
+MAX_ORBIT_STEPS = 1e8
+#: Most orbits expected on a continuation's first branch without ``--force``.
+MAX_ORBITS = 20_000
+#: A run estimated to take longer than this (s) has its estimate printed before it starts.
+LONG_SECONDS = 10.0
 #: Fine samples per forcing period a sweep point keeps in its last window.
 SWEEP_SAMPLES_PER_PERIOD = 128
 
@@ -88,6 +97,11 @@ class Cost:
         bound = "at most " if self.what == "sweep" else "about "
         return (f"{self.what}: {bound}{self.steps:.3g} time steps ({self.detail}), {self.samples:.0f} {unit}, "
                 f"{_size(self.memory)} in memory, {_size(self.disk)} on disk")
+
+    @property
+    def long(self) -> bool:
+        """Whether the estimate is printed before the run (not only with ``--verbose``)."""
+        return self.steps > 1e7 or self.memory > 1e8
 
     def excess(self) -> str | None:
         """Why this run needs ``--force`` (None if it does not)."""
@@ -179,3 +193,57 @@ def sweep_cost(points: list[tuple[EquationsOfMotion, Integrator, float]], n_poin
     return Cost("sweep", total * cap * per_s, total, memory, disk,
                 f"{total} points of up to {cap:.6g} s, {points[0][1].name}, up to {per_s:.3g} steps per simulated "
                 f"second{more}", per_point=cap * per_s)
+
+
+@dataclass(frozen=True)
+class ContinuationCost(Cost):
+    """The estimated cost of a continuation's first branch (:class:`Cost` with ``what``
+    ``"continuation"``; ``steps`` are the Runge-Kutta steps of its flows, variational equations
+    included, ``samples`` the orbits).
+
+    Attributes
+    ----------
+    seconds : float
+        Wall seconds on this machine, from the measured pace of a probe (NaN: not measured, the
+        run being refused on its least cost alone).
+    least : bool
+        The counts are the least the range can take (no probe was run), not an estimate.
+    """
+
+    seconds: float = float("nan")
+    least: bool = False
+
+    def text(self) -> str:
+        """One line: ``continuation: about 230 orbits on the first branch, 1.2e+05 Runge-Kutta
+        steps (...), about 3 s on this machine, 1.5 MB in memory``."""
+        bound = "at least" if self.least else "about"
+        secs = "" if not math.isfinite(self.seconds) else f", about {seconds_text(self.seconds)} on this machine"
+        return (f"{self.what}: {bound} {self.samples:.0f} orbits on the first branch, {bound} {self.steps:.3g} "
+                f"Runge-Kutta steps ({self.detail}){secs}, {_size(self.memory)} in memory")
+
+    @property
+    def long(self) -> bool:
+        return not self.seconds <= LONG_SECONDS or self.memory > 1e8
+
+    def excess(self) -> str | None:
+        why = []
+        if not self.steps <= MAX_ORBIT_STEPS:
+            why.append(f"{self.steps:.3g} Runge-Kutta steps, more than the {MAX_ORBIT_STEPS:.0e} allowed")
+        if not self.samples <= MAX_ORBITS:
+            why.append(f"{self.samples:.0f} orbits, more than the {MAX_ORBITS} allowed")
+        if not self.memory <= MAX_MEMORY:
+            why.append(f"{_size(self.memory)} of memory, more than the {_size(MAX_MEMORY)} allowed")
+        return "; ".join(why) or None
+
+
+def seconds_text(seconds: float) -> str:
+    """``"0.42 s"``, ``"3.5 min"``, ``"2.1 h"``: two significant digits, never an exponent
+    (99.7 s is "100 s", not "1e+02 s")."""
+    def two(v: float) -> str:
+        return f"{v:.0f}" if v >= 10 else f"{v:.2g}"
+    if seconds < 120:
+        return f"{two(seconds)} s"
+    if seconds < 7200:
+        return f"{two(seconds / 60)} min"
+    return f"{two(seconds / 3600)} h"
+

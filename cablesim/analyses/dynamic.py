@@ -19,7 +19,7 @@ from ..statics import segment_geometry
 from .cost import Cost, history_cost
 from .setup import (build_equations, disturbed_start, make_integrator, mode_velocity, need_inextensible,
                     output_interval, taut)
-from .static import PLAUSIBLE_STRAIN, StaticResult, run_static
+from .static import SMALL_STRAINS_TEXT, StaticResult, beyond_small_strains, run_static
 
 
 #: Above this many nodes time histories skip the configurational/elastic split unless the case
@@ -81,15 +81,15 @@ DRIFT_BOUND = 1e-3
 
 
 def history_warnings(cable, hist: HistoryResult) -> tuple[str, ...]:
-    """Plausibility warnings of a time history: a strain T/EA beyond :data:`PLAUSIBLE_STRAIN`
-    (the model's small strains) and a drift of eq. 15 beyond :data:`DRIFT_BOUND`."""
+    """Plausibility warnings of a time history: a strain T/EA beyond the model's range
+    (:func:`~cablesim.analyses.static.beyond_small_strains`) and a drift of eq. 15 beyond :data:`DRIFT_BOUND`."""
     out = []
     if hist.T.size:
         strain = np.asarray(hist.T, dtype=float) / cable.EA
         i, k = np.unravel_index(int(np.argmax(strain)), strain.shape)
-        if strain[i, k] > PLAUSIBLE_STRAIN:
+        if beyond_small_strains(strain[i, k]):
             out.append(f"the strain T/EA of segment {k + 1} reaches {100 * strain[i, k]:.3g} % at t = {hist.t[i]:.6g} s, "
-                       f"beyond the {100 * PLAUSIBLE_STRAIN:g} % of the model's small strains (T = EA (l - S) / S): "
+                       f"beyond {SMALL_STRAINS_TEXT}: "
                        "these are not the motions of a real cable. Check the loads (loads.FL) and cable.EA.")
     if hist.residual.size and np.nanmax(hist.residual) > DRIFT_BOUND:
         j = int(np.nanargmax(hist.residual))

@@ -2,39 +2,31 @@
 
 Step counts and memory come from :mod:`cablesim.analyses.cost`; the seconds are measured: a
 short run of the same plan on this machine gives the wall time per simulated second, which the
-full run multiplies (a sweep: every point to its cap, an upper bound; a continuation: its first
-stretch of the range, extrapolated). Nothing is written.
+full run multiplies (a sweep: every point to its cap, an upper bound; a continuation: the pace
+of its first few orbits, extrapolated over the range, :func:`continuation_cost`). Nothing is written.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 
 import numpy as np
 
-from ..case import Case, parse_case
+from ..case import Case
 from ..errors import CablesimError
-from .continuation import run_continuation
+from ..orbits.budget import orbit_budget
+from ..orbits.diagram import BranchEnd
+from .continuation import prepare_continuation, trace
 from .dynamic import HistoryPlan, plan_free_vibration, plan_history
 from .sweep import estimate_sweep
+from .cost import ContinuationCost, seconds_text
 
 #: A probe integrates about this many steps (at least a few periods), twice: the second is timed.
 PROBE_STEPS = 2000
-#: A continuation is timed over this fraction of its range.
-PROBE_FRACTION = 0.05
-
-
-def seconds_text(seconds: float) -> str:
-    """``"0.42 s"``, ``"3.5 min"``, ``"2.1 h"``: two significant digits, never an exponent
-    (99.7 s is "100 s", not "1e+02 s")."""
-    def two(v: float) -> str:
-        return f"{v:.0f}" if v >= 10 else f"{v:.2g}"
-    if seconds < 120:
-        return f"{two(seconds)} s"
-    if seconds < 7200:
-        return f"{two(seconds / 60)} min"
-    return f"{two(seconds / 3600)} h"
+#: Orbits of a continuation's first branch computed to time it and find its pace.
+PROBE_ORBITS = 6
 
 
 def wall_per_simulated_second(plan: HistoryPlan) -> float:
@@ -70,22 +62,63 @@ def _sweep_text(case: Case, analysis, integrator) -> str:
             + (f"; needs --force: {why}" if why else ""))
 
 
+def continuation_cost(case: Case, analysis: str | None = None) -> ContinuationCost:
+    """The cost of a continuation's first branch, before it runs.
+
+    The least it can take comes first, from the shooting's step rule and the continuation's
+    largest step (:func:`~cablesim.orbits.budget.orbit_budget`, nothing integrated); a range
+    whose least cost is above :data:`~cablesim.analyses.cost.MAX_ORBIT_STEPS` is judged on it
+    alone. Otherwise the first :data:`PROBE_ORBITS` orbits of the branch are computed: their
+    pace (parameter per orbit after the first) gives the orbits expected over the range (at
+    most ``continuation.max_points``), their Runge-Kutta steps per orbit the steps, and the wall
+    time between them the seconds. Folds and resonances slow a branch down, so the count is
+    an estimate, not a bound; each branch switched onto at a period doubling adds to it.
+
+    Raises
+    ------
+    CablesimError
+        The case cannot be continued (:func:`~cablesim.analyses.continuation.prepare_continuation`).
+    KeyboardInterrupt
+        Ctrl-C or SIGTERM during the probe.
+    """
+    start = prepare_continuation(case, analysis)
+    spec, rng = start.spec, start.spec.range
+    budget = orbit_budget(start.eom, spec.parameter, rng.start, rng.stop, spec.period, spec.segments,
+                          spec.fixed_gamma, spec.fixed_support)
+    shooting = (f"{'matrix-free' if budget.matrix_free else 'dense'} {budget.scheme} shooting of {budget.states} "
+                f"states, {min(budget.steps):.3g} to {max(budget.steps):.3g} steps per orbit period")
+    least = ContinuationCost("continuation", budget.least_orbits * min(budget.steps), budget.least_orbits,
+                             budget.working + budget.per_orbit * budget.least_orbits, 0.0, shooting, least=True)
+    if least.excess() is not None:
+        return least
+    seen: list = []
+
+    def clock(point):
+        seen.append((time.perf_counter(), point.parameter))
+
+    t_probe = time.perf_counter()
+    diagram = trace(start, clock, max_points=PROBE_ORBITS, switch_branches=False)
+    if len(seen) < 2:  # no orbit, or the branch is one orbit long: the probe was the run
+        return dataclasses.replace(least, seconds=time.perf_counter() - t_probe)
+    branch = diagram.branches[0]
+    done = branch.end != BranchEnd.MAX_POINTS  # the probe reached the end of the branch
+    pace = abs(seen[-1][1] - seen[0][1]) / (len(seen) - 1)
+    orbits = len(seen) if done else min(spec.max_points, max(len(seen), math.ceil(abs(rng.stop - rng.start) / pace)
+                                                                  if pace > 0 else spec.max_points))
+    # the probe ran at the start of the range: its flows' steps scaled to the range's mean
+    ratio = 1.0 if done else budget.mean_steps / budget.steps[0]
+    per_orbit = diagram.stats["steps"] / len(seen) * ratio
+    # the median interval between orbits: the first uses of the kernels load them
+    seconds = float(np.median(np.diff([t for t, _ in seen]))) * ratio * orbits
+    return ContinuationCost("continuation", orbits * per_orbit, orbits, budget.working + budget.per_orbit * orbits,
+                            budget.per_orbit * orbits, f"{per_orbit:.3g} per orbit, {shooting}", seconds=seconds)
+
+
 def _continuation_text(case: Case, analysis) -> str:
-    spec = case.continuation
-    if spec is None:
-        raise CablesimError("This case has no `continuation:` section (`cablesim example` shows one).")
-    rng = spec.range
-    stop = rng.start + PROBE_FRACTION * (rng.stop - rng.start)
-    key = spec.parameter
-    probe_case = parse_case(case.text, overrides=[f"continuation.{key}={{start: {rng.start!r}, stop: {stop!r}}}",
-                                                  "continuation.switch_branches=false"])
-    run_continuation(probe_case, analysis)  # loads the kernels
-    t0 = time.perf_counter()
-    res = run_continuation(probe_case, analysis)
-    seconds = (time.perf_counter() - t0) / PROBE_FRACTION
-    return (f"roughly {seconds_text(seconds)} on this machine for the branch from {rng.start:g} to {rng.stop:g} "
-            f"({res.n_points} orbits over the first {100 * PROBE_FRACTION:g} % of it in "
-            f"{seconds_text(seconds * PROBE_FRACTION)}); each branch switched onto at a period doubling adds to it")
+    cost = continuation_cost(case, analysis)
+    why = cost.impossible() or cost.excess()
+    return (cost.text().split(": ", 1)[1] + "; each branch switched onto at a period doubling adds to it"
+            + (f"; needs --force: {why}" if why else ""))
 
 
 def estimates(case: Case, analysis: str | None = None, integrator: str | None = None) -> dict[str, str]:

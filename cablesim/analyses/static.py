@@ -262,6 +262,16 @@ MIN_STRAIN = 1e-10
 PLAUSIBLE_STRAIN = 0.05
 
 
+#: The bound of :data:`PLAUSIBLE_STRAIN` in words, for every warning that cites it.
+SMALL_STRAINS_TEXT = f"the {100 * PLAUSIBLE_STRAIN:g} % of the model's small strains (T = EA (l - S) / S)"
+
+
+def beyond_small_strains(strain) -> np.ndarray:
+    """Where a strain ``T / EA`` is beyond the model's range (:data:`PLAUSIBLE_STRAIN`): the one
+    rule of the static, history and continuation warnings."""
+    return np.asarray(strain, dtype=float) > PLAUSIBLE_STRAIN
+
+
 def check_resolvable(cable: Cable, T: np.ndarray) -> None:
     """Refuse an EA so large that the strains under the loads are below double precision."""
     strain = float(np.max(np.abs(T))) / cable.EA
@@ -281,7 +291,7 @@ def strain_warnings(cable: Cable, T: np.ndarray) -> tuple[str, ...]:
     """A warning when the static strain exceeds :data:`PLAUSIBLE_STRAIN` (never an error)."""
     strain = np.asarray(T, dtype=float) / cable.EA
     k = int(np.argmax(strain))
-    if strain[k] <= PLAUSIBLE_STRAIN:
+    if not beyond_small_strains(strain[k]):
         return ()
     return (
         f"the static strain T/EA of segment {k + 1} is {100 * strain[k]:.3g} % (sum of cable.S "

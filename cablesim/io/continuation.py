@@ -122,6 +122,10 @@ def write_continuation(path: str | Path, res) -> Path:
             put(h, "trusted", b.trusted, "1", "multipliers passed the residual and Liouville checks")
             put(h, "multipliers", b.multipliers, "1", "Floquet multipliers, by decreasing modulus")
             put(h, "state", b.state, "m, m/s", "(z, y') at forcing phase 0")
+            if getattr(b, "strain", None) is not None:
+                put(h, "strain", b.strain, "1", "largest strain (l - S) / S of any segment over the orbit (NaN: not "
+                    "measured)", allow_nan=True)
+                put(h, "strained", b.strained, "1", "the orbit's strain is beyond the model's small strains")
             if b.planes is not None:
                 put(h, "multiplier_plane", np.asarray(b.planes, dtype="S"), "1",
                     "block of each multiplier: in-plane, out-of-plane (a planar orbit of a symmetric "

@@ -35,8 +35,7 @@ def guard(cost, force: bool, fix: str, out: Path | None, note, figures: int = 0)
         raise err
     if out is not None:
         check_room(out, cost.disk + PNG_BYTES * figures)
-    long = cost.steps > 1e7 or cost.memory > 1e8
-    note(f"estimate: {cost.text()}", verbose_only=not long)
+    note(f"estimate: {cost.text()}", verbose_only=not cost.long)
 
 
 def simulate(planned, duration: float, notice, quiet: bool = False):

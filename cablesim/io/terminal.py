@@ -275,7 +275,8 @@ RTOL_OPT = typer.Option(None, "--rtol", help="Relative tolerance of the error-co
                         "generalized-alpha; sets integrator.rtol, clears its dt) [default: 1e-8 for dopri5, 1e-5 for "
                         "the implicit schemes].")
 FORCE_OPT = typer.Option(False, "--force", help="Run even when the cost estimate is above the limits (1e8 time "
-                         "steps, a sweep 1e9, or 4 GB of memory).")
+                         "steps, a sweep 1e9; a continuation's first branch 1e8 Runge-Kutta steps or 20000 orbits; "
+                         "or 4 GB of memory).")
 MODES_OPT = typer.Option(None, "--modes", min=1, metavar="K", help="Compute only the lowest K modes and the highest "
                          "frequency (sets modal.modes; default: every mode up to n = 300 nodes, else the lowest 100).")
 MODES_DRAWN_OPT = typer.Option(4, "--modes-drawn", min=0, max=20, metavar="K", help="Draw the lowest K mode shapes "

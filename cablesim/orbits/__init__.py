@@ -15,6 +15,8 @@
   (:mod:`~cablesim.orbits.krylov`) and the leading Floquet multipliers
   (:mod:`~cablesim.orbits.floquet`); :mod:`~cablesim.orbits.mfproblem` makes it a continuation
   problem (``matrix_free`` of :func:`continue_branches`, by default above 40 states);
+- :mod:`~cablesim.orbits.budget`: the steps and memory of a branch's orbits before any is
+  computed (the cost estimate of ``cablesim continue``);
 - :mod:`~cablesim.orbits.systems`, :mod:`~cablesim.orbits.cablefield`: the vector fields;
   :mod:`~cablesim.orbits.starting`: starting states.
 

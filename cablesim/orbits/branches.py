@@ -34,7 +34,7 @@ from . import kernels as ok
 from . import stability
 from .continuation import Settings, continuation
 from .matrixfree import MatrixFreeShooting, orbit_leading, solve_orbit_mf
-from .mfproblem import MatrixFreeOrbitProblem, use_matrix_free
+from .mfproblem import MatrixFreeOrbitProblem, uses_matrix_free
 from .diagram import Bifurcation, BranchEnd, BranchesInterrupted, OrbitBranch, OrbitPoint, ResponseDiagram
 from .shooting import Evaluation, FlowStatus, Shooting, solve_orbit
 from .starting import cable_scales, integrate_to_steady, linear_response_state
@@ -390,6 +390,14 @@ class _Tracer:
                     if child.merged_at is not None:
                         done_pd.add((br.index, child.merged_at.index))
 
+    def record_located(self) -> None:
+        """Record the bifurcations located on the branches that :meth:`collect_bifurcations` has
+        not reached (an interruption: the first branch while it is traced, the rest of a
+        branch whose period doubling was being switched at), without switching at them."""
+        done = {(b.branch, b.point) for b in self.diagram.bifurcations}
+        self.diagram.bifurcations += [_bifurcation(p, br.index) for br in self.diagram.branches for p in br.points
+                                      if (br.index, p.index) not in done and self.is_own_bifurcation(br, p)]
+
     def stats(self, seconds: float) -> dict:
         """Cost counters of :attr:`ResponseDiagram.stats`."""
         return {
@@ -476,7 +484,8 @@ def trace_branches(
     Raises
     ------
     BranchesInterrupted
-        Ctrl-C or SIGTERM: its ``diagram`` holds the orbits computed until then.
+        Ctrl-C or SIGTERM: its ``diagram`` holds the orbits computed until then and the
+        bifurcations located on them.
     """
     t_start = time.perf_counter()
     n = system.dim
@@ -491,13 +500,14 @@ def trace_branches(
         state_scale = np.full(n, max(amp, 1e-12))
     state_scale = np.asarray(state_scale, dtype=float)
     integration = dict(scheme=scheme, steps_per_period=steps_per_period, step_rate=step_rate)
-    mf = use_matrix_free(n, matrix_free) and (matrix_free or system.mechanical is not None)
+    mf = uses_matrix_free(system, matrix_free)
     tracer = _Tracer(system, parameter, st, np.sign(stop - start) or 1.0, state_scale, lam_scale, callback,
                      integration, liouville_tol, switch_size, mf)
     try:
         tracer.first_branch(u0, start, period, segments)
         tracer.collect_bifurcations(switch_branches, max_period)
-    except KeyboardInterrupt:  # keep every orbit computed so far
+    except KeyboardInterrupt:  # keep every orbit and every bifurcation located so far
+        tracer.record_located()
         tracer.diagram.stats = tracer.stats(time.perf_counter() - t_start)
         raise BranchesInterrupted(tracer.diagram) from None
     tracer.diagram.stats = tracer.stats(time.perf_counter() - t_start)

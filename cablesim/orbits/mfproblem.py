@@ -21,7 +21,7 @@ from . import stability
 from .floquet import DEFAULT_BOUND, Deflation, Leading, leading_from, truncated_step_ratio, truncated_tests
 from .matrixfree import Bordered, MatrixFreeShooting, MFEvaluation, orbit_leading
 
-__all__ = ["MATRIX_FREE_DOF", "MatrixFreeOrbitProblem", "use_matrix_free"]
+__all__ = ["MATRIX_FREE_DOF", "MatrixFreeOrbitProblem", "use_matrix_free", "uses_matrix_free"]
 
 #: State dimension above which the continuation shoots matrix-free by default. Measured on the
 #: heavy span (``benchmarks/bench_heavy_orbits.py --crossover``: one orbit by Newton's method
@@ -33,6 +33,12 @@ MATRIX_FREE_DOF = 40
 def use_matrix_free(dim: int, matrix_free: bool | None) -> bool:
     """Whether to shoot matrix-free: as asked, else from :data:`MATRIX_FREE_DOF`."""
     return bool(matrix_free) if matrix_free is not None else dim > MATRIX_FREE_DOF
+
+
+def uses_matrix_free(system, matrix_free: bool | None) -> bool:
+    """Whether the orbits of ``system`` are shot matrix-free: as asked, else above
+    :data:`MATRIX_FREE_DOF` states for a system in mechanical form."""
+    return use_matrix_free(system.dim, matrix_free) and bool(matrix_free or system.mechanical is not None)
 
 
 class MatrixFreeOrbitProblem:

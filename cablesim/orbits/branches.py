@@ -103,6 +103,17 @@ class PlanarOrbitProblem(OrbitProblem):
     def __init__(self, shooting: Shooting, state_scale: np.ndarray, lam_scale: float, mirror: Mirror):
         super().__init__(shooting, state_scale, lam_scale)
         self.mirror = mirror
+        #: The components of the two blocks when the plane's normal is a coordinate axis: the
+        #: variational equations are then integrated on the blocks alone (about the planar
+        #: cable's cost plus the out-of-plane block's instead of the whole spatial Jacobian's).
+        self.blocks = mirror.coordinate_blocks()
+
+    def evaluate(self, u, lam):
+        ev = self.shooting.evaluate(u, lam, blocks=self.blocks)
+        if ev.status != ok.OK:
+            self.last_failure = ev.status
+            return None
+        return ev
 
     def test_functions(self, ev: Evaluation) -> np.ndarray:
         return stability.split_test_functions(*split_multipliers(self.mirror, ev.monodromy))

@@ -227,7 +227,7 @@ def _stage_state(x, K, Yf, KYf, xs, Ysf, A, st, h, with_jac):
 
 
 @njit
-def _variational_rate(J, Ys, dx, dp, KYst, omega, pmode):
+def _variational_rate_whole(J, Ys, dx, dp, KYst, omega, pmode):
     """Stage rate of the variational equations, ``KYst = J Ys`` plus the parameter forcing in
     the extra column; returns ``tr J`` (for the divergence integral)."""
     n, ncol = Ys.shape
@@ -273,6 +273,98 @@ def _variational_rate(J, Ys, dx, dp, KYst, omega, pmode):
                 KYst[i, n] -= dx[i] / omega
             KYst[i, n] += dp[i]
     return tr
+
+
+@njit
+def _variational_rate(J, Yc, dx, dp, KYc, omega, pmode, rows, bounds, ncol, Jb):
+    """Stage rate of the variational equations on the compact blocks of ``Y``
+    (:func:`flow_segment`): ``KY_b = J_bb Y_b`` for each diagonal block ``b``, the same sums as
+    :func:`_variational_rate_whole` without the blocks' zero couplings, plus the parameter
+    forcing in the extra column (of the first block); returns ``tr J`` (for the divergence
+    integral). ``Jb``: scratch for a block of ``J``."""
+    n = J.shape[0]
+    tr = 0.0
+    for i in range(n):
+        tr += J[i, i]
+    off = 0
+    for blk in range(bounds.size - 1):
+        lo = bounds[blk]
+        kb = bounds[blk + 1] - lo
+        nc = kb + 1 if (blk == 0 and ncol > n) else kb
+        for p in range(kb):
+            for q in range(kb):
+                Jb[p, q] = J[rows[lo + p], rows[lo + q]]
+        for p in range(kb):
+            base = off + p * nc
+            j = 0
+            while j + 8 <= nc:  # eight columns at a time, as in _variational_rate_whole
+                a0 = a1 = a2 = a3 = a4 = a5 = a6 = a7 = 0.0
+                for r in range(kb):
+                    jr = Jb[p, r]
+                    if jr != 0.0:
+                        rr = off + r * nc + j
+                        a0 += jr * Yc[rr]
+                        a1 += jr * Yc[rr + 1]
+                        a2 += jr * Yc[rr + 2]
+                        a3 += jr * Yc[rr + 3]
+                        a4 += jr * Yc[rr + 4]
+                        a5 += jr * Yc[rr + 5]
+                        a6 += jr * Yc[rr + 6]
+                        a7 += jr * Yc[rr + 7]
+                KYc[base + j] = a0
+                KYc[base + j + 1] = a1
+                KYc[base + j + 2] = a2
+                KYc[base + j + 3] = a3
+                KYc[base + j + 4] = a4
+                KYc[base + j + 5] = a5
+                KYc[base + j + 6] = a6
+                KYc[base + j + 7] = a7
+                j += 8
+            while j < nc:
+                a0 = 0.0
+                for r in range(kb):
+                    jr = Jb[p, r]
+                    if jr != 0.0:
+                        a0 += jr * Yc[off + r * nc + j]
+                KYc[base + j] = a0
+                j += 1
+            if nc > kb:
+                i = rows[lo + p]
+                if pmode == PARAM_OMEGA:
+                    KYc[base + kb] -= dx[i] / omega
+                KYc[base + kb] += dp[i]
+        off += kb * nc
+    return tr
+
+
+@njit
+def _compact_size(n, ncol, bounds):
+    """Length of the compact blocks of ``Y`` (:func:`flow_segment`)."""
+    size = 0
+    for blk in range(bounds.size - 1):
+        kb = bounds[blk + 1] - bounds[blk]
+        size += kb * (kb + 1 if (blk == 0 and ncol > n) else kb)
+    return size
+
+
+@njit
+def _blocks_to_full(Yc, Y, rows, bounds, to_full):
+    """Copy the compact blocks into the full ``Y`` (``to_full``) or the identity's blocks into
+    the compact ones (after a chunk's restart), column ``n`` being the parameter's."""
+    n, ncol = Y.shape
+    off = 0
+    for blk in range(bounds.size - 1):
+        lo = bounds[blk]
+        kb = bounds[blk + 1] - lo
+        nc = kb + 1 if (blk == 0 and ncol > n) else kb
+        for p in range(kb):
+            for q in range(nc):
+                col = rows[lo + q] if q < kb else n
+                if to_full:
+                    Y[rows[lo + p], col] = Yc[off + p * nc + q]
+                else:
+                    Yc[off + p * nc + q] = 1.0 if q == p else 0.0
+        off += kb * nc
 
 
 @njit
@@ -334,7 +426,7 @@ def _advance_jacobian(Yf, KYf, b, h):
 
 @njit
 def flow_segment(field, model, prm, work, x0, theta0, omega, duration, nsteps, A, b, c, ipar, pmode, jac,
-                 xend, Mout, pout, xmax, xmin, rec, info):
+                 rows, bounds, xend, Mout, pout, xmax, xmin, rec, info):
     """Integrate one segment (see the module docstring). Returns a status code.
 
     Outputs: ``xend`` the final state; with ``jac``: ``Mout`` the Jacobian of the discrete map,
@@ -342,6 +434,15 @@ def flow_segment(field, model, prm, work, x0, theta0, omega, duration, nsteps, A
     :data:`PARAM_NONE`), ``info = (int tr J dt, log|det Mout|, sign det Mout, chunks)``;
     always: ``xmax``, ``xmin`` (extremes of each component), and, if ``rec`` has rows, the
     state and its rate at every step (``rec[k, :n]``, ``rec[k, n:]``).
+
+    ``rows[bounds[k]:bounds[k + 1]]`` (ascending) are the state components of block ``k`` of
+    the variational equations, carried on its diagonal blocks only, each stored compactly (the
+    parameter's column with the first block), the full ``Y`` assembled at the end of each chunk.
+    Exact when the Jacobian has no entries coupling the blocks, as on an orbit in a plane of
+    mirror symmetry whose normal is a coordinate axis
+    (:meth:`cablesim.orbits.symmetry.Mirror.coordinate_blocks`): each block's sums are the whole
+    Jacobian's without their zero terms, so the map is bitwise the same at the blocks' cost.
+    One block, ``rows = 0..n-1``: the whole Jacobian, as one array.
     """
     n = x0.size
     s = b.size
@@ -354,19 +455,22 @@ def flow_segment(field, model, prm, work, x0, theta0, omega, duration, nsteps, A
     dx = np.empty(n)
     dp = np.zeros(n)
     J = np.zeros((n, n))
-    nY = n * ncol
     Y = np.zeros((n, ncol))
-    Ys = np.empty((n, ncol))
-    KY = np.empty((s, n, ncol))
-    Yf = Y.reshape(nY)  # flat views for the stage combinations
-    Ysf = Ys.reshape(nY)
-    KYf = KY.reshape((s, nY))
+    nY = _compact_size(n, ncol, bounds)
+    Yf = np.empty(nY)  # the blocks of Y, compact and flat for the stage combinations
+    Ysf = np.empty(nY)
+    KYf = np.empty((s, nY))
+    Jb = np.empty((n, n))
+    Ys2 = Ysf.reshape((n, ncol)) if bounds.size == 2 else Y
+    KY2 = KYf.reshape((s, n, ncol)) if bounds.size == 2 else KYf.reshape((s, 1, nY))
     tmpM = np.empty((n, n))
     tmpp = np.empty(n)
     LU = np.empty((n, n))
     xprev = np.empty(n)
     dprev = np.empty(n)
     _start_segment(x, Y, xmax, xmin, info)
+    if jac:
+        _blocks_to_full(Yf, Y, rows, bounds, False)
     q_chunk = 0.0
     first_chunk = True
     for k in range(nsteps + 1):
@@ -384,7 +488,10 @@ def flow_segment(field, model, prm, work, x0, theta0, omega, duration, nsteps, A
                     return NONFINITE
                 K[st, i] = dx[i]
             if stage_jac:
-                tr = _variational_rate(J, Ys, dx, dp, KY[st], omega, pmode)
+                if bounds.size == 2:  # the whole Jacobian: compact is the full layout
+                    tr = _variational_rate_whole(J, Ys2, dx, dp, KY2[st], omega, pmode)
+                else:
+                    tr = _variational_rate(J, Ysf, dx, dp, KYf[st], omega, pmode, rows, bounds, ncol, Jb)
                 info[0] += h * b[st] * tr
         _sample_step(k, x, K, xprev, dprev, h, xmax, xmin, rec)
         if last:
@@ -394,11 +501,14 @@ def flow_segment(field, model, prm, work, x0, theta0, omega, duration, nsteps, A
         if jac:
             _advance_jacobian(Yf, KYf, b, h)
             if abs(info[0] - q_chunk) > CHUNK_DIVERGENCE and k < nsteps - 1:
+                _blocks_to_full(Yf, Y, rows, bounds, True)
                 _close_chunk(Y, n, ncol, Mout, pout, tmpM, tmpp, LU, info, first_chunk)
+                _blocks_to_full(Yf, Y, rows, bounds, False)
                 first_chunk = False
                 q_chunk = info[0]
     for i in range(n):
         xend[i] = x[i]
     if jac:
+        _blocks_to_full(Yf, Y, rows, bounds, True)
         _close_chunk(Y, n, ncol, Mout, pout, tmpM, tmpp, LU, info, first_chunk)
     return OK

@@ -185,6 +185,7 @@ class Shooting:
         self._b = np.ascontiguousarray(self.tableau.b)
         self._c = np.ascontiguousarray(self.tableau.c)
         self._flow = ok.EntryPoint(ok.flow_segment)
+        self._whole = (np.arange(system.dim, dtype=np.int64), np.array([0, system.dim], dtype=np.int64))
         self._ipar = -1 if parameter == "omega" else int(system.parameters[parameter])
         self._pmode = ok.PARAM_OMEGA if parameter == "omega" else ok.PARAM_PRM
         #: Counters: flow-segment integrations and Runge-Kutta steps taken.
@@ -215,8 +216,11 @@ class Shooting:
         prm[self._ipar] = lam
         return prm
 
-    def segment(self, k: int, x0: np.ndarray, lam: float, jac: bool = True, record: bool = False):
-        """Integrate segment ``k`` from ``x0``.
+    def segment(self, k: int, x0: np.ndarray, lam: float, jac: bool = True, record: bool = False,
+                blocks: tuple | None = None):
+        """Integrate segment ``k`` from ``x0``; ``blocks`` (``(rows, bounds)``, see
+        :func:`~cablesim.orbits.kernels.flow_segment`) carries the variational equations on
+        those diagonal blocks only, for a Jacobian known not to couple them.
 
         Returns
         -------
@@ -240,10 +244,11 @@ class Shooting:
         info = np.zeros(4)
         rec = np.empty((ns + 1, 2 * n)) if record else _EMPTY_REC
         work = ok.copy_work(self.system.work)
+        rows, bounds = blocks if blocks is not None else self._whole
         code = self._flow(
             self.system.field, self.system.model, self._prm(lam), work, flushed(x0),
-            float(theta0), float(omega), float(dur),
-            int(ns), self._A, self._b, self._c, self._ipar, self._pmode, bool(jac), xend, G, dp, xmax, xmin, rec, info,
+            float(theta0), float(omega), float(dur), int(ns), self._A, self._b, self._c, self._ipar, self._pmode,
+            bool(jac), rows, bounds, xend, G, dp, xmax, xmin, rec, info,
         )
         self.calls += 1
         self.steps_taken += ns
@@ -256,8 +261,9 @@ class Shooting:
             out["rec"] = rec
         return out
 
-    def evaluate(self, u: np.ndarray, lam: float, jac: bool = True) -> Evaluation:
-        """Residual (and derivatives) at ``(u, lam)``; ``status`` says whether it succeeded."""
+    def evaluate(self, u: np.ndarray, lam: float, jac: bool = True, blocks: tuple | None = None) -> Evaluation:
+        """Residual (and derivatives) at ``(u, lam)``; ``status`` says whether it succeeded.
+        ``blocks``: the variational equations on these diagonal blocks only (:meth:`segment`)."""
         n, m = self.n, self.segments
         u = np.asarray(u, dtype=float)
         S = np.array([flushed(s) for s in u.reshape(m, n)])  # the map and its residual of the same states
@@ -273,7 +279,7 @@ class Shooting:
         div = 0.0
         status = ok.OK
         for k in range(m):
-            seg = self.segment(k, S[k], lam, jac=jac)
+            seg = self.segment(k, S[k], lam, jac=jac, blocks=blocks)
             if seg["status"] != ok.OK:
                 status = seg["status"]
                 break

@@ -105,6 +105,22 @@ class Mirror:
         return B[:k, :k], B[k:, k:], off
 
 
+    def coordinate_blocks(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """``(rows, bounds)``: the state components of the even block (``rows[:bounds[1]]``)
+        and of the odd one (``rows[bounds[1]:]``), each ascending, when the plane's normal is a
+        coordinate axis (every odd column of ``Q`` a signed unit vector of the state, so that
+        the even columns span the other components); else None. On an orbit in the plane the
+        variational equations then never couple the two sets of components, and are integrated
+        on the two blocks alone (:func:`~cablesim.orbits.kernels.flow_segment`)."""
+        odd = self.odd
+        if not (np.count_nonzero(odd, axis=0) == 1).all() or not np.all(np.abs(odd[odd != 0.0]) == 1.0):
+            return None
+        is_odd = np.zeros(self.dim, dtype=bool)
+        is_odd[np.argmax(odd != 0.0, axis=0)] = True
+        rows = np.concatenate([np.flatnonzero(~is_odd), np.flatnonzero(is_odd)]).astype(np.int64)
+        return rows, np.array([0, self.dim - self.n_odd, self.dim], dtype=np.int64)
+
+
 def split_multipliers(mirror: Mirror, monodromy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The in-plane and out-of-plane Floquet multipliers of a planar orbit, each sorted by
     decreasing modulus (conjugate pairs with positive imaginary part first)."""

@@ -299,7 +299,8 @@ class _Tracer:
             return None
         if self.matrix_free:
             orbit_leading(self.shootings[(br.period, m1)], ev, self.state_scale)
-        dirn, eps = doubling_direction(ev, m1, self.state_scale, self.switch_size)
+        dirn, eps = doubling_direction(ev, m1, self.state_scale, self.switch_size,
+                                       self.system.mirror if br.planar else None, bif.plane)
         sh2 = self.shooting(2 * br.period, 2 * m1)
         base = np.concatenate([p.u, p.u])
         factor = start_factor(sh2, base, dirn, eps, p.parameter, np.tile(self.state_scale, 2 * m1))

@@ -67,8 +67,15 @@ def lap_separation(u: np.ndarray, n: int, m_parent: int, scale: np.ndarray) -> f
 
 
 def doubling_direction(ev: Evaluation, segments: int, state_scale: np.ndarray,
-                       switch_size: float) -> tuple[np.ndarray, float]:
+                       switch_size: float, mirror=None, plane: str | None = None) -> tuple[np.ndarray, float]:
     """Direction into the period-doubled branch at a period doubling, and the step along it.
+
+    On a planar orbit of a mirror-symmetric cable (``mirror`` and the ``plane`` of the critical
+    multiplier given) the eigenvector is taken from that block of the monodromy
+    (:meth:`~cablesim.orbits.symmetry.Mirror.blocks`): where an in-plane and an out-of-plane
+    multiplier pass -1 together (a taut stay, whose two transverse directions have one
+    frequency), the whole monodromy's eigenvectors at -1 mix the planes and lead to neither
+    doubled branch.
 
     Parameters
     ----------
@@ -80,6 +87,10 @@ def doubling_direction(ev: Evaluation, segments: int, state_scale: np.ndarray,
         Typical size of each state component.
     switch_size : float
         Scaled size of the perturbation.
+    mirror : Mirror, optional
+        The cable's mirror symmetry, for a planar parent orbit.
+    plane : str, optional
+        The block of the critical multiplier (``"in-plane"`` or ``"out-of-plane"``).
 
     Returns
     -------
@@ -92,10 +103,16 @@ def doubling_direction(ev: Evaluation, segments: int, state_scale: np.ndarray,
         if segments != 1:
             raise ValueError("a matrix-free period doubling is switched at from single shooting only")
         mu, V = ev.leading.multipliers, ev.leading.vectors * np.asarray(state_scale, dtype=float)[:, None]
+        basis = None
+    elif mirror is not None and plane in mirror.labels:
+        Pe, Po, _ = mirror.blocks(ev.monodromy)
+        mu, V = np.linalg.eig(Pe if plane == mirror.labels[0] else Po)
+        basis = mirror.even if plane == mirror.labels[0] else mirror.odd
     else:
         mu, V = np.linalg.eig(ev.monodromy)
+        basis = None
     j = int(np.argmin(np.abs(mu + 1.0)))
-    W = [np.real(V[:, j])]
+    W = [np.real(V[:, j]) if basis is None else basis @ np.real(V[:, j])]
     for k in range(segments - 1):
         W.append(ev.G[k] @ W[-1])
     W = np.array(W)

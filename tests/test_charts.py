@@ -307,7 +307,6 @@ def test_a_backbone_that_cannot_start_is_a_clear_error(invoke_cli, monkeypatch):
     (["--mode", "9"], "--mode 9"),
     (["--mode", "0"], "--mode"),
     (["--amplitude", "-1"], "--amplitude"),
-    (["--set", "spatial=true"], "planar cables only"),
 ])
 def test_bad_backbone_options_are_refused_cleanly(invoke_cli, args, words):
     res = invoke_cli("backbone", CONFIG, "-o", "x.h5", *args)

@@ -139,15 +139,6 @@ class Codim2Result:
         return getattr(self, self.second)
 
 
-def need_planar(case: Case, what: str) -> None:
-    """Bifurcation curves and backbones cover planar cables: a spatial case is refused, naming why."""
-    if case.dim == 3:
-        raise CablesimError(
-            f"{what} are computed for planar cables only for now; this case is spatial (spatial: true, cable.W, "
-            "an out-of-plane support or three-component loads). Give the planar case (two components per node) "
-            "for the in-plane curves.", field="spatial")
-
-
 def _locus_plane(loc: Locus, diagram) -> str:
     """The block of the critical multiplier of the bifurcation a curve was started from."""
     for b in diagram.bifurcations:
@@ -315,6 +306,8 @@ class BackboneResult:
     case_text: str
     complete: bool = True
     stats: dict = field(default_factory=dict)
+    #: Components per node of the cable (2 planar, 3 spatial), which the channels' DOF count in.
+    components: int = 2
 
     @property
     def other_modes(self) -> list[int]:
@@ -325,11 +318,12 @@ class BackboneResult:
 def backbone_channels(case: Case) -> tuple[list[str], np.ndarray]:
     """Channel names and DOF indices of a backbone: ``backbone.channels``, else the
     continuation's or the history's, else every DOF."""
-    n_dof = 2 * case.cable.n_nodes
+    dim = case.dim
+    n_dof = dim * case.cable.n_nodes
     spec = case.continuation
     names = (case.backbone.channels or (spec.channels if spec is not None else None) or case.history.channels
              or [f"z{i + 1}" for i in range(n_dof)])
-    idx = np.array([channel_index(c, n_dof) for c in names], dtype=int)
+    idx = np.array([channel_index(c, n_dof, dim) for c in names], dtype=int)
     return [f"z{i + 1}" for i in idx], idx
 
 
@@ -375,10 +369,9 @@ def run_backbone(case: Case, mode: int | None = None, amplitude: float | None = 
     Interrupted
         On Ctrl-C or SIGTERM, with the orbits computed until then (``result.complete`` False).
     """
-    need_planar(case, "Backbone curves")
     spec = case.backbone
     k = int(mode if mode is not None else spec.mode)
-    n_dof = 2 * case.cable.n_nodes
+    n_dof = case.dim * case.cable.n_nodes
     if not 1 <= k <= n_dof:
         raise CablesimError(f"--mode {k}: this cable has {n_dof} modes; give a mode from 1 to {n_dof}.",
                             field="backbone.mode")
@@ -391,7 +384,7 @@ def run_backbone(case: Case, mode: int | None = None, amplitude: float | None = 
     freqs, _ = linear_modes(system, "delta")
     points: list = []
     meta = dict(mode=k, linear_omega=float(freqs[k - 1]), modal_omega=freqs, amplitude_max=a_max,
-                analysis=static.analysis, case_name=case.name, case_text=case.text)
+                analysis=static.analysis, case_name=case.name, case_text=case.text, components=case.dim)
 
     def collect(p):
         points.append(p)

@@ -143,7 +143,8 @@ def write_backbone(path: str | Path, res) -> Path:
         stamp(f, res.case_text, "backbone", analysis=res.analysis)
         g = f.create_group("backbone")
         g.attrs.update(mode=res.mode, linear_omega=res.linear_omega, amplitude_max=res.amplitude_max, end=res.end,
-                       complete=bool(res.complete), case_name=res.case_name)
+                       complete=bool(res.complete), case_name=res.case_name,
+                       components=int(getattr(res, "components", 2)))  # per node: 2 planar, 3 spatial
         g.attrs["channels"] = _strings(res.channels)
         g.attrs["other_modes"] = np.array(res.other_modes, dtype=int)
         for k, v in res.stats.items():
@@ -184,6 +185,7 @@ def read_backbone(path: str | Path) -> dict:
         out["case_name"] = attr_text(g.attrs.get("case_name", path.stem))
         out["channels"] = [attr_text(c) for c in np.asarray(g.attrs["channels"]).ravel()]
         out["other_modes"] = [int(m) for m in np.asarray(g.attrs["other_modes"]).ravel()]
+        out["components"] = int(g.attrs.get("components", 2))
         out["analysis"] = attr_text(f.attrs.get("analysis", "exact"))
         rg = g["resonances"]
         rs = {k: np.asarray(rg[k][()]) for k in rg}

@@ -65,6 +65,7 @@ def write_sweep(path: str | Path, res, fingerprint: str | None = None) -> Path:
         g.attrs["direction"] = res.direction
         g.attrs["channels"] = np.array(res.channels, dtype="S")
         g.attrs["case_name"] = res.case_name
+        g.attrs["components"] = int(res.dim)  # per node: 2 planar, 3 spatial
         for k in SETTINGS_ATTRS:
             if k in res.settings and not (k == "finest_step" and not np.isfinite(res.settings[k])):
                 g.attrs[k] = res.settings[k]
@@ -271,10 +272,12 @@ def read_sweep(h5_path) -> StoredSweep:
         channels = _str_list(g.attrs["channels"]) if "channels" in g.attrs else [f"z{k + 1}" for k in range(n_chan)]
         if len(channels) != n_chan:
             raise bad(f"the attribute channels names {len(channels)} channels but the results hold {n_chan}")
-        channels = [normalise_channel(c) or c for c in channels]
+        components = int(g.attrs.get("components", 2))
+        channels = [normalise_channel(c, components) or c for c in channels]
         analysis = attr_text(f.attrs.get("analysis", g.attrs.get("analysis", "unknown")))
         attrs = {k: g.attrs[k] for k in ("case_name", "integrator", "integrator_rtol", "integrator_atol", "cap", "window",
                                          "refine", "grid_points", "finest_step", "points_refined") if k in g.attrs}
+        attrs["components"] = components
         modal = np.empty(0)
         if "modal" in f and "omega" in f["modal"]:
             modal = np.sort(np.asarray(f["modal"]["omega"][()], dtype=float).ravel())

@@ -381,7 +381,7 @@ def plot_backbone(h5_path, png_path=None, responses=(), title: str | None = None
                 ax.annotate(label, (w, 1.0), xycoords=("data", "axes fraction"), textcoords="offset points",
                             xytext=(2, -10), fontsize=8)
         ax.set_ylim(bottom=0.0)
-        ax.set_ylabel(channel_label(name))
+        ax.set_ylabel(channel_label(name, components=bb.get("components", 2)))
     axes[-1, 0].set_xlim(lo, hi)
     axes[-1, 0].set_xlabel("frequency $\\omega$ (rad/s): of the free orbit (backbone), of the forcing (responses)"
                            if conts else "frequency $\\omega$ of the free orbit (rad/s)")

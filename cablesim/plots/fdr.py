@@ -97,7 +97,7 @@ def draw_fdr(fig_spec, infos, png: Path, title: str) -> Path:
             for w in ws:
                 ax.axvline(w, color=colour, ls=":", lw=0.9, alpha=0.8, zorder=1)
         ax.set_ylim(bottom=0.0)
-        ax.set_ylabel(channel_label(name))
+        ax.set_ylabel(channel_label(name, components=sweeps[0].attrs.get("components", 2)))
         subharmonic_inset(ax, sweeps, name, colors)
     axes[-1].set_xlim(x_lo, x_hi)
     axes[-1].set_xlabel("forcing frequency $\\omega$ (rad/s)")

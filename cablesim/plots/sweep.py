@@ -137,7 +137,7 @@ def _draw_channel(ax, sweep: StoredSweep, c: int, quantity: str, color_of, marke
     for curve in sweep.curves:
         drawn |= draw_curve(ax, sweep.omega, curve, c, quantity, color_of(curve), marked)
     ax.set_ylim(bottom=0.0)
-    ax.set_ylabel(channel_label(sweep.channels[c], quantity))
+    ax.set_ylabel(channel_label(sweep.channels[c], quantity, sweep.attrs.get("components", 2)))
     return tuple(bool(x) for x in drawn)
 
 

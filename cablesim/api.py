@@ -39,6 +39,7 @@ from .dynamics.result import HistoryResult
 from .errors import CablesimError
 from .io.charts import write_backbone
 from .io.continuation import write_continuation
+from .io.continuation_journal import ContinuationFile
 from .io.hdf5 import write_history, write_static
 from .io.journal import SweepFile, fingerprint
 from .io.provenance import invocation
@@ -353,6 +354,8 @@ def continuation(
     analysis: str | None = None,
     progress: Callable[[OrbitPoint], None] | None = None,
     loci_progress: Callable | None = None,
+    output: str | Path | None = None,
+    resume: bool = False,
 ) -> ContinuationRun:
     """Every periodic response over the case's ``continuation:`` range, stable and unstable.
 
@@ -377,6 +380,11 @@ def continuation(
         Receives each converged orbit (``branch``, ``parameter``, ``period``, ``stable``, ...).
     loci_progress : callable, optional
         ``loci_progress(locus, point)`` for every point of every bifurcation curve.
+    output : str or Path, optional
+        Journal every orbit as it comes and keep this HDF5 file current while the branches are
+        traced (a killed continuation loses no finished orbit; ``resume=True`` goes on from
+        the journal, :mod:`cablesim.io.continuation_journal`); written at the end. Without
+        it nothing is written.
 
     Raises
     ------
@@ -384,7 +392,11 @@ def continuation(
         Ctrl-C or SIGTERM while the branches or the curves were traced; its ``result`` keeps what
         was done (``complete`` False).
     """
-    return ContinuationRun(case, run_continuation(case, analysis, progress, loci_progress))
+    recorder = None
+    if output is not None:
+        recorder = ContinuationFile(Path(output), fingerprint(case.text, analysis, "continue"), resume=resume,
+                                    command=invocation()["command_line"])
+    return ContinuationRun(case, run_continuation(case, analysis, progress, loci_progress, recorder))
 
 
 @dataclass(frozen=True)

@@ -488,6 +488,7 @@ def continue_(
     overlay: Optional[Path] = typer.Option(None, "--overlay", metavar="SWEEP.h5", help="Draw a sweep file's points on the plot."),
     plot: bool = typer.Option(True, "--plot/--no-plot", help="Draw the response diagram."),
     force: bool = FORCE_OPT,
+    resume: bool = typer.Option(False, "--resume", help="Finish an interrupted continuation (same command, same -o)."),
 ):
     """Every periodic response over the continuation: range, stable and unstable, with Floquet
     multipliers and the bifurcations (folds, period doublings, Neimark-Sacker) where responses
@@ -501,12 +502,12 @@ def continue_(
     from .io.paths import check_output
 
     pngs = (lambda o: [o.with_suffix(".png"), *cli_charts.chart_pngs(case, o)]) if plot else (lambda o: [])
-    check_output(out, inputs=cli_guard.continue_inputs(case_file, overlay), companions=pngs,
+    check_output(out, inputs=cli_guard.continue_inputs(case_file, overlay), companions=cli_guard.companions(pngs),
                  need_bytes=cli_guard.continue_room(len(pngs(out))))
     say_warnings(cli_guard.check_overlay(overlay, case))
     _effective(ctx, output=out)
     cli_guard.run_continue(case, out, analysis.value if analysis else None, overlay, plot, _note, _echo, _OUT["quiet"],
-                           force)
+                           force, resume)
 
 
 @app.command()

@@ -31,8 +31,19 @@ def chart_pngs(case, out: Path) -> list[Path]:
 
 
 def branch_status(status):
-    """A progress callback that shows the orbit of the branch being continued."""
-    return lambda p: status(f"continuing: branch {p.branch} (period {p.period}), {p.parameter:.5g}, orbit {p.index}")
+    """A progress callback that shows the orbit of the branch being continued, the orbits
+    computed and their rate."""
+    import time
+
+    count, t0 = [0], time.monotonic()
+
+    def show(p):
+        count[0] += 1
+        rate = count[0] / max(time.monotonic() - t0, 1e-9)
+        status(f"continuing: branch {p.branch} (period {p.period}), parameter {p.parameter:.5g}, orbit {p.index} "
+               f"of the branch, {count[0]} orbits, {rate:.3g} orbits/s")
+
+    return show
 
 
 def loci_status(status):

@@ -161,30 +161,90 @@ def guard_continue(case, analysis, force: bool, note) -> None:
     guard(cost, force, CONTINUE_FIX, None, note)
 
 
-def run_continue(case, out: Path, analysis, overlay, plot: bool, note, echo, quiet: bool, force: bool = False) -> None:
+def companions(pngs):
+    """Every file ``cablesim continue -o OUT`` writes beside ``OUT``: the figures ``pngs(OUT)``,
+    the journal and the lock."""
+    return lambda o: [*pngs(o), o.with_name(o.name + ".journal"), o.with_name(o.name + ".lock")]
+
+
+def nothing_to_resume(out: Path, fingerprint: str, echo) -> bool:
+    """``--resume`` without a journal beside ``out``: True (said so) when ``out`` already holds
+    this continuation, complete; refused otherwise."""
+    from .io.continuation import stored_continuation_state
+    from .io.continuation_journal import nothing_to_resume_error
+
+    if out.with_name(out.name + ".journal").exists():
+        return False
+    complete, fp = stored_continuation_state(out)
+    if complete and fp in (None, fingerprint):
+        echo(f"Nothing to do: {out} already holds this continuation, complete (there is no journal to resume).")
+        return True
+    raise nothing_to_resume_error(out, fingerprint)
+
+
+def interrupted(result, out: Path) -> None:
+    """Say what an interrupted ``continue -o`` kept (the file written from the journal, beside a
+    complete result of the same name) and the command that finishes it; exit 130 or 143."""
+    import shlex
+
+    import click
+    import typer
+
+    from .dynamics import interrupts
+    from .io.journal import snapshot_path
+    from .io.provenance import command_words
+    from .io.terminal import say_error
+
+    if not result.n_points:
+        say_error(f"interrupted ({interrupts.signal_name()}) before any orbit was computed; nothing was written.")
+        raise typer.Exit(interrupts.exit_status())
+    target = snapshot_path(out)  # where the run wrote: beside a complete result, never over it
+    ctx = click.get_current_context(silent=True)
+    again = shlex.join(command_words(ctx, drop=("resume", "output")) + ["--output", str(out), "--resume"]) if ctx else None
+    kept = f" (the complete result {out} is untouched)" if target != out else ""
+    say_error(f"interrupted ({interrupts.signal_name()}); {kept_text(result)} until then are in {target}{kept}, marked "
+              f"incomplete (`cablesim plot {target}` draws them), and in the journal {out.name}.journal. Finish the "
+              "continuation with:", command=again)
+    raise typer.Exit(interrupts.exit_status())
+
+
+def run_continue(case, out: Path, analysis, overlay, plot: bool, note, echo, quiet: bool, force: bool = False,
+                 resume: bool = False) -> None:
     """The computing part of ``cablesim continue``, its inputs and outputs checked: bound its
-    cost, continue, keep what an interruption leaves, refuse an empty result, write, report and
-    draw."""
+    cost, continue (every orbit journaled and the file kept current; ``resume``: from the
+    journal of an interrupted run), say what an interruption kept, refuse an empty result,
+    report and draw."""
     import time
 
     from . import api, cli_charts
+    from .analyses.charts import Interrupted
     from .io.finish import replace_result
+    from .io.journal import fingerprint
     from .io.report import continuation_summary
     from .io.terminal import StatusLine, compiling, say_warnings
     from .plots.continuation import plot_continuation
 
+    if resume and nothing_to_resume(out, fingerprint(case.text, analysis, "continue"), echo):
+        return
+    if resume:  # a damaged or foreign journal is refused before anything is computed
+        from .io.journal import read_journal
+
+        read_journal(out.with_name(out.name + ".journal"), fingerprint(case.text, analysis, "continue"), "continuation")
+    if not resume:
+        replace_result(out, None, note)  # the note now; the old figures go once this one is complete
     with compiling(note) as notice, StatusLine(quiet=quiet) as status:
         guard_continue(case, analysis, force, note)
         t0, c0 = time.perf_counter(), notice.seconds()  # the estimate's time left out
-        run = cli_charts.interruptible(lambda: api.continuation(
-            case, analysis, progress=cli_charts.branch_status(status), loci_progress=cli_charts.loci_status(status)),
-            case, out, kept_text)
+        try:
+            run = api.continuation(case, analysis, progress=cli_charts.branch_status(status),
+                                   loci_progress=cli_charts.loci_status(status), output=out, resume=resume)
+        except Interrupted as exc:
+            interrupted(exc.result, out)
     err = empty_continuation(run.result, case)
     if err is not None:
         raise err
     say_warnings(run.result.warnings)
-    replace_result(out, "continuation", note)
-    run.to_hdf5(out)
+    replace_result(out, "continuation", None)  # the figures of the result it replaced
     echo(continuation_summary(case, run.result, time.perf_counter() - t0 - (notice.seconds() - c0))
          + cli_charts.loci_text(run.result))
     drawn = f" and {plot_continuation(out, out.with_suffix('.png'), overlay=overlay)}" if plot else ""

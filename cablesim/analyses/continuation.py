@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import Callable, Protocol
 
 import numpy as np
 
@@ -22,6 +22,7 @@ from ..dynamics.steady import SteadyCriterion, steady_response
 from ..modal import COUPLED, IN_PLANE
 from ..orbits import OrbitPoint, Settings, continue_branches
 from ..orbits.diagram import BranchEnd, BranchesInterrupted
+from ..orbits.resume import TraceLog
 from ..orbits.stability import frequency_ratio
 from ..orbits.symmetry import in_plane_whirling, rotation_sense
 from .charts import Interrupted, finish_loci
@@ -389,17 +390,85 @@ def prepare_continuation(case: Case, analysis: str | None = None) -> Continuatio
     return ContinuationStart(spec, static, eom, names, idx, initial)
 
 
-def trace(start: ContinuationStart, callback, max_points: int | None = None, switch_branches: bool | None = None):
+def trace(start: ContinuationStart, callback, max_points: int | None = None, switch_branches: bool | None = None,
+          log: TraceLog | None = None):
     """:func:`~cablesim.orbits.continue_branches` over the range of ``start`` (``max_points`` and
-    ``switch_branches``: the section's unless given)."""
+    ``switch_branches``: the section's unless given; ``log``: see
+    :func:`~cablesim.orbits.trace_branches`)."""
     spec = start.spec
     return continue_branches(
         start.eom, spec.parameter, spec.range.start, spec.range.stop, period=spec.period,
         switch_branches=spec.switch_branches if switch_branches is None else switch_branches,
         callback=callback, gamma=spec.fixed_gamma, support=spec.fixed_support, initial_state=start.initial,
         segments=spec.segments, max_period=spec.max_period,
-        settings=Settings(max_points=spec.max_points if max_points is None else max_points),
+        settings=Settings(max_points=spec.max_points if max_points is None else max_points), log=log,
     )
+
+
+class ContinuationRecorder(Protocol):
+    """What :func:`run_continuation` tells about its progress, so that a killed run loses no orbit
+    (:class:`cablesim.io.continuation_journal.ContinuationFile` journals the records and keeps the
+    HDF5 file current)."""
+
+    def previous(self) -> list[dict]:
+        """The records of the interrupted run to go on from (empty unless resuming)."""
+
+    def begin(self) -> None:
+        """Called once the case is known to be good, before the first orbit."""
+
+    def record(self, record: dict, result: Callable[[], ContinuationResult]) -> None:
+        """Called with every record of the tracing (:mod:`cablesim.orbits.resume`); ``result()``
+        gives the result so far."""
+
+    def end(self, result: ContinuationResult | None, complete: bool) -> None:
+        """Called last, also when interrupted (``result``: what was done; None after a failure)."""
+
+
+def _log(start: ContinuationStart, case: Case, recorder) -> TraceLog:
+    """The tracing's log: its records to ``recorder``, those of an interrupted run replayed."""
+    def sink(record: dict, partial) -> None:
+        recorder.record(record, lambda: assemble(start, case, partial(), None, complete=False))
+
+    try:
+        log = TraceLog(sink, recorder.previous())
+        log.replay.check(2 * start.eom.n_dof)
+        return log
+    except ValueError as exc:
+        where = getattr(recorder, "journal_path", "of this continuation")
+        raise CablesimError(f"The journal {where} does not fit this case ({exc}), so --resume cannot trust it. Run "
+                            "the same command without --resume to start afresh (the journal is replaced), or give "
+                            "another -o.", field="continuation") from None
+
+
+def assemble(start: ContinuationStart, case: Case, diagram, strains, complete: bool = True) -> ContinuationResult:
+    """The :class:`ContinuationResult` of a traced diagram (``strains``: per branch with orbits,
+    or None where not measured)."""
+    spec, static, idx = start.spec, start.static, start.idx
+    kept = [(k, br) for k, br in enumerate(diagram.branches) if br.points]
+    strains = [None] * len(kept) if strains is None else strains
+    branches = [_branch(k, br, spec, idx, case.dim, st) for (k, br), st in zip(kept, strains)]
+    other = IN_PLANE if case.dim == 2 else COUPLED
+    bifs = [
+        BifurcationResult(
+            kind=b.kind, parameter=float(b.parameter), **parameter_values(spec, b.parameter),
+            branch=int(b.branch), period=int(b.period), amplitude=np.asarray(b.amplitude)[idx],
+            multiplier=complex(b.multiplier), located=bool(b.located), trusted=bool(b.trusted),
+            plane=b.plane or other, frequency_ratio=frequency_ratio(complex(b.multiplier)),
+        )
+        for b in diagram.bifurcations
+    ]
+    bifs += _grazing_points(diagram, spec, idx, case.dim)
+    result = ContinuationResult(
+        parameter=spec.parameter, start=spec.range.start, stop=spec.range.stop, fixed=spec.fixed, channels=start.names,
+        branches=branches, bifurcations=bifs, analysis=static.analysis, modal_omega=static.modes.omega.copy(),
+        case_name=case.name, case_text=case.text, stats=dict(diagram.stats), start_failure=_start_failure(diagram),
+        warnings=[*static.warnings, *strain_warning([b.name for b in branches], [b.strain for b in branches],
+                                                    spec.parameter, [b.parameter for b in branches])],
+        fixed_gamma=spec.fixed_gamma, fixed_support=spec.fixed_support, support_amplitudes=support_amplitudes(case),
+        components=case.dim, complete=complete,
+    )
+    result.start_cause = _start_cause(diagram) if result.start_failure else ""
+    return result
 
 
 def run_continuation(
@@ -407,6 +476,7 @@ def run_continuation(
     analysis: str | None = None,
     progress: Callable[[OrbitPoint], None] | None = None,
     loci_progress: Callable | None = None,
+    recorder: ContinuationRecorder | None = None,
 ) -> ContinuationResult:
     """Continue the periodic responses of a case over its ``continuation:`` range.
 
@@ -421,6 +491,11 @@ def run_continuation(
     loci_progress : callable, optional
         With ``continuation.loci``: ``loci_progress(locus, point)`` for every point of every
         bifurcation curve.
+    recorder : ContinuationRecorder, optional
+        Receives every orbit and checkpoint as it comes and the result at the end; its
+        ``previous()`` records (an interrupted run of the same case) are restored and the
+        tracing goes on from them (:mod:`cablesim.orbits.resume`). The bifurcation curves
+        are traced again.
 
     Returns
     -------
@@ -433,8 +508,8 @@ def run_continuation(
         holds the orbits and the curves traced so far (``complete`` False).
     """
     start = prepare_continuation(case, analysis)
-    spec, static, eom, names, idx = start.spec, start.static, start.eom, start.names, start.idx
-    rng, fixed = spec.range, spec.fixed
+    spec, eom = start.spec, start.eom
+    log = _log(start, case, recorder) if recorder is not None else None
     t0 = time.perf_counter()
 
     def callback(point):
@@ -442,51 +517,39 @@ def run_continuation(
             progress(point)
         return None
 
+    if recorder is not None:
+        recorder.begin()
+    result = None
+    try:
+        result, diagram = _branches(start, case, callback, log)
+        result.warnings[:0] = list(getattr(recorder, "warnings", ()))  # journal records skipped
+        if result.complete and spec.loci:
+            result.loci, result.codim2, more, interrupted = finish_loci(case, eom, diagram, start.idx, loci_progress)
+            result.loci_parameter = spec.loci_parameter
+            result.loci_range = (spec.loci_range.start, spec.loci_range.stop)
+            result.stats.update(more)
+            result.complete = not interrupted
+        result.stats["wall"] = time.perf_counter() - t0
+    finally:
+        if recorder is not None:
+            recorder.end(result, result is not None and result.complete)
+    if not result.complete:
+        raise Interrupted(result)
+    return result
+
+
+def _branches(start: ContinuationStart, case: Case, callback, log) -> tuple:
+    """The branches traced: their result (``complete`` False after an interruption) and the
+    diagram (for the bifurcation curves)."""
+    spec, eom = start.spec, start.eom
     interrupted = False
     try:
-        diagram = trace(start, callback)
+        diagram = trace(start, callback, log=log)
     except BranchesInterrupted as exc:  # keep the orbits computed so far
         diagram, interrupted = exc.diagram, True
-    kept = [(k, br) for k, br in enumerate(diagram.branches) if br.points]
+    kept = [br for br in diagram.branches if br.points]
     try:
-        strains = [orbit_strains(eom, br, spec.parameter, spec.fixed_gamma, spec.fixed_support) for _, br in kept]
+        strains = [orbit_strains(eom, br, spec.parameter, spec.fixed_gamma, spec.fixed_support) for br in kept]
     except KeyboardInterrupt:  # the orbits are kept, their strains not measured
-        strains, interrupted = [None] * len(kept), True
-    branches = [_branch(k, br, spec, idx, case.dim, st) for (k, br), st in zip(kept, strains)]
-    other = IN_PLANE if case.dim == 2 else COUPLED
-    bifs = [
-        BifurcationResult(
-            kind=b.kind, parameter=float(b.parameter), **parameter_values(spec, b.parameter),
-            branch=int(b.branch), period=int(b.period), amplitude=np.asarray(b.amplitude)[idx],
-            multiplier=complex(b.multiplier), located=bool(b.located), trusted=bool(b.trusted),
-            plane=b.plane or other, frequency_ratio=frequency_ratio(complex(b.multiplier)),
-        )
-        for b in diagram.bifurcations
-    ]
-    bifs += _grazing_points(diagram, spec, idx, case.dim)
-    stats = dict(diagram.stats)
-    result = ContinuationResult(
-        parameter=spec.parameter, start=rng.start, stop=rng.stop, fixed=fixed, channels=names, branches=branches,
-        bifurcations=bifs, analysis=static.analysis, modal_omega=static.modes.omega.copy(), case_name=case.name,
-        case_text=case.text, stats=stats, start_failure=_start_failure(diagram),
-        warnings=[*static.warnings, *strain_warning([b.name for b in branches], [b.strain for b in branches],
-                                                    spec.parameter, [b.parameter for b in branches])],
-        fixed_gamma=spec.fixed_gamma, fixed_support=spec.fixed_support, support_amplitudes=support_amplitudes(case),
-        components=case.dim,
-    )
-    result.start_cause = _start_cause(diagram) if result.start_failure else ""
-    if interrupted:
-        result.complete = False
-        stats["wall"] = time.perf_counter() - t0
-        raise Interrupted(result)
-    if spec.loci:
-        result.loci, result.codim2, more, interrupted = finish_loci(case, eom, diagram, idx, loci_progress)
-        result.loci_parameter = spec.loci_parameter
-        result.loci_range = (spec.loci_range.start, spec.loci_range.stop)
-        stats.update(more)
-        if interrupted:
-            result.complete = False
-            stats["wall"] = time.perf_counter() - t0
-            raise Interrupted(result)
-    stats["wall"] = time.perf_counter() - t0
-    return result
+        strains, interrupted = None, True
+    return assemble(start, case, diagram, strains, complete=not interrupted), diagram

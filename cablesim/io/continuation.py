@@ -85,8 +85,22 @@ def _put_support(group, values, amplitudes: dict):
     return ds
 
 
-def write_continuation(path: str | Path, res) -> Path:
-    """Write a :class:`~cablesim.analyses.continuation.ContinuationResult` atomically."""
+def _put_state(g, res, fingerprint: str | None) -> None:
+    """The attributes of ``/continuation`` that say how far it got and what it was."""
+    g.attrs["complete"] = bool(getattr(res, "complete", True))  # False: interrupted, the orbits until then
+    if fingerprint is not None:
+        g.attrs["fingerprint"] = fingerprint
+    g.attrs["warnings"] = json.dumps(list(getattr(res, "warnings", ())))  # plausibility warnings
+    g.attrs["channels"] = np.array(res.channels, dtype="S")
+    g.attrs["components"] = int(getattr(res, "components", 2))  # per node: 2 planar, 3 spatial
+    for k, v in res.stats.items():
+        g.attrs[f"cost_{k}"] = v
+
+
+def write_continuation(path: str | Path, res, fingerprint: str | None = None) -> Path:
+    """Write a :class:`~cablesim.analyses.continuation.ContinuationResult` atomically
+    (``fingerprint``: of the case and settings, :func:`cablesim.io.journal.fingerprint`, stored
+    as an attribute of ``/continuation`` for ``--resume``)."""
     unit = "rad/s" if res.parameter == "omega" else "1"
     amplitudes = dict(getattr(res, "support_amplitudes", {}) or {})
     with atomic_h5(path) as f:
@@ -101,12 +115,7 @@ def write_continuation(path: str | Path, res) -> Path:
             ds = put(g, "support_amplitude", np.array(list(amplitudes.values()), dtype=float), "m",
                      "amplitude of each moving support at support multiplier s = 1 and gamma = 1, as supports: gives it")
             ds.attrs["supports"] = np.array(list(amplitudes), dtype="S")
-        g.attrs["complete"] = bool(getattr(res, "complete", True))  # False: interrupted, the orbits until then
-        g.attrs["warnings"] = json.dumps(list(getattr(res, "warnings", ())))  # plausibility warnings
-        g.attrs["channels"] = np.array(res.channels, dtype="S")
-        g.attrs["components"] = int(getattr(res, "components", 2))  # per node: 2 planar, 3 spatial
-        for k, v in res.stats.items():
-            g.attrs[f"cost_{k}"] = v
+        _put_state(g, res, fingerprint)
         bg = g.create_group("branches")
         for k, b in enumerate(res.branches):
             h = bg.create_group(b.name)
@@ -252,3 +261,17 @@ def _read(f, path: Path) -> dict:
     spatial = any("whirl_area" in b for b in branches)  # (files written before the attribute)
     out["components"] = int(g.attrs.get("components", 3 if spatial else 2))
     return out
+
+
+def stored_continuation_state(path) -> tuple[bool, str | None]:
+    """``(complete, fingerprint)`` of the continuation file ``path`` (``(False, None)`` if it is
+    missing, unreadable or not a continuation file)."""
+    try:
+        with h5py.File(path, "r") as f:
+            g = f.get("continuation")
+            if not isinstance(g, h5py.Group):
+                return False, None
+            fp = g.attrs.get("fingerprint")
+            return bool(g.attrs.get("complete", True)), None if fp is None else attr_text(fp)
+    except (OSError, KeyError, ValueError):
+        return False, None

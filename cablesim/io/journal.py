@@ -30,44 +30,46 @@ def fingerprint(case_text: str, analysis, integrator) -> str:
     return h.hexdigest()[:16]
 
 
-def _damaged(path: Path, what: str) -> CablesimError:
+def damaged(path: Path, what: str, run: str = "sweep") -> CablesimError:
+    """The refusal of a journal that cannot be trusted (``run``: what it journals)."""
     return CablesimError(
         f"The journal {path} is damaged ({what}), so --resume cannot trust it. Run the same command "
-        "without --resume to start the sweep afresh (the journal is replaced), or give another -o.",
-        field="sweep",
+        f"without --resume to start the {run} afresh (the journal is replaced), or give another -o.",
+        field=run,
     )
 
 
-def read_journal(path: Path, fingerprint: str) -> tuple[list[dict], list[str]]:
-    """The records of a journal after checking that it belongs to this sweep, and warnings.
+def read_journal(path: Path, fingerprint: str, run: str = "sweep") -> tuple[list[dict], list[str]]:
+    """The records of a journal after checking that it belongs to this ``run`` (a sweep, a
+    continuation), and warnings.
 
     A record that cannot be read or belongs to other settings is skipped with a warning (its
     point is computed again); a torn last record (a kill mid-write) is cut off the file. A
-    journal whose first line does not name this sweep's settings is refused.
+    journal whose first line does not name this run's settings is refused.
     """
     try:
         with open(path, "rb") as f:
             raw = f.read()
         text = raw.decode("utf-8")
     except UnicodeDecodeError:
-        raise _damaged(path, "it is not text") from None
+        raise damaged(path, "it is not text", run) from None
     except OSError as exc:
-        raise _damaged(path, f"it cannot be read: {exc.strerror}") from None
+        raise damaged(path, f"it cannot be read: {exc.strerror}", run) from None
     lines = text.split("\n")
     if not lines[0].strip():
-        raise _damaged(path, "its first line, which names the sweep's settings, is empty")
+        raise damaged(path, f"its first line, which names the {run}'s settings, is empty", run)
     try:
         head = json.loads(lines[0])
     except json.JSONDecodeError:
-        raise _damaged(path, "its first line is not a JSON record") from None
+        raise damaged(path, "its first line is not a JSON record", run) from None
     if not isinstance(head, dict) or not isinstance(head.get("fingerprint"), str):
-        raise _damaged(path, "its first line does not name the sweep's settings")
+        raise damaged(path, f"its first line does not name the {run}'s settings", run)
     if head["fingerprint"] != fingerprint:
         raise CablesimError(
             f"The journal {path} belongs to a different case or different settings, so --resume "
             "cannot continue it. Run without --resume to start afresh (the journal is replaced), "
             "or give another output file with -o.",
-            field="sweep",
+            field=run,
         )
     records, warnings = [], []
     good = len(lines[0].encode()) + 1
@@ -83,7 +85,7 @@ def read_journal(path: Path, fingerprint: str) -> tuple[list[dict], list[str]]:
                 rec = None
             if rec is not None:
                 if not isinstance(rec, dict) or rec.get("fingerprint") != fingerprint:
-                    warnings.append(f"journal line {number} does not carry this sweep's fingerprint (another "
+                    warnings.append(f"journal line {number} does not carry this {run}'s fingerprint (another "
                                     "run's or damaged); its point is computed again")
                 else:
                     rec = dict(rec, line=number)
@@ -95,7 +97,7 @@ def read_journal(path: Path, fingerprint: str) -> tuple[list[dict], list[str]]:
     return records, warnings
 
 
-class _Journal:
+class Journal:
     """An append-only file of JSON records, each flushed to disk as it is written."""
 
     def __init__(self, path: Path, fingerprint: str, fresh: bool):
@@ -174,7 +176,7 @@ class SweepFile:
     def begin(self) -> None:
         """Take the lock and open the journal (a fresh one unless resuming)."""
         self.lock.acquire()
-        self._journal = _Journal(self.journal_path, self.fingerprint, fresh=not self.resume)
+        self._journal = Journal(self.journal_path, self.fingerprint, fresh=not self.resume)
         self._last = time.monotonic()
 
     def point(self, point, result) -> None:

@@ -146,21 +146,31 @@ class LazyBar:
 
 class StatusLine:
     """One status line on a terminal for a run of unknown length (``cablesim continue``),
-    refreshed at most ten times a second; silent when quiet or when standard error is not a
-    terminal. Use as a context manager; call it with the text to show."""
+    refreshed at most ten times a second; when standard error is not a terminal (a log file),
+    one plain line every ``every`` seconds instead, the first after ``every`` seconds (a short
+    run prints none); silent when quiet. Use as a context manager; call it with the text to show."""
 
-    def __init__(self, quiet: bool = False):
+    def __init__(self, quiet: bool = False, every: float = 5.0):
         self.quiet = quiet
         self.shown = 0.0
+        self.every = every
+        self.tty = sys.stderr.isatty()
+        self.logged = time.monotonic()
 
     def __enter__(self):
         return self
 
     def __call__(self, text: str) -> None:
         now = time.monotonic()
-        if not self.quiet and sys.stderr.isatty() and now - self.shown > 0.1:
+        if self.quiet:
+            return
+        if self.tty and now - self.shown > 0.1:
             self.shown = now
             sys.stderr.write(f"\r{text}   ")
+            sys.stderr.flush()
+        elif not self.tty and now - self.logged >= self.every:
+            self.logged = now
+            sys.stderr.write(text + "\n")
             sys.stderr.flush()
 
     def __exit__(self, *exc):

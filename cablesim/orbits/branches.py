@@ -36,6 +36,8 @@ from .continuation import Settings, continuation
 from .matrixfree import MatrixFreeShooting, orbit_leading, solve_orbit_mf
 from .mfproblem import MatrixFreeOrbitProblem, uses_matrix_free
 from .diagram import Bifurcation, BranchEnd, BranchesInterrupted, OrbitBranch, OrbitPoint, ResponseDiagram
+from .problems import OrbitProblem, PlanarOrbitProblem, labelled_multipliers
+from .resume import TraceLog
 from .shooting import Evaluation, FlowStatus, Shooting, solve_orbit
 from .starting import cable_scales, integrate_to_steady, linear_response_state
 from .switching import (
@@ -47,7 +49,7 @@ from .switching import (
     pitchfork_direction,
     start_factor,
 )
-from .symmetry import Mirror, in_plane_whirling, orbit_whirling, split_multipliers
+from .symmetry import Mirror, in_plane_whirling, orbit_whirling
 from .systems import OdeSystem, cable_system
 
 
@@ -60,80 +62,6 @@ DOUBLINGS = {None: "period-doubling", "in-plane": "period-doubling",
              "out-of-plane": "out-of-plane period-doubling"}
 #: Samples per forcing period of a nonplanar orbit for its whirling measures.
 WHIRL_SAMPLES = 256
-
-
-class OrbitProblem:
-    """The periodicity condition of a :class:`Shooting` as a continuation problem."""
-
-    test_names = stability.TEST_NAMES
-    fold_tests = stability.FOLD_TESTS
-
-    def __init__(self, shooting: Shooting, state_scale: np.ndarray, lam_scale: float):
-        self.shooting = shooting
-        #: Status of the last flow that failed (why a step was refused), if any.
-        self.last_failure: FlowStatus | None = None
-        self.u_scale = np.tile(np.asarray(state_scale, dtype=float), shooting.segments)
-        self.lam_scale = float(lam_scale)
-
-    def evaluate(self, u, lam):
-        ev = self.shooting.evaluate(u, lam)
-        if ev.status != ok.OK:
-            self.last_failure = ev.status
-            return None
-        return ev
-
-    def test_functions(self, ev: Evaluation) -> np.ndarray:
-        return stability.test_functions(ev.multipliers)
-
-    def confirm(self, name: str, ev: Evaluation) -> str | None:
-        return stability.confirm(name, ev.multipliers)
-
-    def step_ratio(self, ev_a: Evaluation, ev_b: Evaluation) -> float:
-        return stability.step_ratio(ev_a.multipliers, ev_b.multipliers)
-
-
-class PlanarOrbitProblem(OrbitProblem):
-    """:class:`OrbitProblem` on a branch of planar orbits of a mirror-symmetric system: the
-    bifurcation tests run on the in-plane and the out-of-plane blocks of the monodromy apart
-    (:mod:`cablesim.orbits.symmetry`), so that an out-of-plane multiplier through +1 is a
-    pitchfork, never a fold or branch point of the planar branch."""
-
-    test_names = stability.TEST_NAMES + stability.OUT_OF_PLANE_TESTS
-
-    def __init__(self, shooting: Shooting, state_scale: np.ndarray, lam_scale: float, mirror: Mirror):
-        super().__init__(shooting, state_scale, lam_scale)
-        self.mirror = mirror
-        #: The components of the two blocks when the plane's normal is a coordinate axis: the
-        #: variational equations are then integrated on the blocks alone (about the planar
-        #: cable's cost plus the out-of-plane block's instead of the whole spatial Jacobian's).
-        self.blocks = mirror.coordinate_blocks()
-
-    def evaluate(self, u, lam):
-        ev = self.shooting.evaluate(u, lam, blocks=self.blocks)
-        if ev.status != ok.OK:
-            self.last_failure = ev.status
-            return None
-        return ev
-
-    def test_functions(self, ev: Evaluation) -> np.ndarray:
-        return stability.split_test_functions(*split_multipliers(self.mirror, ev.monodromy))
-
-    def confirm(self, name: str, ev: Evaluation) -> str | None:
-        mu_in, mu_out = split_multipliers(self.mirror, ev.monodromy)
-        if name.startswith("out-of-plane "):
-            base = stability.confirm(name[len("out-of-plane "):], mu_out)
-            return None if base is None else name
-        return stability.confirm(name, mu_in)
-
-
-def labelled_multipliers(mirror: Mirror, monodromy: np.ndarray) -> tuple[np.ndarray, tuple]:
-    """The multipliers of a planar orbit from the two blocks of its monodromy, sorted together
-    (:func:`~cablesim.orbits.stability.sort_multipliers`), and the block of each."""
-    mu_in, mu_out = split_multipliers(mirror, monodromy)
-    mu = np.concatenate([mu_in, mu_out])
-    labels = np.array([mirror.labels[0]] * mu_in.size + [mirror.labels[1]] * mu_out.size)
-    order = np.lexsort((-mu.imag, -np.abs(mu)))
-    return mu[order], tuple(str(x) for x in labels[order])
 
 
 def _orbit_point(system: OdeSystem, shooting: Shooting, cp, branch: int, index: int, residual_tol: float,
@@ -185,8 +113,12 @@ class _Tracer:
 
     def __init__(self, system: OdeSystem, parameter: str, settings: Settings, direction: float,
                  state_scale: np.ndarray, lam_scale: float, callback, integration: dict,
-                 liouville_tol: float, switch_size: float, matrix_free: bool = False):
+                 liouville_tol: float, switch_size: float, matrix_free: bool = False, log: TraceLog | None = None):
         self.system = system
+        #: Where the runs are recorded as they come, and replayed from (:mod:`cablesim.orbits.resume`).
+        self.log = log if log is not None else TraceLog()
+        #: The branch being continued, if any.
+        self.running: OrbitBranch | None = None
         self.matrix_free = matrix_free
         self.n = system.dim
         self.parameter = parameter
@@ -214,8 +146,12 @@ class _Tracer:
 
     def first_branch(self, u0: np.ndarray, start: float, period: int, segments: int) -> None:
         """Solve the orbit near ``u0`` at ``start`` (from a steady state of the time integration
-        if Newton's method fails from ``u0``) and continue its branch."""
+        if Newton's method fails from ``u0``) and continue its branch (restored or resumed
+        instead if the log replays it)."""
         sh = self.shooting(period, segments)
+        if self.log.planar(0) is not None:
+            self.run_branch(sh, None, start, None, None, None, [])
+            return
         solve = solve_orbit_mf if self.matrix_free else solve_orbit
         sol = solve(sh, u0, start, scale=self.state_scale)
         if not sol.converged:
@@ -229,7 +165,35 @@ class _Tracer:
         else:
             self.run_branch(sh, sol.u, start, None, None, None, [])
 
-    def run_branch(self, sh: Shooting, u_start: np.ndarray, lam_start: float, tangent: np.ndarray | None,
+    def problem(self, sh: Shooting, br: OrbitBranch, u_start: np.ndarray | None):
+        """The continuation problem of branch ``br`` and the mirror of its orbits (None unless
+        planar); decides :attr:`OrbitBranch.planar` (the log's record of a replayed run)."""
+        mirror = self.system.mirror
+        replayed = self.log.planar(self.log.count)
+        # the matrix-free shooting forms no monodromy to split by planes
+        br.planar = replayed if replayed is not None else (
+            not self.matrix_free and mirror is not None and mirror.is_planar(u_start[: self.n], self.state_scale))
+        if br.planar:
+            return PlanarOrbitProblem(sh, self.state_scale, self.lam_scale, mirror), mirror
+        if self.matrix_free:
+            return MatrixFreeOrbitProblem(sh, self.state_scale, self.lam_scale), None
+        return OrbitProblem(sh, self.state_scale, self.lam_scale), None
+
+    def watch(self, br: OrbitBranch, sh: Shooting, size: float | None):
+        """The watch of a switched branch for its return to its parent or to the plane (None for
+        the first branch)."""
+        if br.origin is not None and br.origin.kind == "pitchfork":
+            size = self.switch_size if size is None else size
+            return PlaneWatch(self.system.mirror, self.n, self.state_scale, size)
+        if br.parent is None:
+            return None
+        size = self.switch_size if size is None else size
+        self.sizes[br.index] = size
+        kind = br.origin.plane if br.origin is not None else None
+        partners = [q for q in self.diagram.branches[br.parent].points if q.special == DOUBLINGS.get(kind)]
+        return MergeWatch(partners, br.index, sh.period, self.n, sh.segments // 2, self.state_scale, size)
+
+    def run_branch(self, sh: Shooting, u_start: np.ndarray | None, lam_start: float, tangent: np.ndarray | None,
                    parent: int | None, origin: Bifurcation | None, prefix: list,
                    size: float | None = None) -> OrbitBranch:
         """Continue one branch from ``(u_start, lam_start)`` and append it to the diagram.
@@ -237,52 +201,52 @@ class _Tracer:
         ``tangent``, ``parent``, ``origin`` and ``size`` are given for a period-doubled branch
         (its start direction, the parent branch, the period doubling and the scaled size of the
         perturbation it started from); ``prefix`` are points recorded before the continuation's
-        first (the parent's period doubling)."""
+        first (the parent's period doubling). A run the log replays is restored (finished) or
+        goes on from its last checkpoint (:mod:`cablesim.orbits.resume`)."""
         idx = len(self.diagram.branches)
         br = OrbitBranch(index=idx, period=sh.period, parameter=self.parameter, parent=parent, origin=origin)
         br.segments = sh.segments
         self.diagram.branches.append(br)
-        mirror = self.system.mirror
-        # the matrix-free shooting forms no monodromy to split by planes
-        br.planar = not self.matrix_free and mirror is not None and mirror.is_planar(u_start[: self.n],
-                                                                                     self.state_scale)
-        if br.planar:
-            problem = PlanarOrbitProblem(sh, self.state_scale, self.lam_scale, mirror)
-        elif self.matrix_free:
-            problem, mirror = MatrixFreeOrbitProblem(sh, self.state_scale, self.lam_scale), None
-        else:
-            problem, mirror = OrbitProblem(sh, self.state_scale, self.lam_scale), None
-        watch = None
-        if origin is not None and origin.kind == "pitchfork":
-            size = self.switch_size if size is None else size
-            watch = PlaneWatch(self.system.mirror, self.n, self.state_scale, size)
-        elif parent is not None:
-            size = self.switch_size if size is None else size
-            self.sizes[idx] = size
-            kind = origin.plane if origin is not None else None
-            partners = [q for q in self.diagram.branches[parent].points if q.special == DOUBLINGS.get(kind)]
-            watch = MergeWatch(partners, idx, sh.period, self.n, sh.segments // 2, self.state_scale, size)
+        problem, mirror = self.problem(sh, br, u_start)
+        watch = self.watch(br, sh, size)
         for p in prefix:
             p.branch, p.index = idx, len(br.points)
             br.points.append(p)
+        r, past = self.log.start(br)
+        resume = None
+        if past is not None:
+            past.restore(br, self.n)
+            if past.end is not None:
+                past.finish(br, self.diagram.branches[parent] if parent is not None else None)
+                return br
+            resume = past.resume()
+            if watch is not None:
+                watch.resume(resume.u, bool(past.step["far"]))
 
         def deliver(op: OrbitPoint) -> bool:
             op.index = len(br.points)
             br.points.append(op)
+            self.log.orbit(r, op)
             return bool(self.callback(op)) if self.callback is not None else False
 
         def on_point(cp) -> bool:
             op = _orbit_point(self.system, sh, cp, idx, -1, self.settings.residual_tol, self.liouville_tol, mirror)
             return deliver(op) if watch is None else watch.observe(cp, op, deliver)
 
+        def checkpoint(cp, ds: float, count: int) -> None:
+            self.log.step(r, cp, ds, count, len(br.points), None if watch is None else bool(watch.far))
+
+        self.running = br
         res = continuation(problem, u_start, lam_start, self.settings, callback=on_point, direction=self.direction,
-                           tangent=tangent)
+                           tangent=tangent, checkpoint=checkpoint, resume=resume)
+        self.running = None
         br.evaluations = res.evaluations
         br.merged_at = getattr(watch, "merged_at", None)
         returned = bool(getattr(watch, "returned", False))
         br.end = BranchEnd.MERGED if br.merged_at is not None or returned else BranchEnd(int(res.status))
         if br.end in (BranchEnd.STEP_TOO_SMALL, BranchEnd.START_FAILED):
             br.failure = problem.last_failure
+        self.log.end(r, br)
         return br
 
     def switch(self, br: OrbitBranch, p: OrbitPoint, bif: Bifurcation) -> OrbitBranch | None:
@@ -402,13 +366,24 @@ class _Tracer:
                     if child.merged_at is not None:
                         done_pd.add((br.index, child.merged_at.index))
 
-    def record_located(self) -> None:
+    def record_located(self, diagram: ResponseDiagram | None = None) -> None:
         """Record the bifurcations located on the branches that :meth:`collect_bifurcations` has
         not reached (an interruption: the first branch while it is traced, the rest of a
         branch whose period doubling was being switched at), without switching at them."""
-        done = {(b.branch, b.point) for b in self.diagram.bifurcations}
-        self.diagram.bifurcations += [_bifurcation(p, br.index) for br in self.diagram.branches for p in br.points
-                                      if (br.index, p.index) not in done and self.is_own_bifurcation(br, p)]
+        d = self.diagram if diagram is None else diagram
+        done = {(b.branch, b.point) for b in d.bifurcations}
+        d.bifurcations += [_bifurcation(p, br.index) for br in d.branches for p in br.points
+                           if (br.index, p.index) not in done and self.is_own_bifurcation(br, p)]
+
+    def partial(self, seconds: float = 0.0) -> ResponseDiagram:
+        """A copy of the diagram so far, as an interruption would leave it (the branch being
+        continued ends :attr:`BranchEnd.INTERRUPTED`), for the file written while it runs."""
+        branches = [replace(b, points=list(b.points), end=BranchEnd.INTERRUPTED if b is self.running else b.end)
+                    for b in self.diagram.branches]
+        d = ResponseDiagram(parameter=self.parameter, branches=branches, bifurcations=list(self.diagram.bifurcations))
+        self.record_located(d)
+        d.stats = self.stats(seconds)
+        return d
 
     def stats(self, seconds: float) -> dict:
         """Cost counters of :attr:`ResponseDiagram.stats`."""
@@ -443,6 +418,7 @@ def trace_branches(
     liouville_tol: float = 1e-3,
     switch_size: float = 0.02,
     matrix_free: bool | None = None,
+    log: TraceLog | None = None,
 ) -> ResponseDiagram:
     """Continue the period-``period`` branch through ``u0`` from ``start`` to ``stop`` and the
     branches born at its period doublings (module docstring).
@@ -488,6 +464,10 @@ def trace_branches(
         multipliers only, their eigenpair residuals as the check instead of Liouville's
         formula); default: for systems in mechanical form above
         :data:`~cablesim.orbits.mfproblem.MATRIX_FREE_DOF` states.
+    log : TraceLog, optional
+        Receives every run's records as they come (what the tracing needs to go on after a
+        kill), and replays those of an interrupted tracing of the same system and settings
+        (:mod:`cablesim.orbits.resume`); its ``partial`` is set to give the diagram so far.
 
     Returns
     -------
@@ -514,7 +494,8 @@ def trace_branches(
     integration = dict(scheme=scheme, steps_per_period=steps_per_period, step_rate=step_rate)
     mf = uses_matrix_free(system, matrix_free)
     tracer = _Tracer(system, parameter, st, np.sign(stop - start) or 1.0, state_scale, lam_scale, callback,
-                     integration, liouville_tol, switch_size, mf)
+                     integration, liouville_tol, switch_size, mf, log)
+    tracer.log.partial = lambda: tracer.partial(time.perf_counter() - t_start)
     try:
         tracer.first_branch(u0, start, period, segments)
         tracer.collect_bifurcations(switch_branches, max_period)
@@ -545,6 +526,7 @@ def continue_branches(
     liouville_tol: float = 1e-3,
     matrix_free: bool | None = None,
     support: float = 1.0,
+    log: TraceLog | None = None,
 ) -> ResponseDiagram:
     """Periodic responses of the cable over a range of forcing frequency, load factor or support
     motion multiplier.
@@ -571,7 +553,7 @@ def continue_branches(
     initial_state : ndarray, optional
         Guess of ``(z, y')`` (or ``(z, y', y'')``) at forcing phase 0 at ``start`` (default:
         the linear response).
-    segments, max_period, settings, scheme, steps_per_period, step_rate, liouville_tol, matrix_free
+    segments, max_period, settings, scheme, steps_per_period, step_rate, liouville_tol, matrix_free, log
         See :func:`trace_branches`.
     support : float
         Multiplier ``s`` of the supports' motion when continuing in ``omega`` or ``gamma``.
@@ -596,5 +578,5 @@ def continue_branches(
         system, u0, parameter, start, stop, period=period, segments=segments, state_scale=scale,
         lam_scale=lam_scale, switch_branches=switch_branches, max_period=max_period, callback=callback,
         settings=settings, scheme=scheme, steps_per_period=steps_per_period, step_rate=step_rate,
-        liouville_tol=liouville_tol, matrix_free=matrix_free,
+        liouville_tol=liouville_tol, matrix_free=matrix_free, log=log,
     )

@@ -366,6 +366,8 @@ def continuation(
     callback: Callable[[Point], bool | None] | None = None,
     direction: float = 1.0,
     tangent: np.ndarray | None = None,
+    checkpoint: Callable[[Point, float, int], None] | None = None,
+    resume: Resume | None = None,
 ) -> Branch:
     """Continue the branch through ``(u0, lam0)`` (see the module docstring).
 
@@ -384,25 +386,65 @@ def continuation(
     tangent : ndarray, optional
         Initial direction ``(du, dlam)`` in *unscaled* variables (for branch switching); the
         start is then corrected on the hyperplane through ``(u0, lam0)`` normal to it.
+    checkpoint : callable, optional
+        ``checkpoint(point, ds, count)`` after the first point and after every accepted step:
+        the march goes on from ``point`` with the step ``ds``, ``count`` points on the branch
+        so far (what :class:`Resume` needs to go on after the run is killed).
+    resume : Resume, optional
+        Go on from a checkpoint instead of starting at ``(u0, lam0)`` (ignored, like
+        ``direction`` and ``tangent``): the steps taken are those the uninterrupted run took.
 
     Returns
     -------
     Branch
+        Its ``points`` are those computed by this call (after ``resume``: from the checkpoint).
     """
     st = settings
     sp = _Scaled(problem)
     branch = Branch()
-    p = _first_point(sp, u0, lam0, st, direction, tangent)
+    p = _first_point(sp, u0, lam0, st, direction, tangent) if resume is None else resume.point(sp)
     if p is None:
         branch.status = Status.START_FAILED
+    elif resume is not None:
+        branch.points.append(p)
+        branch.status = _march(sp, branch, st, callback, checkpoint, resume.ds, resume.count - 1)
     else:
         branch.points.append(p)
         if callback is not None and callback(p):
             branch.status = Status.STOPPED_BY_CALLBACK
         else:
-            branch.status = _march(sp, branch, st, callback)
+            if checkpoint is not None:
+                checkpoint(p, st.ds, 1)
+            branch.status = _march(sp, branch, st, callback, checkpoint)
     branch.evaluations = sp.count
     return branch
+
+
+@dataclass(frozen=True)
+class Resume:
+    """Where an interrupted :func:`continuation` goes on: the last point's unknowns ``u``,
+    parameter ``lam``, scaled unit ``tangent``, test function values ``tests`` and
+    ``arclength`` (as :class:`Point` holds them), the next step ``ds`` and the ``count`` of
+    points on the branch. The point's evaluation is computed again (the problem's evaluation
+    is deterministic, so the march takes the steps the uninterrupted one took)."""
+
+    u: np.ndarray
+    lam: float
+    tangent: np.ndarray
+    tests: np.ndarray
+    arclength: float
+    ds: float
+    count: int
+
+    def point(self, sp: _Scaled) -> Point | None:
+        """The checkpoint's point with its evaluation (None if it cannot be evaluated)."""
+        sp.count += 1
+        ev = sp.p.evaluate(np.array(self.u, dtype=float), float(self.lam))
+        if ev is None:
+            return None
+        return Point(u=np.array(self.u, dtype=float), lam=float(self.lam), tangent=np.array(self.tangent, dtype=float),
+                     evaluation=ev, tests=np.array(self.tests, dtype=float), iterations=0, residual=0.0,
+                     arclength=float(self.arclength))
 
 
 def _first_point(sp: _Scaled, u0, lam0, st: Settings, direction: float, tangent) -> Point | None:
@@ -423,13 +465,15 @@ def _first_point(sp: _Scaled, u0, lam0, st: Settings, direction: float, tangent)
     return _point(sp, v, ev, its, res, Jf, ref)
 
 
-def _march(sp: _Scaled, branch: Branch, st: Settings, callback) -> Status:
+def _march(sp: _Scaled, branch: Branch, st: Settings, callback, checkpoint=None, ds: float | None = None,
+           before: int = 0) -> Status:
     """Predictor-corrector steps from the branch's last point until a stop (module docstring);
-    returns why it stopped."""
-    ds = st.ds
+    returns why it stopped. ``ds``: the first step (default ``st.ds``); ``before``: points of
+    the branch computed before its first (a resumed march)."""
+    ds = st.ds if ds is None else ds
     cos_min = np.cos(st.max_angle)
     while True:
-        if len(branch.points) >= st.max_points:
+        if len(branch.points) + before >= st.max_points:
             return Status.MAX_POINTS
         a = branch.points[-1]
         va = _v(sp, a)
@@ -463,6 +507,8 @@ def _march(sp: _Scaled, branch: Branch, st: Settings, callback) -> Status:
         if bound is not None:
             return Status.BOUND_REACHED
         ds = _next_step(ds, a, b, ratio, st)
+        if checkpoint is not None:
+            checkpoint(b, ds, len(branch.points) + before)
 
 
 def _bound_crossed(a: Point, b: Point, st: Settings) -> float | None:

@@ -213,6 +213,11 @@ class MergeWatch:
         #: The parent's period doubling where the branch rejoined it, if it did.
         self.merged_at = None
 
+    def resume(self, u: np.ndarray, far: bool) -> None:
+        """The state after the regular point of unknowns ``u`` (a resumed branch), ``far``
+        as it was then."""
+        self.far, self.previous = far, lap_difference(u, self.n, self.m_parent, self.state_scale)
+
     def observe(self, cp, op, deliver: Callable[[object], bool]) -> bool:
         """Pass the continuation point ``cp`` (as orbit point ``op``) on to ``deliver``, or hold
         it back, or end the branch at the parent; True ends the branch."""
@@ -287,11 +292,20 @@ class PlaneWatch:
         #: Whether the branch came back to the plane.
         self.returned = False
 
+    def odd(self, u: np.ndarray) -> np.ndarray:
+        """The scaled out-of-plane part of the state in the unknowns ``u``."""
+        x = np.asarray(u[: self.n], dtype=float)
+        return self.mirror.odd.T @ x / (np.abs(self.mirror.odd.T) @ self.state_scale)
+
+    def resume(self, u: np.ndarray, far: bool) -> None:
+        """The state after the regular point of unknowns ``u`` (a resumed branch), ``far``
+        as it was then."""
+        self.far, self.previous = far, self.odd(u)
+
     def observe(self, cp, op, deliver: Callable[[object], bool]) -> bool:
         """Pass the continuation point ``cp`` (as orbit point ``op``) on to ``deliver``, or hold
         it back, or end the branch; True ends it."""
-        x = np.asarray(cp.u[: self.n], dtype=float)
-        odd = self.mirror.odd.T @ x / (np.abs(self.mirror.odd.T) @ self.state_scale)
+        odd = self.odd(cp.u)
         size = float(np.abs(odd).max())
         self.far = self.far or size > 2.0 * self.switch_size
         flipped = self.previous is not None and float(odd @ self.previous) < 0.0

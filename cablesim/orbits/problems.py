@@ -1,0 +1,86 @@
+"""The periodicity condition of a shooting as a continuation problem
+(:mod:`cablesim.orbits.continuation`): the dense one, and the one of a branch of planar orbits
+of a mirror-symmetric system whose bifurcation tests run on the two blocks of the monodromy."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import kernels as ok
+from . import stability
+from .shooting import Evaluation, FlowStatus, Shooting
+from .symmetry import Mirror, split_multipliers
+
+
+class OrbitProblem:
+    """The periodicity condition of a :class:`Shooting` as a continuation problem."""
+
+    test_names = stability.TEST_NAMES
+    fold_tests = stability.FOLD_TESTS
+
+    def __init__(self, shooting: Shooting, state_scale: np.ndarray, lam_scale: float):
+        self.shooting = shooting
+        #: Status of the last flow that failed (why a step was refused), if any.
+        self.last_failure: FlowStatus | None = None
+        self.u_scale = np.tile(np.asarray(state_scale, dtype=float), shooting.segments)
+        self.lam_scale = float(lam_scale)
+
+    def evaluate(self, u, lam):
+        ev = self.shooting.evaluate(u, lam)
+        if ev.status != ok.OK:
+            self.last_failure = ev.status
+            return None
+        return ev
+
+    def test_functions(self, ev: Evaluation) -> np.ndarray:
+        return stability.test_functions(ev.multipliers)
+
+    def confirm(self, name: str, ev: Evaluation) -> str | None:
+        return stability.confirm(name, ev.multipliers)
+
+    def step_ratio(self, ev_a: Evaluation, ev_b: Evaluation) -> float:
+        return stability.step_ratio(ev_a.multipliers, ev_b.multipliers)
+
+
+class PlanarOrbitProblem(OrbitProblem):
+    """:class:`OrbitProblem` on a branch of planar orbits of a mirror-symmetric system: the
+    bifurcation tests run on the in-plane and the out-of-plane blocks of the monodromy apart
+    (:mod:`cablesim.orbits.symmetry`), so that an out-of-plane multiplier through +1 is a
+    pitchfork, never a fold or branch point of the planar branch."""
+
+    test_names = stability.TEST_NAMES + stability.OUT_OF_PLANE_TESTS
+
+    def __init__(self, shooting: Shooting, state_scale: np.ndarray, lam_scale: float, mirror: Mirror):
+        super().__init__(shooting, state_scale, lam_scale)
+        self.mirror = mirror
+        #: The components of the two blocks when the plane's normal is a coordinate axis: the
+        #: variational equations are then integrated on the blocks alone (about the planar
+        #: cable's cost plus the out-of-plane block's instead of the whole spatial Jacobian's).
+        self.blocks = mirror.coordinate_blocks()
+
+    def evaluate(self, u, lam):
+        ev = self.shooting.evaluate(u, lam, blocks=self.blocks)
+        if ev.status != ok.OK:
+            self.last_failure = ev.status
+            return None
+        return ev
+
+    def test_functions(self, ev: Evaluation) -> np.ndarray:
+        return stability.split_test_functions(*split_multipliers(self.mirror, ev.monodromy))
+
+    def confirm(self, name: str, ev: Evaluation) -> str | None:
+        mu_in, mu_out = split_multipliers(self.mirror, ev.monodromy)
+        if name.startswith("out-of-plane "):
+            base = stability.confirm(name[len("out-of-plane "):], mu_out)
+            return None if base is None else name
+        return stability.confirm(name, mu_in)
+
+
+def labelled_multipliers(mirror: Mirror, monodromy: np.ndarray) -> tuple[np.ndarray, tuple]:
+    """The multipliers of a planar orbit from the two blocks of its monodromy, sorted together
+    (:func:`~cablesim.orbits.stability.sort_multipliers`), and the block of each."""
+    mu_in, mu_out = split_multipliers(mirror, monodromy)
+    mu = np.concatenate([mu_in, mu_out])
+    labels = np.array([mirror.labels[0]] * mu_in.size + [mirror.labels[1]] * mu_out.size)
+    order = np.lexsort((-mu.imag, -np.abs(mu)))
+    return mu[order], tuple(str(x) for x in labels[order])

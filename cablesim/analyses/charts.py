@@ -34,7 +34,7 @@ from .setup import build_equations
 from .static import run_static
 
 #: Short names of the kinds of curves (HDF5 group names ``<short><k>-p<period>``).
-SHORT = {"fold": "fold", "period-doubling": "pd", "neimark-sacker": "ns"}
+SHORT = {"fold": "fold", "period-doubling": "pd", "neimark-sacker": "ns", "pitchfork": "pf"}
 #: Fraction of the chord that is the default largest amplitude of a backbone.
 DEFAULT_BACKBONE_AMPLITUDE = 0.02
 #: Scaled Newton correction at which a backbone orbit counts as converged, per analysis. The

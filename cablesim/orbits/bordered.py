@@ -42,15 +42,15 @@ from dataclasses import dataclass
 import numpy as np
 
 #: Kinds of bifurcation curves and the rank defect of their test matrix.
-RANK_DEFECT = {"fold": 1, "period-doubling": 1, "neimark-sacker": 2}
+RANK_DEFECT = {"fold": 1, "period-doubling": 1, "neimark-sacker": 2, "pitchfork": 1}
 #: Extra unknowns of each kind (``kappa`` for Neimark-Sacker).
-EXTRA_UNKNOWNS = {"fold": 0, "period-doubling": 0, "neimark-sacker": 1}
+EXTRA_UNKNOWNS = {"fold": 0, "period-doubling": 0, "neimark-sacker": 1, "pitchfork": 0}
 
 
 def defining_matrix(kind: str, Ms: np.ndarray, kappa: float = 0.0) -> np.ndarray:
     """``A`` of the kind (module docstring) on the whole scaled space."""
     eye = np.eye(Ms.shape[0])
-    if kind == "fold":
+    if kind in ("fold", "pitchfork"):  # a pitchfork: +1 in the odd block (LocusProblem's subspace)
         return Ms - eye
     if kind == "period-doubling":
         return Ms + eye
@@ -63,7 +63,7 @@ def derivative_terms(kind: str, Ms: np.ndarray, kappa: float, w: np.ndarray, v: 
     """``(c, a, b)`` such that ``w^T A_z v = sum c a^T Ms_z b`` for every unknown ``z`` (``Ms``
     is the only part of ``A`` that depends on the orbit and the parameters; ``kappa`` is
     treated separately, :func:`kappa_derivative`)."""
-    if kind in ("fold", "period-doubling"):
+    if kind in ("fold", "period-doubling", "pitchfork"):
         return [(1.0, w, v)]
     return [(1.0, w, Ms @ v), (1.0, Ms.T @ w, v), (-2.0 * kappa, w, v)]
 
@@ -182,7 +182,7 @@ def critical_indices(kind: str, mu: np.ndarray, kappa: float = 0.0) -> list[int]
     """Indices of the critical multipliers: nearest +1 (fold), -1 (period doubling), or the
     pair nearest ``exp(+-i acos kappa)`` (Neimark-Sacker)."""
     mu = np.asarray(mu, dtype=complex)
-    if kind == "fold":
+    if kind in ("fold", "pitchfork"):
         return [int(np.argmin(np.abs(mu - 1.0)))]
     if kind == "period-doubling":
         return [int(np.argmin(np.abs(mu + 1.0)))]

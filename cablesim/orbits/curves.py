@@ -92,7 +92,7 @@ class Locus:
     ----------
     index : int
     kind : str
-        ``"fold"``, ``"period-doubling"`` or ``"neimark-sacker"``.
+        ``"fold"``, ``"period-doubling"``, ``"neimark-sacker"`` or ``"pitchfork"`` (of a planar orbit).
     period : int
         Period of the orbits in forcing periods.
     parameters : (str, str)
@@ -250,6 +250,7 @@ def trace_locus(
     liouville_tol: float = 1e-3,
     callback: Callable[[LocusPoint], bool | None] | None = None,
     index: int = 0,
+    odd: np.ndarray | None = None,
 ) -> Locus:
     """Continue a bifurcation in two parameters (module docstring).
 
@@ -257,7 +258,7 @@ def trace_locus(
     ----------
     system : OdeSystem
     kind : str
-        ``"fold"``, ``"period-doubling"`` or ``"neimark-sacker"``.
+        ``"fold"``, ``"period-doubling"``, ``"neimark-sacker"`` or ``"pitchfork"`` (of a planar orbit).
     u0 : ndarray (m n,)
         Shooting unknowns of the bifurcating orbit (a located point of a branch).
     x1, x2 : float
@@ -281,6 +282,9 @@ def trace_locus(
         Continuation settings (the bounds of ``p2`` are set from ``p2_range``).
     subspace : ndarray (n, q), optional
         See :class:`~cablesim.orbits.loci.LocusProblem`.
+    odd : ndarray (n, q), optional
+        ``"pitchfork"``: the odd coordinates of the mirror symmetry
+        (:class:`~cablesim.orbits.loci.LocusProblem`).
     integration : dict, optional
         ``scheme``, ``steps_per_period``, ``step_rate`` of the shootings.
     liouville_tol : float
@@ -301,7 +305,7 @@ def trace_locus(
     if scales is None:
         scales = (max(abs(p1_range[0]), abs(p1_range[1])), max(abs(p2_range[0]), abs(p2_range[1])))
     flows = TwoParameterFlows(system, period, segments, parameters, integration)
-    problem = LocusProblem(flows, kind, state_scale, scales, subspace, levels)
+    problem = LocusProblem(flows, kind, state_scale, scales, subspace, levels, odd=odd)
     U0 = problem.start(np.asarray(u0, dtype=float), x1, x2, kappa)
     B0, C0 = problem.borders()
     st = replace(settings or Settings(), lam_min=min(p2_range), lam_max=max(p2_range))
@@ -452,6 +456,9 @@ def trace_loci(
     for b in diagram.bifurcations:
         if b.kind not in kinds or not (b.located and b.trusted):
             continue
+        mirror = getattr(system, "mirror", None)
+        if b.kind == "pitchfork" and mirror is None:
+            continue
         if _covered(loci, b.kind, b.period, b.parameter, x2, scales):
             continue
         br = diagram.branches[b.branch]
@@ -463,7 +470,8 @@ def trace_loci(
             loc = trace_locus(system, b.kind, p.u, b.parameter, x2, p1_range, p2_range, parameters=parameters,
                               period=b.period, segments=br.segments, kappa=float(np.real(b.multiplier)),
                               state_scale=state_scale, scales=scales, levels=levels, settings=settings,
-                              integration=integration, liouville_tol=liouville_tol, callback=cb, index=index)
+                              integration=integration, liouville_tol=liouville_tol, callback=cb, index=index,
+                              odd=mirror.odd if b.kind == "pitchfork" else None)
         except FloatingPointError:
             continue
         except LociInterrupted as exc:

@@ -56,6 +56,8 @@ from .systems import OdeSystem
 CODIM2_TESTS = {
     "fold": ("cusp", "fold-flip", "1:1 resonance", "fold-neimark-sacker"),
     "period-doubling": ("fold-flip", "1:2 resonance", "flip-neimark-sacker"),
+    # a planar orbit's symmetry-breaking pitchfork: another multiplier through -1, +1 or a pair
+    "pitchfork": ("fold-flip", "1:1 resonance", "fold-neimark-sacker"),
     "neimark-sacker": ("1:1 resonance", "1:2 resonance", "1:3 resonance", "1:4 resonance",
                        "fold-neimark-sacker", "flip-neimark-sacker"),
 }
@@ -197,10 +199,18 @@ class LocusProblem:
         bifurcation belongs to (default: the whole state space).
     levels : sequence of float
         Values of ``p2`` whose crossings are located.
+    odd : ndarray (n, q), optional
+        ``"pitchfork"`` (required): orthonormal basis, in state coordinates, of the odd
+        coordinates of a mirror symmetry (:class:`~cablesim.orbits.symmetry.Mirror`). The curve
+        is one of planar orbits whose odd block has the multiplier +1: the singularity is
+        sought in that block (the default subspace) and the odd rows of the periodicity
+        condition, which vanish on a planar orbit and carry the pitchfork's null vector, are
+        replaced by ``P_o u = 0`` (``P_o`` the projector on the odd coordinates), which keeps
+        the orbit in the plane and the system regular.
     """
 
     def __init__(self, flows: TwoParameterFlows, kind: str, state_scale: np.ndarray, scales: tuple[float, float],
-                 subspace: np.ndarray | None = None, levels=()):
+                 subspace: np.ndarray | None = None, levels=(), odd: np.ndarray | None = None):
         if kind not in bd.RANK_DEFECT:
             raise ValueError(f"unknown kind {kind!r}: one of {sorted(bd.RANK_DEFECT)}")
         self.flows, self.kind = flows, kind
@@ -208,6 +218,14 @@ class LocusProblem:
         self.n, self.m, self.N = n, m, n * m
         self.d, self.extra = bd.RANK_DEFECT[kind], bd.EXTRA_UNKNOWNS[kind]
         self.scale = np.asarray(state_scale, dtype=float)
+        self.P_odd = None
+        if kind == "pitchfork":
+            if odd is None:
+                raise ValueError("a pitchfork curve needs the odd coordinates of the mirror symmetry (odd)")
+            odd = np.asarray(odd, dtype=float)
+            self.P_odd = odd @ odd.T
+            if subspace is None:  # the odd coordinates in the scaled ones, orthonormal
+                subspace = np.linalg.qr(odd / self.scale[:, None])[0]
         self.Q = np.eye(n) if subspace is None else np.asarray(subspace, dtype=float)
         self.levels = tuple(float(x) for x in levels)
         self.u_scale = np.concatenate([np.tile(self.scale, m), [float(scales[0])], np.ones(self.extra)])
@@ -284,9 +302,27 @@ class LocusProblem:
             if self.extra:
                 J_u[N + e, N + 1] = gk
             J_lam[N + e] = gp[1]
+        r = ev.r
+        if self.P_odd is not None:
+            r = self._in_the_plane(u, r, J_u, J_lam)
         crit = bd.critical_indices(self.kind, ev.multipliers, kappa)
-        return LocusEvaluation(r=np.concatenate([ev.r, g]), J_u=J_u, J_lam=J_lam, orbit=ev, p1=x1, p2=x2,
+        return LocusEvaluation(r=np.concatenate([r, g]), J_u=J_u, J_lam=J_lam, orbit=ev, p1=x1, p2=x2,
                                kappa=kappa, V=V, W=W, g=G.ravel(), critical=crit, cusp=rows[1])
+
+    def _in_the_plane(self, u, r, J_u, J_lam) -> np.ndarray:
+        """The periodicity rows of a pitchfork curve (``odd`` in the class docstring): per
+        segment ``P_e r + P_o u``, with ``J_u`` and ``J_lam`` changed to match in place."""
+        n, m, N = self.n, self.m, self.N
+        Po = self.P_odd
+        Pe = np.eye(n) - Po
+        rows = np.empty(N)
+        for k in range(m):
+            s = slice(k * n, (k + 1) * n)
+            rows[s] = Pe @ r[s] + Po @ u[s]
+            J_u[s, : N + 1] = Pe @ J_u[s, : N + 1]
+            J_u[s, s] += Po
+            J_lam[s] = Pe @ J_lam[s]
+        return rows
 
     def _gradients(self, u, x1, x2, kappa, ev, dparams, Ms, V, W):
         """``([(dg/du, dg/dp, dg/dkappa) per equation], cusp coefficient)``, or None if a
@@ -333,6 +369,8 @@ class LocusProblem:
         pairs = stability.test_functions(nc)[1] if nc.size > 1 else 1.0
         if self.kind == "fold":
             values = [ev.cusp, plus, minus, pairs]
+        elif self.kind == "pitchfork":
+            values = [plus, minus, pairs]
         elif self.kind == "period-doubling":
             values = [minus, plus, pairs]
         else:

@@ -40,6 +40,8 @@ KIND_STYLE = {
                                      "planar response unstable across its plane: swings at 1/2", 0.2, "\\\\"),
     "out-of-plane neimark-sacker": ("#e7298a", "out-of-plane Neimark-Sacker curve",
                                     "planar response unstable across its plane: quasi-periodic", 0.16, ".."),
+    "out-of-plane pitchfork": ("#66a61e", "pitchfork curve (+1 across the plane: whirling is born)",
+                               "planar response unstable across its plane: whirling", 0.18, "xx"),
 }
 #: Marker and short label of each codimension-two point.
 CODIM2_STYLE = {

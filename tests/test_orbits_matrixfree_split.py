@@ -184,6 +184,10 @@ def test_pitchfork_switching_follows_the_same_nonplanar_branch():
     wd, wf = dense.branches[pf_d.child], free.branches[pf_f.child]
     assert wf.mirror_image and not wf.planar and len(wf.points) == len(wd.points) > 3
     assert_same_orbits_or_mirrored(eom, wd, wf)
+    for p, q in zip(wd.points[1:], wf.points[1:]):  # whirling measures (the mirror image goes the other way round)
+        assert abs(abs(q.whirl.area[0]) - abs(p.whirl.area[0])) <= 1e-6 * abs(p.whirl.area[0])
+        assert abs(q.whirl.max_w[0] - p.whirl.max_w[0]) <= 1e-6 * p.whirl.max_w[0]
+        assert abs(q.whirl.tilt - p.whirl.tilt) < 1e-4
     assert np.abs(wf.points[-1].state[[2, 5]]).max() > 0.01  # w and w' of the bead
 
 
@@ -196,3 +200,70 @@ def test_out_of_plane_period_doubling_switches_onto_the_period_two_branch():
     cd, cf = (d.branches[d.bifurcations[0].child] for d in (dense, free))
     assert cf.period == 2 and not cf.planar and len(cf.points) == len(cd.points) > 3
     assert_same_orbits_or_mirrored(eom, cd, cf)
+
+
+#: The paper's example cable made spatial (two nodes, 12 states: blocks of 8 and 4).
+PAPER = {
+    "spatial": True,
+    "cable": {"L": 300.0, "H": 20.0, "S": [130.0, 100.0, 110.0], "EA": 1.0e9, "masses": [8000.0, 14000.0]},
+    "loads": {"F0": [300.0e3, 1100.0e3, 450.0e3, 2000.0e3], "FL": [-6.0e3, 22.0e3, -18.0e3, 120.0e3]},
+    "damping": {"ratio": 0.01, "modes": [1, 2]},
+}
+
+
+def test_paper_example_made_spatial_loses_planar_stability_at_the_same_doublings():
+    """The paper's cable made spatial: its harmonic response's out-of-plane period doublings
+    (5.473 and 5.556 rad/s) where the dense path finds them (1e-8 relative), no in-plane
+    special point between them, each block's multipliers at every point to 1e-8."""
+    case = case_from_dict(copy.deepcopy(PAPER))
+    eom = build_equations(case, run_static(case), omega=5.4)
+    dense, free = both(eom, "omega", 5.4, 5.6, switch_branches=False)
+    assert [(b.kind, b.plane) for b in dense.bifurcations] == [("period-doubling", "out-of-plane")] * 2
+    assert_same_bifurcations(dense, free)
+    assert_same_split_points(dense.branches[0], free.branches[0])
+
+
+def continue_file(tmp_path, monkeypatch, matrix_free: bool):
+    """`cablesim continue` on the bead across its whirling onset, shot matrix-free or dense (the
+    size above which the continuation shoots matrix-free set below or above the bead's 6 states)."""
+    import yaml
+    from typer.testing import CliRunner
+
+    from cablesim.cli import app
+    from cablesim.orbits import mfproblem
+
+    monkeypatch.setattr(mfproblem, "MATRIX_FREE_DOF", 0 if matrix_free else 10**6)
+    data = copy.deepcopy(BEAD)
+    data.update(name="bead", continuation={"omega": {"start": 5.0, "stop": 6.6}, "switch_branches": False})
+    path = tmp_path / "bead.yaml"
+    path.write_text(yaml.safe_dump(data))
+    out = tmp_path / f"bead-{'mf' if matrix_free else 'dense'}.h5"
+    res = CliRunner().invoke(app, ["continue", str(path), "-o", str(out)])
+    assert res.exit_code == 0, (res.stdout, res.exception)
+    return out, res.stdout
+
+
+def test_result_file_of_a_matrix_free_planar_branch_is_laid_out_as_the_dense_one(tmp_path, monkeypatch):
+    """The matrix-free run's file holds the datasets and attributes of the dense run's, the
+    bifurcations' kinds and planes and every multiplier's block the same, and the summary names
+    the pitchforks out of the plane."""
+    import h5py
+
+    files = {mf: continue_file(tmp_path, monkeypatch, mf) for mf in (False, True)}
+    assert "pitchfork" in files[True][1] and "out-of-plane" in files[True][1]
+
+    def layout(path):
+        items = {}
+        with h5py.File(path) as f:
+            f["continuation"].visititems(lambda name, obj: items.setdefault(name, (type(obj).__name__, sorted(obj.attrs))))
+            bif = f["continuation/bifurcations"]
+            kinds = [(k.decode(), p.decode()) for k, p in zip(bif["kind"][()], bif["plane"][()])]
+            planes = f["continuation/branches/b0-p1/multiplier_plane"][()]
+            parameter = bif["parameter"][()]
+        return items, kinds, planes, parameter
+
+    (ld, kd, pd, wd), (lf, kf, pf, wf) = layout(files[False][0]), layout(files[True][0])
+    assert lf == ld
+    assert kf == kd == [("pitchfork", "out-of-plane")] * 2
+    assert pf.shape == pd.shape and np.array_equal(pf, pd)
+    np.testing.assert_allclose(wf, wd, rtol=1e-8)

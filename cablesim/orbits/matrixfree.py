@@ -40,7 +40,7 @@ from . import kernels as ok
 from . import radau as rd
 from .floquet import DEFAULT_BOUND, DEFAULT_TOL, Deflation, Leading, leading_multipliers
 from .krylov import gmres
-from .shooting import DEFAULT_STEPS, Evaluation, FlowStatus, OrbitSolution, SolveStatus
+from .shooting import DEFAULT_STEPS, Evaluation, FlowStatus, OrbitSolution, Shooting, SolveStatus
 from .stability import sort_multipliers
 from .systems import OdeSystem
 from .tableaux import TABLEAUX
@@ -306,6 +306,11 @@ class MatrixFreeShooting:
         self._taped.append(ev)
         while len(self._taped) > KEEP_TAPES:
             self._taped.popleft().tapes = None
+
+    #: The orbit at its integration steps and sampled uniformly (the whirling measures of a
+    #: nonplanar orbit), as the dense shooting's: the same records of state and rate.
+    steps = Shooting.steps
+    trajectory = Shooting.trajectory
 
     # ------------------------------------------------------------------------------------------
     def segment_apply(self, ev: MFEvaluation, k: int, X: np.ndarray) -> np.ndarray:

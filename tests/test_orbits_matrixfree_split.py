@@ -255,7 +255,8 @@ def test_result_file_of_a_matrix_free_planar_branch_is_laid_out_as_the_dense_one
     def layout(path):
         items = {}
         with h5py.File(path) as f:
-            f["continuation"].visititems(lambda name, obj: items.setdefault(name, (type(obj).__name__, sorted(obj.attrs))))
+            f["continuation"].visititems(
+                lambda name, obj: items.setdefault(name, (type(obj).__name__, sorted(obj.attrs))))
             bif = f["continuation/bifurcations"]
             kinds = [(k.decode(), p.decode()) for k, p in zip(bif["kind"][()], bif["plane"][()])]
             planes = f["continuation/branches/b0-p1/multiplier_plane"][()]

@@ -153,7 +153,7 @@ def split_leading(shooting: MatrixFreeShooting, ev: MFEvaluation, mirror: Mirror
 def labelled_leading(mirror: Mirror, split: SplitLeading) -> tuple[np.ndarray, tuple]:
     """The kept multipliers of both blocks sorted together
     (:func:`~cablesim.orbits.stability.sort_multipliers`), and the block of each (the form of
-    :func:`~cablesim.orbits.branches.labelled_multipliers`)."""
+    :func:`~cablesim.orbits.problems.labelled_multipliers`)."""
     return mirror.labelled(leading_from(split.in_plane), leading_from(split.out_of_plane))
 
 
@@ -162,7 +162,7 @@ class PlanarMatrixFreeProblem(MatrixFreeOrbitProblem):
     mirror-symmetric system: the bifurcation tests run on each block's leading multipliers
     (:func:`split_leading`), those of :data:`~cablesim.orbits.stability.TEST_NAMES` on the
     in-plane block and those of :data:`~cablesim.orbits.stability.OUT_OF_PLANE_TESTS` on the
-    out-of-plane one, as :class:`~cablesim.orbits.branches.PlanarOrbitProblem` does on the dense
+    out-of-plane one, as :class:`~cablesim.orbits.problems.PlanarOrbitProblem` does on the dense
     monodromy's blocks; the step control on the multipliers of both."""
 
     test_names = stability.TEST_NAMES + stability.OUT_OF_PLANE_TESTS

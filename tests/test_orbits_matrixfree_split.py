@@ -268,3 +268,45 @@ def test_result_file_of_a_matrix_free_planar_branch_is_laid_out_as_the_dense_one
     assert kf == kd == [("pitchfork", "out-of-plane")] * 2
     assert pf.shape == pd.shape and np.array_equal(pf, pd)
     np.testing.assert_allclose(wf, wd, rtol=1e-8)
+
+
+def test_each_plane_has_its_own_matrix_free_doubling_direction_at_a_double_minus_one():
+    """The taut stay at its threshold of parametric resonance, where an in-plane and an
+    out-of-plane multiplier pass -1 together: the matrix-free direction of each plane's doubling
+    lies in that plane's block and is an eigenvector of the dense monodromy with multiplier -1."""
+    import yaml
+
+    import cablesim
+    from cablesim.orbits.switching import doubling_direction
+    from helpers_whirl_cases import STAY_CASE
+
+    omega = 12.0835669
+    data = yaml.safe_load(STAY_CASE.format(nodes=6, omega=omega))
+    case = cablesim.load_case(data)
+    eom = build_equations(case, run_static(case), omega=omega)
+    sysm = cable_system(eom, support=0.2)
+    mirror = sysm.mirror
+    dense = Shooting(sysm, parameter="support")
+    sol = solve_orbit(dense, linear_response_state(eom, omega, 1.0, 0.2), 0.2)
+    assert sol.converged
+    # the threshold: where the largest |mu| of the planar orbit is 1, by bisection in s
+    lo, hi, u = 0.05, 0.5, sol.u
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        s_mid = solve_orbit(dense, u, mid)
+        assert s_mid.converged
+        u = s_mid.u
+        lo, hi = (lo, mid) if np.abs(s_mid.evaluation.multipliers).max() > 1.0 else (mid, hi)
+    ev_d = dense.evaluate(u, mid)
+    M = ev_d.monodromy
+    assert np.sum(np.abs(ev_d.multipliers + 1) < 1e-5) == 2  # two multipliers at -1
+    mf = MatrixFreeShooting(sysm, parameter="support", scheme="rk8")
+    ev = mf.evaluate(u, mid)
+    scale = np.ones(M.shape[0])
+    split_leading(mf, ev, mirror, scale)
+    for plane, inside, across in (("in-plane", mirror.even, mirror.odd), ("out-of-plane", mirror.odd, mirror.even)):
+        d, _ = doubling_direction(ev, 1, scale, 1e-3, mirror, plane)
+        w = d[: M.shape[0]]
+        assert np.linalg.norm(across.T @ w) <= 1e-14 * np.linalg.norm(w), plane
+        assert np.linalg.norm(inside.T @ w) > 0.0
+        assert np.linalg.norm(M @ w + w) < 1e-5 * np.linalg.norm(w), plane

@@ -318,7 +318,7 @@ def _branch(k: int, br, spec, idx: np.ndarray, dim: int = 2, strain: np.ndarray 
 
 def _whirling(br, dim: int) -> dict:
     """The whirling measures of a spatial branch's points: zero on planar orbits, NaN where they
-    could not be measured (an equilibrium not in one plane, a matrix-free orbit)."""
+    could not be measured (an equilibrium not in one plane)."""
     if dim == 2:
         return {}
     n = br.points[0].state.size // 6 if br.points else 0

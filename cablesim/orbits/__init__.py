@@ -14,7 +14,9 @@
   implicit Radau IIA flow for stiff cables, :mod:`~cablesim.orbits.radau`), Newton-GMRES
   (:mod:`~cablesim.orbits.krylov`) and the leading Floquet multipliers
   (:mod:`~cablesim.orbits.floquet`); :mod:`~cablesim.orbits.mfproblem` makes it a continuation
-  problem (``matrix_free`` of :func:`continue_branches`, by default above 40 states);
+  problem (``matrix_free`` of :func:`continue_branches`, by default above 40 states), and
+  :mod:`~cablesim.orbits.splitleading` on the planar orbits of a symmetric spatial cable (the
+  leading multipliers of the in-plane and out-of-plane blocks apart);
 - :mod:`~cablesim.orbits.budget`: the steps and memory of a branch's orbits before any is
   computed (the cost estimate of ``cablesim continue``);
 - :mod:`~cablesim.orbits.systems`, :mod:`~cablesim.orbits.cablefield`: the vector fields;

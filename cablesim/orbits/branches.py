@@ -39,6 +39,7 @@ from .diagram import Bifurcation, BranchEnd, BranchesInterrupted, OrbitBranch, O
 from .problems import OrbitProblem, PlanarOrbitProblem, labelled_multipliers
 from .resume import TraceLog
 from .shooting import Evaluation, FlowStatus, Shooting, solve_orbit
+from .splitleading import PlanarMatrixFreeProblem, labelled_leading, split_leading
 from .starting import cable_scales, integrate_to_steady, linear_response_state
 from .switching import (
     MergeWatch,
@@ -70,8 +71,9 @@ def _orbit_point(system: OdeSystem, shooting: Shooting, cp, branch: int, index: 
     d = system.displacements
     xmax, xmin = ev.xmax[d], ev.xmin[d]
     mu, planes, whirl = ev.multipliers, None, None
-    if mirror is not None:
-        mu, planes = labelled_multipliers(mirror, ev.monodromy)
+    if mirror is not None:  # the blocks of the dense monodromy, or the leading multipliers of each
+        mu, planes = labelled_multipliers(mirror, ev.monodromy) if ev.monodromy is not None \
+            else labelled_leading(mirror, ev.split)
     elif getattr(system, "frame", None) is not None and hasattr(shooting, "trajectory"):
         # a nonplanar orbit of a spatial cable (of a symmetric one, or one forced out of its plane)
         whirl = orbit_whirling(system.frame, shooting, cp.u, cp.lam, WHIRL_SAMPLES)
@@ -170,11 +172,11 @@ class _Tracer:
         planar); decides :attr:`OrbitBranch.planar` (the log's record of a replayed run)."""
         mirror = self.system.mirror
         replayed = self.log.planar(self.log.count)
-        # the matrix-free shooting forms no monodromy to split by planes
         br.planar = replayed if replayed is not None else (
-            not self.matrix_free and mirror is not None and mirror.is_planar(u_start[: self.n], self.state_scale))
-        if br.planar:
-            return PlanarOrbitProblem(sh, self.state_scale, self.lam_scale, mirror), mirror
+            mirror is not None and mirror.is_planar(u_start[: self.n], self.state_scale))
+        if br.planar:  # the monodromy's blocks, dense or their leading multipliers
+            kind = PlanarMatrixFreeProblem if self.matrix_free else PlanarOrbitProblem
+            return kind(sh, self.state_scale, self.lam_scale, mirror), mirror
         if self.matrix_free:
             return MatrixFreeOrbitProblem(sh, self.state_scale, self.lam_scale), None
         return OrbitProblem(sh, self.state_scale, self.lam_scale), None
@@ -262,7 +264,7 @@ class _Tracer:
         if ev.status != ok.OK:
             return None
         if self.matrix_free:
-            orbit_leading(self.shootings[(br.period, m1)], ev, self.state_scale)
+            self.leading(br, self.shootings[(br.period, m1)], ev)
         dirn, eps = doubling_direction(ev, m1, self.state_scale, self.switch_size,
                                        self.system.mirror if br.planar else None, bif.plane)
         sh2 = self.shooting(2 * br.period, 2 * m1)
@@ -275,6 +277,14 @@ class _Tracer:
             factor *= 0.25
         return None
 
+    def leading(self, br: OrbitBranch, sh: MatrixFreeShooting, ev) -> None:
+        """The leading multipliers of a matrix-free orbit of branch ``br`` (of each block on a
+        planar branch), for the eigenvector that starts a branch born there."""
+        if br.planar:
+            split_leading(sh, ev, self.system.mirror, self.state_scale)
+        else:
+            orbit_leading(sh, ev, self.state_scale)
+
     def switch_pitchfork(self, br: OrbitBranch, p: OrbitPoint, bif: Bifurcation) -> OrbitBranch | None:
         """Start the nonplanar branch at pitchfork ``p`` of planar branch ``br`` along the
         out-of-plane null vector (:func:`~cablesim.orbits.switching.pitchfork_direction`); its
@@ -284,6 +294,8 @@ class _Tracer:
         ev = sh.evaluate(p.u, p.parameter)
         if ev.status != ok.OK:
             return None
+        if self.matrix_free:
+            self.leading(br, sh, ev)
         dirn, eps = pitchfork_direction(ev, self.system.mirror, br.segments, self.state_scale, self.switch_size)
         size = self.switch_size
         for _ in range(SWITCH_ATTEMPTS):

@@ -40,7 +40,7 @@ from . import kernels as ok
 from . import radau as rd
 from .floquet import DEFAULT_BOUND, DEFAULT_TOL, Deflation, Leading, leading_multipliers
 from .krylov import gmres
-from .shooting import DEFAULT_STEPS, Evaluation, FlowStatus, OrbitSolution, SolveStatus
+from .shooting import DEFAULT_STEPS, Evaluation, FlowStatus, OrbitSolution, Shooting, SolveStatus
 from .stability import sort_multipliers
 from .systems import OdeSystem
 from .tableaux import TABLEAUX
@@ -80,11 +80,13 @@ class _Tape:
 class MFEvaluation(Evaluation):
     """:class:`~cablesim.orbits.shooting.Evaluation` of the matrix-free shooting (module
     docstring); ``starts`` are the segment start states, ``leading`` the leading multipliers
-    once computed (:func:`orbit_leading`)."""
+    once computed (:func:`orbit_leading`), ``split`` those of each block of a planar orbit
+    (:func:`cablesim.orbits.splitleading.split_leading`; then ``leading`` joins them)."""
 
     starts: np.ndarray | None = None
     tapes: list | None = None
     leading: Leading | None = None
+    split: object = None
     newton_krylov: int = 0
 
     @property
@@ -305,6 +307,11 @@ class MatrixFreeShooting:
         while len(self._taped) > KEEP_TAPES:
             self._taped.popleft().tapes = None
 
+    #: The orbit at its integration steps and sampled uniformly (the whirling measures of a
+    #: nonplanar orbit), as the dense shooting's: the same records of state and rate.
+    steps = Shooting.steps
+    trajectory = Shooting.trajectory
+
     # ------------------------------------------------------------------------------------------
     def segment_apply(self, ev: MFEvaluation, k: int, X: np.ndarray) -> np.ndarray:
         """``G_k X`` for the columns of ``X`` (n, q)."""
@@ -442,20 +449,33 @@ class Bordered:
     refresh : callable, optional
         Called before the tangent is solved; returns a better preconditioner (for instance from
         the multipliers at this point) or None.
+    project : callable, optional
+        An orthogonal projection of the unknowns' block (scaled) onto an invariant subspace of
+        ``J_u`` that holds the branch, applied to every direction and to the solutions (the
+        planar orbits of a symmetric system are corrected in the plane: at a pitchfork ``J_u``
+        is singular across it, so that without the projection the Krylov iteration would amplify
+        round-off into an out-of-plane correction).
     """
 
     def __init__(self, shooting, ev, us, ls, rs, precondition=None, tol: float = 1e-6, tangent_tol: float = 1e-8,
-                 max_iter: int = 200, refresh=None):
+                 max_iter: int = 200, refresh=None, project=None):
         self.sh, self.ev = shooting, ev
         self.us, self.ls, self.rs = us, ls, rs
         self.pre = precondition
         self.tol, self.tangent_tol, self.max_iter = tol, tangent_tol, max_iter
         self.refresh = refresh
+        self.project = project
+
+    def _projected(self, v: np.ndarray) -> np.ndarray:
+        if self.project is None:
+            return v
+        return np.concatenate([self.project(v[:-1]), v[-1:]])
 
     def _matvec(self, normal):
         sh, ev, us, ls, rs = self.sh, self.ev, self.us, self.ls, self.rs
 
         def apply(v):
+            v = self._projected(v)
             Ju = sh.jacobian_apply(ev, (v[:-1] * us)[:, None])[:, 0]
             top = (Ju + ev.J_lam * (v[-1] * ls)) / rs
             return np.concatenate([top, [normal @ v]])
@@ -482,7 +502,7 @@ class Bordered:
         self.ev.newton_krylov += sol.iterations
         if not np.all(np.isfinite(sol.x)) or sol.residual > 1e3 * max(self.tol, 1e-12):
             return None
-        return sol.x
+        return self._projected(sol.x)
 
     def tangent(self, ref: np.ndarray) -> np.ndarray | None:
         """Unit null vector of ``[J_u J_lam]`` with positive projection on ``ref``."""
@@ -498,7 +518,7 @@ class Bordered:
         except FloatingPointError:
             return None
         self.sh.krylov_iterations += sol.iterations
-        t = sol.x
+        t = self._projected(sol.x)
         nt = np.linalg.norm(t)
         if not np.isfinite(nt) or nt == 0.0:
             return None

@@ -79,8 +79,4 @@ class PlanarOrbitProblem(OrbitProblem):
 def labelled_multipliers(mirror: Mirror, monodromy: np.ndarray) -> tuple[np.ndarray, tuple]:
     """The multipliers of a planar orbit from the two blocks of its monodromy, sorted together
     (:func:`~cablesim.orbits.stability.sort_multipliers`), and the block of each."""
-    mu_in, mu_out = split_multipliers(mirror, monodromy)
-    mu = np.concatenate([mu_in, mu_out])
-    labels = np.array([mirror.labels[0]] * mu_in.size + [mirror.labels[1]] * mu_out.size)
-    order = np.lexsort((-mu.imag, -np.abs(mu)))
-    return mu[order], tuple(str(x) for x in labels[order])
+    return mirror.labelled(*split_multipliers(mirror, monodromy))

@@ -99,26 +99,35 @@ def doubling_direction(ev: Evaluation, segments: int, state_scale: np.ndarray,
     eps : float
         Step along ``direction`` of scaled size ``switch_size``.
     """
-    if ev.monodromy is None:  # matrix-free: the leading eigenvectors, in coordinates x / state_scale
-        if segments != 1:
-            raise ValueError("a matrix-free period doubling is switched at from single shooting only")
-        mu, V = ev.leading.multipliers, ev.leading.vectors * np.asarray(state_scale, dtype=float)[:, None]
-        basis = None
-    elif mirror is not None and plane in mirror.labels:
-        Pe, Po, _ = mirror.blocks(ev.monodromy)
-        mu, V = np.linalg.eig(Pe if plane == mirror.labels[0] else Po)
-        basis = mirror.even if plane == mirror.labels[0] else mirror.odd
-    else:
-        mu, V = np.linalg.eig(ev.monodromy)
-        basis = None
-    j = int(np.argmin(np.abs(mu + 1.0)))
-    W = [np.real(V[:, j]) if basis is None else basis @ np.real(V[:, j])]
+    if ev.monodromy is None and segments != 1:
+        raise ValueError("a matrix-free period doubling is switched at from single shooting only")
+    W = [_critical_vector(ev, state_scale, mirror, plane)]
     for k in range(segments - 1):
         W.append(ev.G[k] @ W[-1])
     W = np.array(W)
     direction = np.concatenate([W.ravel(), -W.ravel()])
     eps = switch_size / np.linalg.norm(direction / np.tile(state_scale, 2 * segments))
     return direction, eps
+
+
+def _critical_vector(ev: Evaluation, state_scale: np.ndarray, mirror, plane: str | None) -> np.ndarray:
+    """The real eigenvector of multiplier -1 at a period doubling (:func:`doubling_direction`):
+    of the monodromy's block ``plane`` or of the whole, its dense eigenvectors or, on a
+    matrix-free orbit, the leading ones (of the block: :mod:`cablesim.orbits.splitleading`)."""
+    scale = np.asarray(state_scale, dtype=float)
+    if mirror is not None and plane in mirror.labels:
+        basis = mirror.even if plane == mirror.labels[0] else mirror.odd
+        if ev.monodromy is None:
+            w = ev.split.vector(plane, -1.0) * scale
+            return basis @ (basis.T @ w)  # in the block's subspace to round-off: exactly there
+        Pe, Po, _ = mirror.blocks(ev.monodromy)
+        mu, V = np.linalg.eig(Pe if plane == mirror.labels[0] else Po)
+        return basis @ np.real(V[:, int(np.argmin(np.abs(mu + 1.0)))])
+    if ev.monodromy is None:  # the leading eigenvectors, in coordinates x / state_scale
+        mu, V = ev.leading.multipliers, ev.leading.vectors * scale[:, None]
+    else:
+        mu, V = np.linalg.eig(ev.monodromy)
+    return np.real(V[:, int(np.argmin(np.abs(mu + 1.0)))])
 
 
 def start_factor(shooting, base: np.ndarray, direction: np.ndarray, eps: float, lam: float,
@@ -254,8 +263,10 @@ def pitchfork_direction(ev: Evaluation, mirror, segments: int, state_scale: np.n
 
     The critical eigenvector of the out-of-plane block ``Phi_o`` (multiplier +1) is ``w_0 = Q_o
     e``; carried through the segments, ``w_{k+1} = G_k w_k``, it is a null vector of the shooting
-    Jacobian that lies in the odd subspace. The branch leaves the planar one along it with no
-    change of the parameter (a pitchfork's parabola); ``-eps`` gives the mirror image.
+    Jacobian that lies in the odd subspace. On a matrix-free orbit (single shooting) it is the
+    out-of-plane block's leading eigenvector (:mod:`cablesim.orbits.splitleading`). The branch
+    leaves the planar one along it with no change of the parameter (a pitchfork's parabola);
+    ``-eps`` gives the mirror image.
 
     Returns
     -------
@@ -263,10 +274,16 @@ def pitchfork_direction(ev: Evaluation, mirror, segments: int, state_scale: np.n
     eps : float
         Step along ``direction`` of scaled size ``switch_size``.
     """
-    _, Po, _ = mirror.blocks(ev.monodromy)
-    mu, V = np.linalg.eig(Po)
-    j = int(np.argmin(np.abs(mu - 1.0)))
-    W = [mirror.odd @ np.real(V[:, j])]
+    if ev.monodromy is None:  # matrix-free: the out-of-plane block's leading eigenvectors (ev.split)
+        if segments != 1:
+            raise ValueError("a matrix-free pitchfork is switched at from single shooting only")
+        w = ev.split.vector(mirror.labels[1], 1.0) * np.asarray(state_scale, dtype=float)
+        W = [mirror.odd @ (mirror.odd.T @ w)]  # in the odd subspace to round-off: exactly there
+    else:
+        _, Po, _ = mirror.blocks(ev.monodromy)
+        mu, V = np.linalg.eig(Po)
+        j = int(np.argmin(np.abs(mu - 1.0)))
+        W = [mirror.odd @ np.real(V[:, j])]
     for k in range(segments - 1):
         W.append(ev.G[k] @ W[-1])
     direction = np.concatenate(W)

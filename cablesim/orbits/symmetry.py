@@ -104,6 +104,14 @@ class Mirror:
         off = max(float(np.abs(B[:k, k:]).max(initial=0.0)), float(np.abs(B[k:, :k]).max(initial=0.0))) / big
         return B[:k, :k], B[k:, k:], off
 
+    def labelled(self, mu_even: np.ndarray, mu_odd: np.ndarray) -> tuple[np.ndarray, tuple]:
+        """The multipliers of both blocks sorted together
+        (:func:`~cablesim.orbits.stability.sort_multipliers`), and the block of each."""
+        mu = np.concatenate([np.asarray(mu_even, dtype=complex), np.asarray(mu_odd, dtype=complex)])
+        labels = np.array([self.labels[0]] * np.size(mu_even) + [self.labels[1]] * np.size(mu_odd))
+        order = np.lexsort((-mu.imag, -np.abs(mu)))
+        return mu[order], tuple(str(x) for x in labels[order])
+
 
     def coordinate_blocks(self) -> tuple[np.ndarray, np.ndarray] | None:
         """``(rows, bounds)``: the state components of the even block (``rows[:bounds[1]]``)

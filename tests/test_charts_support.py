@@ -180,3 +180,31 @@ def test_continue_writes_the_curves_in_s_and_plot_redraws_the_chart(tmp_path, in
     assert left == "support motion multiplier $s$ (s = 1: $|u_A|$ = 5.0 mm)"
     assert right == ["support amplitude $s\\,|u_A|$ (m)"]
     assert [list(y) for y in dashed] == [[0.8, 0.8]]  # the response line at its s
+
+
+def _polylines_cross(p, q) -> bool:
+    """Whether two curves, given by their points (x, y), have crossing segments."""
+    def side(o, a, b):
+        return np.sign((a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]))
+    P, Q = np.column_stack(p), np.column_stack(q)
+    for i in range(len(P) - 1):
+        for j in range(len(Q) - 1):
+            if side(P[i], P[i + 1], Q[j]) * side(P[i], P[i + 1], Q[j + 1]) < 0 and \
+                    side(Q[j], Q[j + 1], P[i]) * side(Q[j], Q[j + 1], P[i + 1]) < 0:
+                return True
+    return False
+
+
+def test_where_an_in_plane_and_an_out_of_plane_curve_cross_no_resonance_is_reported():
+    """The one-node stay made spatial: its in-plane and out-of-plane period-doubling curves
+    cross (two multipliers at -1, one in each block of the monodromy). That is two curves
+    crossing, not a 1:2 resonance (a double multiplier -1 of one block): the codimension-two
+    tests of a curve of planar orbits look at its own block only."""
+    case = stay(1, {"omega": {"start": 10.8, "stop": 11.3}, "loci": True,
+                    "support": {"start": 0.1, "stop": 1.0}}, spatial=True)
+    res = cablesim.continuation(case).result
+    planes = {L.plane: L for L in res.loci if L.kind == "period-doubling"}
+    assert set(planes) == {"in-plane", "out-of-plane"}
+    a, b = planes["in-plane"], planes["out-of-plane"]
+    assert _polylines_cross((a.omega, a.support), (b.omega, b.support))
+    assert not [c for c in res.codim2 if c.kind == "1:2 resonance"], [(c.kind, c.omega, c.support) for c in res.codim2]

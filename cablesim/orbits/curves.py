@@ -250,7 +250,8 @@ def trace_locus(
     liouville_tol: float = 1e-3,
     callback: Callable[[LocusPoint], bool | None] | None = None,
     index: int = 0,
-    odd: np.ndarray | None = None,
+    mirror=None,
+    plane: str | None = None,
 ) -> Locus:
     """Continue a bifurcation in two parameters (module docstring).
 
@@ -282,9 +283,11 @@ def trace_locus(
         Continuation settings (the bounds of ``p2`` are set from ``p2_range``).
     subspace : ndarray (n, q), optional
         See :class:`~cablesim.orbits.loci.LocusProblem`.
-    odd : ndarray (n, q), optional
-        ``"pitchfork"``: the odd coordinates of the mirror symmetry
-        (:class:`~cablesim.orbits.loci.LocusProblem`).
+    mirror : Mirror, optional
+    plane : str, optional
+        For a curve of planar orbits of a mirror-symmetric system, and the block of the
+        critical multiplier (:class:`~cablesim.orbits.loci.LocusProblem`; required for
+        ``"pitchfork"``).
     integration : dict, optional
         ``scheme``, ``steps_per_period``, ``step_rate`` of the shootings.
     liouville_tol : float
@@ -305,7 +308,7 @@ def trace_locus(
     if scales is None:
         scales = (max(abs(p1_range[0]), abs(p1_range[1])), max(abs(p2_range[0]), abs(p2_range[1])))
     flows = TwoParameterFlows(system, period, segments, parameters, integration)
-    problem = LocusProblem(flows, kind, state_scale, scales, subspace, levels, odd=odd)
+    problem = LocusProblem(flows, kind, state_scale, scales, subspace, levels, mirror=mirror, plane=plane)
     U0 = problem.start(np.asarray(u0, dtype=float), x1, x2, kappa)
     B0, C0 = problem.borders()
     st = replace(settings or Settings(), lam_min=min(p2_range), lam_max=max(p2_range))
@@ -471,7 +474,7 @@ def trace_loci(
                               period=b.period, segments=br.segments, kappa=float(np.real(b.multiplier)),
                               state_scale=state_scale, scales=scales, levels=levels, settings=settings,
                               integration=integration, liouville_tol=liouville_tol, callback=cb, index=index,
-                              odd=mirror.odd if b.kind == "pitchfork" else None)
+                              mirror=mirror if br.planar else None, plane=b.plane)
         except FloatingPointError:
             continue
         except LociInterrupted as exc:

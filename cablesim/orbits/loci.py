@@ -169,6 +169,8 @@ class LocusEvaluation:
     g: np.ndarray
     critical: list
     cusp: float = np.nan
+    #: On a curve of planar orbits: the other multipliers of the critical one's block.
+    block_others: np.ndarray | None = None
 
     @property
     def multipliers(self) -> np.ndarray:
@@ -176,7 +178,10 @@ class LocusEvaluation:
 
     @property
     def others(self) -> np.ndarray:
-        """The multipliers other than the critical ones."""
+        """The multipliers other than the critical ones (of its block, on a curve of planar
+        orbits of a mirror-symmetric system)."""
+        if self.block_others is not None:
+            return self.block_others
         keep = np.ones(self.orbit.multipliers.size, dtype=bool)
         keep[self.critical] = False
         return self.orbit.multipliers[keep]
@@ -199,18 +204,23 @@ class LocusProblem:
         bifurcation belongs to (default: the whole state space).
     levels : sequence of float
         Values of ``p2`` whose crossings are located.
-    odd : ndarray (n, q), optional
-        ``"pitchfork"`` (required): orthonormal basis, in state coordinates, of the odd
-        coordinates of a mirror symmetry (:class:`~cablesim.orbits.symmetry.Mirror`). The curve
-        is one of planar orbits whose odd block has the multiplier +1: the singularity is
-        sought in that block (the default subspace) and the odd rows of the periodicity
-        condition, which vanish on a planar orbit and carry the pitchfork's null vector, are
-        replaced by ``P_o u = 0`` (``P_o`` the projector on the odd coordinates), which keeps
-        the orbit in the plane and the system regular.
+    mirror : Mirror, optional
+        For a curve of planar orbits of a mirror-symmetric system
+        (:class:`~cablesim.orbits.symmetry.Mirror`), with ``plane`` the block (``in-plane`` or
+        ``out-of-plane``) of the critical multiplier: the codimension-two tests look at that
+        block's other multipliers only (a multiplier of the other block at -1 or +1 is where
+        this curve crosses a curve of the other block, not a resonance of this one). Required
+        for ``"pitchfork"``: the curve is one of planar orbits whose odd block has the
+        multiplier +1; the singularity is sought in that block (the default subspace) and the
+        odd rows of the periodicity condition, which vanish on a planar orbit and carry the
+        pitchfork's null vector, are replaced by ``P_o u = 0`` (``P_o`` the projector on the odd
+        coordinates), which keeps the orbit in the plane and the system regular.
+    plane : str, optional
+        See ``mirror``.
     """
 
     def __init__(self, flows: TwoParameterFlows, kind: str, state_scale: np.ndarray, scales: tuple[float, float],
-                 subspace: np.ndarray | None = None, levels=(), odd: np.ndarray | None = None):
+                 subspace: np.ndarray | None = None, levels=(), mirror=None, plane: str | None = None):
         if kind not in bd.RANK_DEFECT:
             raise ValueError(f"unknown kind {kind!r}: one of {sorted(bd.RANK_DEFECT)}")
         self.flows, self.kind = flows, kind
@@ -219,10 +229,15 @@ class LocusProblem:
         self.d, self.extra = bd.RANK_DEFECT[kind], bd.EXTRA_UNKNOWNS[kind]
         self.scale = np.asarray(state_scale, dtype=float)
         self.P_odd = None
+        #: Orthonormal basis (state coordinates) of the block of the critical multiplier.
+        self.block = None
+        if mirror is not None and plane in mirror.labels:
+            self.block = mirror.even if plane == mirror.labels[0] else mirror.odd
         if kind == "pitchfork":
-            if odd is None:
-                raise ValueError("a pitchfork curve needs the odd coordinates of the mirror symmetry (odd)")
-            odd = np.asarray(odd, dtype=float)
+            if mirror is None:
+                raise ValueError("a pitchfork curve needs the mirror symmetry of the system (mirror)")
+            odd = mirror.odd
+            self.block = odd
             self.P_odd = odd @ odd.T
             if subspace is None:  # the odd coordinates in the scaled ones, orthonormal
                 subspace = np.linalg.qr(odd / self.scale[:, None])[0]
@@ -306,8 +321,13 @@ class LocusProblem:
         if self.P_odd is not None:
             r = self._in_the_plane(u, r, J_u, J_lam)
         crit = bd.critical_indices(self.kind, ev.multipliers, kappa)
+        block_others = None
+        if self.block is not None:  # the other multipliers of the critical one's block
+            mu_b = np.linalg.eigvals(self.block.T @ ev.monodromy @ self.block)
+            block_others = np.delete(mu_b, bd.critical_indices(self.kind, mu_b, kappa))
         return LocusEvaluation(r=np.concatenate([r, g]), J_u=J_u, J_lam=J_lam, orbit=ev, p1=x1, p2=x2,
-                               kappa=kappa, V=V, W=W, g=G.ravel(), critical=crit, cusp=rows[1])
+                               kappa=kappa, V=V, W=W, g=G.ravel(), critical=crit, cusp=rows[1],
+                               block_others=block_others)
 
     def _in_the_plane(self, u, r, J_u, J_lam) -> np.ndarray:
         """The periodicity rows of a pitchfork curve (``odd`` in the class docstring): per

@@ -52,8 +52,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ..dynamics.extremes import hermite_extreme
 from ..dynamics import interrupts
+from ..dynamics.extremes import hermite_extreme
 from ..dynamics.interrupts import Deferred
 from ..dynamics.status import INNER_SOLVE, INTERRUPTED, NONFINITE, OK, SLACK
 from ..jit import njit

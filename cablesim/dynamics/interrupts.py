@@ -7,12 +7,25 @@
   :attr:`Deferred.hit` between chunks, which return to Python many times a second).
 - :data:`MAX_CHUNK_STEPS` bounds the steps of every compiled call, so that an interruption acts
   within about a second whatever the step size.
+- :data:`STOP` is the flag of the compiled loops that cannot return to Python in chunks (the
+  flow of one orbit, with its variational equations, is one call): such a loop reads it once a
+  step and returns :data:`~cablesim.dynamics.status.INTERRUPTED` when it is set, and
+  :func:`acted_on` turns that status into ``KeyboardInterrupt``. Python runs its signal handlers
+  only between bytecodes, never inside a compiled call, so the flag is set by a thread that the
+  signal itself wakes: :func:`install` makes the interpreter's C-level handler write each
+  signal's number to a socket (``signal.set_wakeup_fd``), which that thread reads; the loops
+  release the interpreter lock (``nogil``) so that it can run.
 """
 
 from __future__ import annotations
 
 import signal
+import socket
 import threading
+
+import numpy as np
+
+from .status import INTERRUPTED
 
 #: Most time steps one compiled call may take before returning to Python.
 MAX_CHUNK_STEPS = 20_000
@@ -21,6 +34,12 @@ MIN_CHUNK_STEPS = 200
 
 _received: list[int] = []
 _SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+#: ``STOP[0]`` is nonzero once SIGINT or SIGTERM has come during a compiled loop that reads it
+#: (cleared by :func:`clear` as such a loop starts).
+STOP = np.zeros(1, dtype=np.int64)
+#: The socket the interpreter writes signal numbers to, while :func:`install` is in force.
+_wakeup: dict = {}
 
 
 def _main_thread() -> bool:
@@ -33,11 +52,13 @@ def _raise(signum, frame):
 
 
 def install() -> None:
-    """SIGINT and SIGTERM both raise ``KeyboardInterrupt`` (main thread), noting the signal."""
+    """SIGINT and SIGTERM both raise ``KeyboardInterrupt`` (main thread), noting the signal, and
+    set :data:`STOP` at once, even inside a compiled loop."""
     _received.clear()
     if _main_thread():
         for sig in _SIGNALS:
             signal.signal(sig, _raise)
+        _watch()
 
 
 def restore() -> None:
@@ -46,6 +67,65 @@ def restore() -> None:
     if _main_thread():
         signal.signal(signal.SIGINT, signal.default_int_handler)
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        _unwatch()
+
+
+def _watch() -> None:
+    """Have the interpreter write each signal's number to a socket that a thread reads, setting
+    :data:`STOP` for SIGINT and SIGTERM; a wakeup descriptor set by someone else (an event loop)
+    is left alone."""
+    if _wakeup:
+        return
+    reader, writer = socket.socketpair()
+    writer.setblocking(False)  # the interpreter's handler must never block on it
+    try:
+        previous = signal.set_wakeup_fd(writer.fileno(), warn_on_full_buffer=False)
+    except (ValueError, OSError):
+        previous = None
+    if previous != -1:
+        if previous is not None:
+            signal.set_wakeup_fd(previous)
+        reader.close()
+        writer.close()
+        return
+    _wakeup["writer"] = writer
+    threading.Thread(target=_read_signals, args=(reader,), name="cablesim-signals", daemon=True).start()
+
+
+def _read_signals(reader: socket.socket) -> None:
+    with reader:
+        while True:
+            try:
+                data = reader.recv(64)
+            except OSError:
+                return
+            if not data:  # the writer closed: :func:`restore`
+                return
+            if any(b in _SIGNALS for b in data):
+                STOP[0] = 1
+
+
+def _unwatch() -> None:
+    writer = _wakeup.pop("writer", None)
+    if writer is not None:
+        previous = signal.set_wakeup_fd(-1)
+        if previous not in (-1, writer.fileno()):  # someone else's since: put it back
+            signal.set_wakeup_fd(previous)
+        writer.close()
+
+
+def clear() -> None:
+    """Clear :data:`STOP` as a compiled loop that reads it starts (a signal before it was acted on
+    by the handlers already)."""
+    STOP[0] = 0
+
+
+def acted_on(code):
+    """``code``, the status of a compiled loop that reads :data:`STOP`, after raising
+    ``KeyboardInterrupt`` if the loop stopped for SIGINT or SIGTERM."""
+    if code == INTERRUPTED:
+        raise KeyboardInterrupt
+    return code
 
 
 def received() -> int | None:

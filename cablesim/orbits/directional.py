@@ -26,7 +26,7 @@ import numpy as np
 
 from ..jit import njit
 from ..mechanics.banded import half_band, is_band
-from .kernels import NONFINITE, OK, PARAM_NONE, PARAM_OMEGA, advance_state, sample_step
+from .kernels import INTERRUPTED, NONFINITE, OK, PARAM_NONE, PARAM_OMEGA, advance_state, sample_step
 
 __all__ = ["flow_dense_directions", "flow_mechanical", "mechanical_rate", "mechanical_jac_times"]
 
@@ -147,13 +147,14 @@ def _parameter_forcing(KWp, dx, g, omega, pmode):
             KWp[i] += g[i]
 
 
-@njit
+@njit(nogil=True)
 def flow_mechanical(balance, stiffness_times, load_derivative, model, prm, work, geo, x0, theta0, omega, duration,
-                    nsteps, A, b, c, ipar, pmode, V, P, xend, xmax, xmin, rec):
+                    nsteps, A, b, c, ipar, pmode, V, P, xend, xmax, xmin, rec, stop):
     """Integrate one segment of a system in mechanical form with the directions ``V`` (updated
     in place to ``G V``) and, unless ``pmode`` is ``PARAM_NONE``, the parameter derivative ``P``
     (zero on entry; ``dPhi/dlambda`` on return). ``xend``, ``xmax``, ``xmin`` and ``rec`` as in
-    :func:`~cablesim.orbits.kernels.flow_segment`. Returns a status code."""
+    :func:`~cablesim.orbits.kernels.flow_segment`, and ``stop`` its interruption flag. Returns a
+    status code."""
     n = x0.size
     nd = n // 2
     s = b.size
@@ -173,6 +174,8 @@ def flow_mechanical(balance, stiffness_times, load_derivative, model, prm, work,
         xmax[i] = x[i]
         xmin[i] = x[i]
     for k in range(nsteps + 1):
+        if stop[0] != 0:
+            return INTERRUPTED
         last = k == nsteps
         for st in range(s if not last else 1):
             _stage_of(x, K, A, st, h, xs)
@@ -206,9 +209,9 @@ def flow_mechanical(balance, stiffness_times, load_derivative, model, prm, work,
     return OK
 
 
-@njit
+@njit(nogil=True)
 def flow_dense_directions(field, model, prm, work, x0, theta0, omega, duration, nsteps, A, b, c, ipar, pmode, V, P,
-                          xend, xmax, xmin, rec):
+                          xend, xmax, xmin, rec, stop):
     """:func:`flow_mechanical` for any vector field of the :mod:`cablesim.orbits.kernels`
     contract: the Jacobian is formed at every stage and multiplied by each direction (O(n^2)
     per direction and stage: for small systems)."""
@@ -232,6 +235,8 @@ def flow_dense_directions(field, model, prm, work, x0, theta0, omega, duration, 
         xmax[i] = x[i]
         xmin[i] = x[i]
     for k in range(nsteps + 1):
+        if stop[0] != 0:
+            return INTERRUPTED
         last = k == nsteps
         for st in range(s if not last else 1):
             _stage_of(x, K, A, st, h, xs)

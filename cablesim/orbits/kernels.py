@@ -36,6 +36,12 @@ identity whenever the divergence integral over the chunk exceeds :data:`CHUNK_DI
 modulus, and the chunks are multiplied; the log-determinant is accumulated chunk by chunk, so it
 stays accurate when the monodromy is nearly singular (strongly damped modes).
 
+Ctrl-C and SIGTERM: one segment is one compiled call, which may run for many seconds (a long
+forcing period, a many-node cable), so the loop reads the interruption flag
+:data:`~cablesim.dynamics.interrupts.STOP` once a step and returns ``INTERRUPTED`` when it is set;
+it runs without the interpreter lock, so that the thread setting the flag can run. Every
+kernel of the orbits called through an :class:`EntryPoint` does the same (its last argument).
+
 Cost: the variational product ``J Y`` at every stage is the largest part of a step; it is summed
 eight columns at a time in scalar accumulators (the same sums, in the same order, as one column
 at a time: the flow map is bitwise unchanged).
@@ -46,9 +52,10 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from ..dynamics import interrupts
 from ..dynamics.extremes import hermite_extreme
 from ..dynamics.interrupts import Deferred
-from ..dynamics.status import INNER_SOLVE, NONFINITE, OK, SLACK
+from ..dynamics.status import INNER_SOLVE, INTERRUPTED, NONFINITE, OK, SLACK
 from ..jit import njit
 
 #: Parameter modes of :func:`flow_segment`.
@@ -61,7 +68,8 @@ IPAR_OMEGA = -2
 #: Restart the propagated Jacobian when ``|int tr J dt|`` over a chunk exceeds this.
 CHUNK_DIVERGENCE = 2.0
 
-__all__ = ["EntryPoint", "INNER_SOLVE", "IPAR_OMEGA", "NONFINITE", "OK", "SLACK", "flow_segment", "copy_work"]
+__all__ = ["EntryPoint", "INNER_SOLVE", "INTERRUPTED", "IPAR_OMEGA", "NONFINITE", "OK", "SLACK", "flow_segment",
+           "copy_work"]
 
 
 def copy_work(work):
@@ -78,16 +86,23 @@ class EntryPoint:
     """A compiled kernel called through the entry point compiled for its argument types
     (:func:`entry_point`, looked up on the first call): numba's type dispatch of a named-tuple
     argument costs about 20 us a call, a tenth of a one-period evaluation of the paper's cable.
-    The function is the same either way."""
+    The function is the same either way.
+
+    The kernel's last argument is the interruption flag
+    :data:`~cablesim.dynamics.interrupts.STOP`, passed here (the caller gives the others), and
+    its status ``INTERRUPTED`` becomes ``KeyboardInterrupt``
+    (:func:`~cablesim.dynamics.interrupts.acted_on`)."""
 
     def __init__(self, kernel):
         self.kernel = kernel
         self._entry = None
 
     def __call__(self, *args):
+        args = (*args, interrupts.STOP)
         if self._entry is None:
             self._entry = entry_point(self.kernel, args)
-        return self._entry(*args)
+        interrupts.clear()
+        return interrupts.acted_on(self._entry(*args))
 
 
 #: Entry points by kernel and argument types, for :func:`entry_point`.
@@ -424,10 +439,11 @@ def _advance_jacobian(Yf, KYf, b, h):
                 Yf[i] += hb * KYf[st, i]
 
 
-@njit
+@njit(nogil=True)
 def flow_segment(field, model, prm, work, x0, theta0, omega, duration, nsteps, A, b, c, ipar, pmode, jac,
-                 rows, bounds, xend, Mout, pout, xmax, xmin, rec, info):
-    """Integrate one segment (see the module docstring). Returns a status code.
+                 rows, bounds, xend, Mout, pout, xmax, xmin, rec, info, stop):
+    """Integrate one segment (see the module docstring). Returns a status code (``INTERRUPTED``
+    as soon as ``stop[0]`` is set: :data:`~cablesim.dynamics.interrupts.STOP`).
 
     Outputs: ``xend`` the final state; with ``jac``: ``Mout`` the Jacobian of the discrete map,
     ``pout`` its derivative with respect to the parameter (zero when ``pmode`` is
@@ -474,6 +490,8 @@ def flow_segment(field, model, prm, work, x0, theta0, omega, duration, nsteps, A
     q_chunk = 0.0
     first_chunk = True
     for k in range(nsteps + 1):
+        if stop[0] != 0:
+            return INTERRUPTED
         last = k == nsteps
         # the last sample needs only its rate (first stage), not a step
         stage_jac = jac and not last

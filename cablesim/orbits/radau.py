@@ -44,7 +44,7 @@ from ..jit import njit
 from ..mechanics.banded import half_band, is_band
 from . import bandlu
 from .directional import mechanical_rate
-from .kernels import NONFINITE, OK, PARAM_NONE, PARAM_OMEGA, sample_step
+from .kernels import INTERRUPTED, NONFINITE, OK, PARAM_NONE, PARAM_OMEGA, sample_step
 
 __all__ = ["RADAU", "RadauTableau", "radau_directions", "radau_orbit", "q_bandwidth"]
 
@@ -193,17 +193,18 @@ def _newton_stages(balance, model, prm, work, geo3, bal3, x, a, xs, theta0, omeg
     return NONFINITE
 
 
-@njit
+@njit(nogil=True)
 def radau_orbit(balance, stiffness_band, model, prm, work, geo3, Kb3, x0, theta0, omega, duration, nsteps, c,
-                W1, W2, E, vnoise, taped, tape_AB, tape_piv, tape_geo, tape_rate, xend, xmax, xmin, rec, info):
+                W1, W2, E, vnoise, taped, tape_AB, tape_piv, tape_geo, tape_rate, xend, xmax, xmin, rec, info, stop):
     """Integrate one segment by the Radau IIA scheme (module docstring).
 
     ``geo3`` (3, ...) and ``Kb3`` (3, 2 h + 1, nd) are scratch for the stages' geometry and
     stiffness bands. With ``taped``, step ``k``'s factors of ``Q`` at its converged stages go to
     ``tape_AB[k]``, ``tape_piv[k]``, the stages' geometry to ``tape_geo[k]`` and their rates
     ``f = (v_s, v'_s)`` to ``tape_rate[k]``. ``xend``, ``xmax``, ``xmin``, ``rec`` as in
-    :func:`~cablesim.orbits.kernels.flow_segment`; ``info[0]`` receives the Newton iterations.
-    Returns a status code (``NONFINITE`` also when the stage equations do not converge).
+    :func:`~cablesim.orbits.kernels.flow_segment`; ``info[0]`` receives the Newton iterations;
+    ``stop``: the interruption flag, read once a step. Returns a status code (``NONFINITE`` also
+    when the stage equations do not converge).
     """
     n = x0.size
     nd = n // 2
@@ -237,6 +238,8 @@ def radau_orbit(balance, stiffness_band, model, prm, work, geo3, Kb3, x0, theta0
         for i in range(nd):
             ap[s, i] = c[s] * h * x[nd + i]  # the first step starts from the linear guess
     for k in range(nsteps + 1):
+        if stop[0] != 0:
+            return INTERRUPTED
         sample_step(k, x, rate, xprev, dprev, h, xmax, xmin, rec)
         if k == nsteps:
             break
@@ -327,13 +330,13 @@ def _update(w, da, col, W1, h, nd, gz, with_g):
             w[nd + i] -= gz[2, i]
 
 
-@njit
+@njit(nogil=True)
 def radau_directions(stiffness_times, load_derivative, model, prm, theta0, omega, duration, nsteps, c, W1,
-                     tape_AB, tape_piv, tape_geo, tape_rate, kl, ipar, pmode, V, P):
+                     tape_AB, tape_piv, tape_geo, tape_rate, kl, ipar, pmode, V, P, stop):
     """Replay the tape of :func:`radau_orbit`: ``V`` (k, n) becomes ``G V`` and, unless ``pmode``
     is ``PARAM_NONE``, ``P`` (zero on entry) the derivative of the segment's end state with
     respect to the parameter (``omega`` or ``prm[ipar]``). All directions share each step's
-    banded solve. Returns a status code."""
+    banded solve; ``stop``: the interruption flag, read once a step. Returns a status code."""
     n = V.shape[1]
     nd = n // 2
     q = V.shape[0]
@@ -346,6 +349,8 @@ def radau_directions(stiffness_times, load_derivative, model, prm, theta0, omega
     gv = np.zeros((3, nd))
     ld = np.empty(nd)
     for k in range(nsteps):
+        if stop[0] != 0:
+            return INTERRUPTED
         AB, piv, geo3, rates = tape_AB[k], tape_piv[k], tape_geo[k], tape_rate[k]
         _plain_rhs(stiffness_times, model, geo3, W1, h, V, RHS, tmp)
         if with_p:

@@ -23,7 +23,7 @@ from .analyses.charts import BackboneResult, run_backbone
 from .analyses.continuation import ContinuationResult, run_continuation
 from .analyses.cost import Cost
 from .analyses.estimates import chosen_integrator
-from .analyses.estimates import continuation_cost as _continuation_cost
+from .analyses.estimates import backbone_cost as _backbone_cost, continuation_cost as _continuation_cost
 from .analyses.estimates import estimates as _estimates
 from .analyses.pool import check_jobs
 from .analyses.dynamic import HistoryPlan, plan_free_vibration, plan_history
@@ -278,11 +278,15 @@ def sweep_cost(case: Case, analysis: str | None = None, integrator: str | None =
     return estimate_sweep(case, analysis, integrator)
 
 
+def backbone_cost(case: Case, mode: int | None = None, analysis: str | None = None) -> Cost:
+    """The most a backbone of ``mode`` can cost (:func:`cablesim.analyses.estimates.backbone_cost`)."""
+    return _backbone_cost(case, mode, analysis)
+
+
 def continuation_cost(case: Case, analysis: str | None = None) -> Cost:
     """What :func:`continuation` will take on its first branch: orbits, Runge-Kutta steps,
-    memory and seconds on this machine, from a probe of its first few orbits (or the least the
-    range can take, when that is already above the limits;
-    :func:`cablesim.analyses.estimates.continuation_cost`)."""
+    memory and seconds, from a probe of its first few orbits (or the least the range can take,
+    when already above the limits; :func:`cablesim.analyses.estimates.continuation_cost`)."""
     return _continuation_cost(case, analysis)
 
 

@@ -17,7 +17,7 @@ from typing import Optional
 import typer
 
 from .errors import CablesimError
-from .io.terminal import ANALYSIS_OPT, CASE_ARG, SET_OPT, Analysis, StatusLine, compiling, say_error
+from .io.terminal import ANALYSIS_OPT, CASE_ARG, FORCE_OPT, SET_OPT, Analysis, StatusLine, compiling, say_error
 
 
 def chart_png(out: Path) -> Path:
@@ -125,27 +125,32 @@ def _check_amplitude(amplitude: float | None) -> None:
                             "above 0 and at most 1e5 (e.g. --amplitude 5).", field="backbone.amplitude")
 
 
-def run_backbone_command(ctx, case_file, overrides, mode, amplitude, output, analysis, plot) -> None:
+#: What to change when a backbone is refused on its cost.
+BACKBONE_FIX = "Give fewer orbits (backbone.max_points), a smaller --amplitude or fewer nodes"
+
+
+def run_backbone_command(ctx, case_file, overrides, mode, amplitude, output, analysis, plot, force=False) -> None:
     """``cablesim backbone`` (see :func:`register`)."""
     import time
 
     from . import api
     from .case.numbers import MODE, check_flag
     from .io.chart_report import backbone_summary
-    from .io.finish import replace_result
+    from .io.finish import guard, replace_result
     from .io.paths import check_output
 
     check_flag(MODE, mode, "--mode", "backbone.mode")
     _check_amplitude(amplitude)
     case = api.load_case(case_file, overrides)
     k = mode if mode is not None else case.backbone.mode
-    n_dof = 2 * case.cable.n_nodes
+    n_dof = case.dim * case.cable.n_nodes
     if k > n_dof:
-        raise CablesimError(f"--mode {k}: this cable has 2n = {n_dof} modes; give a mode from 1 to {n_dof} "
+        raise CablesimError(f"--mode {k}: this cable has {case.dim}n = {n_dof} modes; give a mode from 1 to {n_dof} "
                             "(cablesim static lists their frequencies).", field="backbone.mode")
     out = output if output is not None else Path("runs") / case.name / f"backbone-mode{k}.h5"
     check_output(out, inputs=[case_file] if case_file else [], companions=(lambda o: [o.with_suffix(".png")]) if plot else [])
     echo, note, quiet = _begin(ctx, output=out, mode=k)
+    guard(api.backbone_cost(case, k, analysis.value if analysis else None), force, BACKBONE_FIX, out, note, int(plot))
     t0 = time.perf_counter()
     with compiling(note) as notice, StatusLine(quiet=quiet) as status:
         run = interruptible(lambda: api.backbone(
@@ -168,14 +173,15 @@ def register(app, user_errors) -> None:
         ctx: typer.Context,
         case_file: Optional[Path] = CASE_ARG,
         overrides: Optional[list[str]] = SET_OPT,
-        mode: Optional[int] = typer.Option(None, "--mode", help="Linear mode K the backbone starts from, 1 to 2n (default: backbone.mode, else 1)."),
+        mode: Optional[int] = typer.Option(None, "--mode", help="Linear mode K the backbone starts from, 1 to 2n, or 3n for a spatial cable (default: backbone.mode, else 1)."),
         amplitude: Optional[float] = typer.Option(None, "--amplitude", help="Follow the orbits until the largest |z| of the channels reaches this, m (default: backbone.amplitude, else 2 % of the chord)."),
         output: Optional[Path] = typer.Option(None, "-o", "--output", help="HDF5 file (default: runs/<name>/backbone-mode<K>.h5); the plot goes beside it as .png."),
         analysis: Optional[Analysis] = ANALYSIS_OPT,
         plot: bool = typer.Option(True, "--plot/--no-plot", help="Draw the backbone (frequency against amplitude per channel)."),
+        force: bool = FORCE_OPT,
     ):
         """Backbone curve of a linear mode: the free, undamped cable's periodic orbits from mode K
         to large amplitude, their frequency against their amplitude per channel (the curve the
         peaks of every lightly damped forced response follow), their stability and the internal
         resonances met. `cablesim plot BACKBONE.h5 CONT.h5` draws it over frequency responses."""
-        run_backbone_command(ctx, case_file, overrides, mode, amplitude, output, analysis, plot)
+        run_backbone_command(ctx, case_file, overrides, mode, amplitude, output, analysis, plot, force)

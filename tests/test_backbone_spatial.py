@@ -117,3 +117,26 @@ def test_backbone_and_sweep_files_of_a_spatial_cable_label_their_channels_in_spa
     assert res.returncode == 0, res.stderr
     sw = read_sweep(tmp_path / "sw.h5")
     assert sw.attrs["components"] == 3 and "out of plane" in channel_label(sw.channels[-1], components=3)
+
+
+def test_a_spatial_cable_has_three_modes_per_node_to_choose_from(invoke_cli, tmp_path):
+    res = invoke_cli("backbone", CONFIG, "--set", "spatial=true", "--mode", "7", "-o", tmp_path / "x.h5")
+    assert res.returncode == 2 and "3n = 6 modes" in res.stderr and "Traceback" not in res.stderr
+    assert not (tmp_path / "x.h5").exists()
+
+
+HEAVY = Path(__file__).resolve().parents[1] / "configs" / "heavy-span.yaml"
+
+
+def test_a_backbone_beyond_the_limits_is_refused_before_it_starts(invoke_cli, tmp_path):
+    """The most a backbone can take (every orbit of backbone.max_points, each a few flows over the
+    mode's period) is checked before it starts, as for the other commands."""
+    res = invoke_cli("backbone", HEAVY, "--set", "backbone={max_points: 100000}", "-o", tmp_path / "x.h5")
+    assert res.returncode == 2 and "Traceback" not in res.stderr
+    for words in ("Runge-Kutta steps", "backbone.max_points", "--force"):
+        assert words in res.stderr, res.stderr
+    assert not (tmp_path / "x.h5").exists()
+    from cablesim import api
+
+    cost = api.backbone_cost(cablesim.load_case(CONFIG), mode=1)
+    assert cost.samples == 2000 and cost.excess() is None and "at most" in cost.text()

@@ -165,7 +165,8 @@ def test_check_fills_in_what_cablesim_chooses_and_estimates_in_seconds(invoke_cl
     assert "integrator: {}" not in res.stdout and "modal: {}" not in res.stdout
     assert "# integrator: none given: dopri5 (rtol = 1e-08" in out and "for a history at 2.4 rad/s" in out
     assert re.search(r"# history: about [\d.]+ (s|min) on this machine", out)
-    assert re.search(r"# continue: roughly [\d.]+ (s|min) on this machine", out)
+    assert re.search(r"# continue: about \d+ orbits on the first branch, .*about [\d.]+ (s|min) on this machine", out)
+    assert re.search(r"# backbone: at most \d+ orbits, at most [\d.e+]+ Runge-Kutta steps", out)
     assert re.search(r"# sweep: at most [\d.]+ (s|min|h) of one core", out)
 
 

@@ -208,17 +208,21 @@ class ContinuationCost(Cost):
         run being refused on its least cost alone).
     least : bool
         The counts are the least the range can take (no probe was run), not an estimate.
+    most : bool
+        The counts are the most the run can take (a backbone: every orbit it may compute).
     """
 
     seconds: float = float("nan")
     least: bool = False
+    most: bool = False
 
     def text(self) -> str:
         """One line: ``continuation: about 230 orbits on the first branch, 1.2e+05 Runge-Kutta
         steps (...), about 3 s on this machine, 1.5 MB in memory``."""
-        bound = "at least" if self.least else "about"
+        bound = "at least" if self.least else "at most" if self.most else "about"
         secs = "" if not math.isfinite(self.seconds) else f", about {seconds_text(self.seconds)} on this machine"
-        return (f"{self.what}: {bound} {self.samples:.0f} orbits on the first branch, {bound} {self.steps:.3g} "
+        where = " on the first branch" if self.what == "continuation" else ""
+        return (f"{self.what}: {bound} {self.samples:.0f} orbits{where}, {bound} {self.steps:.3g} "
                 f"Runge-Kutta steps ({self.detail}){secs}, {_size(self.memory)} in memory")
 
     @property

@@ -16,10 +16,15 @@ import numpy as np
 
 from ..case import Case
 from ..errors import CablesimError
+from ..orbits.backbone import linear_modes
 from ..orbits.budget import orbit_budget
+from ..orbits.conservative import conservative_cable_system
 from ..orbits.diagram import BranchEnd
+from ..orbits.shooting import Shooting
 from .continuation import prepare_continuation, trace
 from .dynamic import HistoryPlan, plan_free_vibration, plan_history
+from .setup import build_equations
+from .static import run_static
 from .sweep import estimate_sweep
 from .cost import ContinuationCost, seconds_text
 
@@ -114,6 +119,38 @@ def continuation_cost(case: Case, analysis: str | None = None) -> ContinuationCo
                             budget.per_orbit * orbits, f"{per_orbit:.3g} per orbit, {shooting}", seconds=seconds)
 
 
+#: Shooting evaluations one backbone orbit takes (predictor, Newton corrections, the accepted one).
+BACKBONE_EVALUATIONS = 4
+
+
+def backbone_cost(case: Case, mode: int | None = None, analysis: str | None = None) -> ContinuationCost:
+    """The most a backbone can cost, before it runs: ``backbone.max_points`` orbits of about
+    :data:`BACKBONE_EVALUATIONS` shooting evaluations each, every one a flow over the linear
+    mode's period with its variational equations (the shooting's own step rule; the frequency
+    changes little along a backbone), and the memory of the stored orbits and the dense
+    Jacobians. An upper bound on the orbits: the amplitude asked for usually ends it sooner."""
+    k = int(mode if mode is not None else case.backbone.mode)
+    static = run_static(case, analysis, all_models=False)
+    eom = build_equations(case, static, omega=float(static.modes.omega[0]), load_scale=1.0)
+    system = conservative_cable_system(eom)
+    freqs, _ = linear_modes(system, "delta")
+    w = float(freqs[min(max(k, 1), freqs.size) - 1])
+    steps = Shooting(system).segment_steps(w)
+    orbits = int(case.backbone.max_points)
+    n = system.dim
+    per_orbit = 8.0 * (3 * n + 2 * n)  # unknowns, state, multipliers (complex)
+    working = 8.0 * (20 * n * (n + 1) + 4 * (n * n + (n + 1) ** 2))
+    return ContinuationCost("backbone", orbits * BACKBONE_EVALUATIONS * steps, orbits, working + per_orbit * orbits,
+                            per_orbit * orbits, f"{steps} per flow over the period of mode {k}, {w:.4g} rad/s, "
+                            f"{n} states", most=True)
+
+
+def _backbone_text(case: Case, analysis) -> str:
+    cost = backbone_cost(case, analysis=analysis)
+    why = cost.impossible() or cost.excess()
+    return cost.text().split(": ", 1)[1] + (f"; needs --force: {why}" if why else "")
+
+
 def _continuation_text(case: Case, analysis) -> str:
     cost = continuation_cost(case, analysis)
     why = cost.impossible() or cost.excess()
@@ -131,6 +168,7 @@ def estimates(case: Case, analysis: str | None = None, integrator: str | None = 
         "free-vibration": lambda: _history_text(plan_free_vibration(case, analysis=analysis, integrator=integrator)),
         "sweep": lambda: _sweep_text(case, analysis, integrator) if case.sweep is not None else estimate_sweep(case),
         "continue": lambda: _continuation_text(case, analysis),
+        "backbone": lambda: _backbone_text(case, analysis),
     }
     for command, text in tries.items():
         try:

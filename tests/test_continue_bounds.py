@@ -243,3 +243,17 @@ app()
     assert "Traceback" not in res.stderr and "the 1 bifurcation located" in flat(res.stderr)
     kinds, where, orbits = _kept(tmp_path / "c.h5")
     assert kinds == ["period-doubling"] and where[0] == orbits[-1]
+
+
+def test_the_estimate_of_a_continuation_with_loci_says_what_each_curve_adds():
+    """The bifurcation curves are traced after the branches, from the bifurcations found: their
+    number is not known before the run, so the estimate says what each one may add."""
+    from cablesim import api
+
+    case = api.load_case(Path(__file__).resolve().parents[1] / "configs" / "paper-example.yaml", overrides=[
+        "continuation={omega: {start: 4.9, stop: 5.2}, loci: true, gamma: {start: 0.8, stop: 1.0}}"])
+    text = api.continuation_cost(case).text()
+    assert f"each bifurcation curve adds up to {2 * case.continuation.max_points} points" in text, text
+    plain = api.load_case(Path(__file__).resolve().parents[1] / "configs" / "paper-example.yaml", overrides=[
+        "continuation={omega: {start: 4.9, stop: 5.2}}"])
+    assert "bifurcation curve" not in api.continuation_cost(plain).text()

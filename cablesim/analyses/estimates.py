@@ -32,6 +32,9 @@ from .cost import ContinuationCost, seconds_text
 PROBE_STEPS = 2000
 #: Orbits of a continuation's first branch computed to time it and find its pace.
 PROBE_ORBITS = 6
+#: Flows one point of a bifurcation curve takes (the orbit with both parameters' derivatives and
+#: the directional flows of its defining function, over a couple of Newton steps).
+LOCUS_FLOWS = 6
 
 
 def wall_per_simulated_second(plan: HistoryPlan) -> float:
@@ -115,8 +118,11 @@ def continuation_cost(case: Case, analysis: str | None = None) -> ContinuationCo
     per_orbit = diagram.stats["steps"] / len(seen) * ratio
     # the median interval between orbits: the first uses of the kernels load them
     seconds = float(np.median(np.diff([t for t, _ in seen]))) * ratio * orbits
+    curves = (f"; with loci, each bifurcation curve adds up to {2 * spec.max_points} points (both directions), "
+              f"each point about {LOCUS_FLOWS} flows like an orbit's" if spec.loci else "")
     return ContinuationCost("continuation", orbits * per_orbit, orbits, budget.working + budget.per_orbit * orbits,
-                            budget.per_orbit * orbits, f"{per_orbit:.3g} per orbit, {shooting}", seconds=seconds)
+                            budget.per_orbit * orbits, f"{per_orbit:.3g} per orbit, {shooting}{curves}",
+                            seconds=seconds)
 
 
 #: Shooting evaluations one backbone orbit takes (predictor, Newton corrections, the accepted one).

@@ -50,7 +50,9 @@ def _acceleration(eom, t, z, v):
 # ----------------------------------------------------------------------------------------------
 # 1. The estimate is the local error
 # ----------------------------------------------------------------------------------------------
-@pytest.mark.parametrize("integ", [Newmark(dt=1.0), GeneralizedAlpha(dt=1.0, rho_inf=0.8)], ids=SCHEMES)
+@pytest.mark.parametrize("integ", [
+    pytest.param(Newmark(dt=1.0), marks=pytest.mark.slow(reason="about 18 s; generalized-alpha is the fast check")),
+    GeneralizedAlpha(dt=1.0, rho_inf=0.8)], ids=SCHEMES)
 def test_local_error_estimate_is_the_true_local_error(forced, integ):
     """One step from the reference's state at t = 20 s: ``(beta + (am - af)/2 - 1/6) h^2 (a1 - a)``
     against ``z1 - z_ref(t + h)``; the ratio tends to 1 as h falls (generalized-alpha starts
@@ -90,7 +92,9 @@ def paper_reference(forced):
     return t, reference_history(forced, t)[0]
 
 
-@pytest.mark.parametrize("name", SCHEMES)
+@pytest.mark.parametrize("name", [
+    pytest.param("newmark", marks=pytest.mark.slow(reason="about 9 s; generalized-alpha is the fast check")),
+    "generalized-alpha"])
 def test_error_follows_and_meets_the_tolerance(forced, paper_reference, name):
     t, zref = paper_reference
     errs = []

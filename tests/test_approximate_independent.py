@@ -306,7 +306,13 @@ def test_static_state_and_stiffness_match(name):
 # ----------------------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("name", sorted(CASES))
+def _fast_cases(slow: str, seconds: int):
+    """The cases, ``slow`` marked slow (about ``seconds`` s; the others are the fast checks)."""
+    return [pytest.param(c, marks=pytest.mark.slow(reason=f"about {seconds} s; the other cases are the fast check"))
+            if c == slow else c for c in sorted(CASES)]
+
+
+@pytest.mark.parametrize("name", _fast_cases("inclined-soft", 10))
 def test_dopri5_history_matches_the_reference(name):
     """dopri5 at rtol 1e-10 (measured: see the module docstring). Tolerances: z and z_c 1e-9
     (the order of rtol, global errors over ~1e3 steps; measured <= 2e-11); z_e 1e-8 and T 2e-8
@@ -324,7 +330,7 @@ def test_dopri5_history_matches_the_reference(name):
     assert np.abs(r.z - r.zc - r.ze).max() < 1e-9 * np.abs(me["z"]).max()
 
 
-@pytest.mark.parametrize("name", sorted(CASES))
+@pytest.mark.parametrize("name", _fast_cases("inclined-soft", 19))
 def test_generalized_alpha_displacements_match_the_reference(name):
     """generalized-alpha (rho_inf 0.8) at dt = 2e-4: z within 5e-8, 6e-8, 2e-7 of the peak
     (second order: halving dt divides it by 4.0, checked below); tolerance 1e-6."""

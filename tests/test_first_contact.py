@@ -69,6 +69,8 @@ QUICK = {"sweep": ["--set", "sweep.omega=[2.4, 2.5]", "--duration", "200", "--wi
          "check": ["--set", "continuation.omega={start: 2.40, stop: 2.45}"]}
 
 
+@pytest.mark.slow(reason="about 24 s: every command of the README's use block; its results block runs in "
+                        "test_views_readme")
 def test_the_readmes_use_block_runs_with_short_sweeps(tmp_path):
     """The same block, its sweep and continuation over a short range (the test above runs it
     as written)."""

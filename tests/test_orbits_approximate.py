@@ -54,7 +54,8 @@ def _call(sysm, work, x, theta=0.0, model=None):
     return code, dx, J
 
 
-@pytest.mark.parametrize("which", ["fig6", "example"])
+@pytest.mark.parametrize("which", [
+    pytest.param("fig6", marks=pytest.mark.slow(reason="about 10 s; the example is the fast check")), "example"])
 def test_equilibrium_is_a_rest_point(which, request):
     case, static = request.getfixturevalue(which)
     eom = build_equations(case, static, omega=1.0)

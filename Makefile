@@ -21,12 +21,13 @@ install: $(STAMP)
 run: $(STAMP)
 	$(CLI) sweep configs/paper-example.yaml
 
-# `make test` skips the checks marked slow; `make test-all` runs every test.
+# `make test` skips the checks marked slow; `make test-all` runs every test. Both spread the
+# tests over every core (pytest-xdist, -n auto).
 test: $(STAMP)
-	$(PY) -m pytest -q -m 'not slow'
+	$(PY) -m pytest -q -n auto -m 'not slow'
 
 test-all: $(STAMP)
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q -n auto
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_dynamics.py

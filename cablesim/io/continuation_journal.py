@@ -17,62 +17,18 @@ from pathlib import Path
 
 from ..errors import CablesimError
 from .continuation import stored_continuation_state, write_continuation
-from .journal import Journal, read_journal, snapshot_path
-from .paths import OutputLock, write_error
+from .journal import JournalledFile
+from .paths import write_error
 
 
-class ContinuationFile:
-    """A continuation's HDF5 file and journal: the recorder
-    :func:`cablesim.analyses.continuation.run_continuation` reports to.
+class ContinuationFile(JournalledFile):
+    """A continuation's HDF5 file and journal (:class:`~cablesim.io.journal.JournalledFile`):
+    the recorder :func:`cablesim.analyses.continuation.run_continuation` reports to."""
 
-    Parameters
-    ----------
-    out : Path
-        The HDF5 file; the journal is ``out`` + ``.journal``, the lock ``out`` + ``.lock``.
-    fingerprint : str
-        From :func:`cablesim.io.journal.fingerprint`; stored with every record and in the HDF5
-        file, and checked on resume.
-    resume : bool
-        Go on from the journal of an interrupted run.
-    snapshot_every : float
-        Seconds between atomic rewrites of the HDF5 file.
-    command : str
-        The command line, recorded in the lock.
+    run = "continuation"
 
-    While it runs, the continuation holds ``out.lock``. If ``out`` already holds a complete
-    result, the snapshots go beside it (:func:`cablesim.io.paths.beside`) and replace it only
-    once the continuation is complete.
-    """
-
-    def __init__(self, out: Path, fingerprint: str, resume: bool = False, snapshot_every: float = 3.0,
-                 command: str = ""):
-        self.out = Path(out)
-        self.journal_path = self.out.with_name(self.out.name + ".journal")
-        self.fingerprint = fingerprint
-        self.resume = resume
-        self.snapshot_every = snapshot_every
-        self.lock = OutputLock(self.out, command)
-        self.snapshot = snapshot_path(self.out)
-        self.warnings: list[str] = []
-        self._journal = None
-        self._last = time.monotonic()
-        self.lock.refuse_if_taken()
-
-    def previous(self) -> list[dict]:
-        """Records of the interrupted run (empty unless resuming)."""
-        if not self.resume:
-            return []
-        if not self.journal_path.exists():
-            raise nothing_to_resume_error(self.out, self.fingerprint)
-        records, warnings = read_journal(self.journal_path, self.fingerprint, run="continuation")
-        self.warnings += warnings
-        return records
-
-    def begin(self) -> None:
-        """Take the lock and open the journal (a fresh one unless resuming)."""
-        self.lock.acquire()
-        self._journal = Journal(self.journal_path, self.fingerprint, fresh=not self.resume)
-        self._last = time.monotonic()
+    def nothing_to_resume(self) -> CablesimError:
+        return nothing_to_resume_error(self.out, self.fingerprint)
 
     def record(self, record: dict, result) -> None:
         """Journal one record; rewrite the HDF5 file from ``result()`` if the last snapshot is

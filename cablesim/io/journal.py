@@ -133,28 +133,33 @@ class Journal:
             self.path.unlink(missing_ok=True)
 
 
-class SweepFile:
-    """A sweep's HDF5 file and journal: the recorder :func:`cablesim.analyses.sweep.run_sweep`
-    reports to.
+class JournalledFile:
+    """An HDF5 result file kept with its journal and lock while a run writes it (the sweep's
+    :class:`SweepFile`, the continuation's
+    :class:`~cablesim.io.continuation_journal.ContinuationFile`): the journal is ``out`` +
+    ``.journal``, the lock ``out`` + ``.lock``, the snapshots go to :func:`snapshot_path`.
 
     Parameters
     ----------
     out : Path
-        The HDF5 file; the journal is ``out`` + ``.journal``, the lock ``out`` + ``.lock``.
+        The HDF5 file.
     fingerprint : str
         From :func:`fingerprint`; stored with every record and in the HDF5 file, and checked on
         resume.
     resume : bool
-        Continue from the journal of an interrupted run.
+        Go on from the journal of an interrupted run.
     snapshot_every : float
         Seconds between atomic rewrites of the HDF5 file.
     command : str
         The command line, recorded in the lock so that a second writer is told who holds it.
 
-    While it runs, the sweep holds ``out.lock`` (a second sweep writing the same file is
-    refused). If ``out`` already holds a complete result, the snapshots of this run go beside
-    it (:func:`cablesim.io.paths.beside`) and replace it only once the sweep is complete.
+    While the run goes on, it holds ``out.lock`` (a second run writing the same file is
+    refused). If ``out`` already holds a complete result, the snapshots go beside it
+    (:func:`cablesim.io.paths.beside`) and replace it only once the run is complete.
     """
+
+    #: The kind of run whose journals this reads (:func:`read_journal`).
+    run = "sweep"
 
     def __init__(self, out: Path, fingerprint: str, resume: bool = False, snapshot_every: float = 3.0,
                  command: str = ""):
@@ -170,18 +175,17 @@ class SweepFile:
         self._last = time.monotonic()
         self.lock.refuse_if_taken()
 
+    def nothing_to_resume(self) -> CablesimError:
+        """Why ``--resume`` found no journal at :attr:`out`."""
+        raise NotImplementedError
+
     def previous(self) -> list[dict]:
         """Records of the interrupted run (empty unless resuming)."""
         if not self.resume:
             return []
         if not self.journal_path.exists():
-            if self.out.exists():
-                raise CablesimError(f"{self.out} is already complete (no journal to resume); nothing to do.")
-            raise CablesimError(
-                f"There is no interrupted sweep to resume at {self.out} (no {self.journal_path.name}); "
-                "run the command without --resume."
-            )
-        records, warnings = read_journal(self.journal_path, self.fingerprint)
+            raise self.nothing_to_resume()
+        records, warnings = read_journal(self.journal_path, self.fingerprint, run=self.run)
         self.warnings += warnings
         return records
 
@@ -190,6 +194,19 @@ class SweepFile:
         self.lock.acquire()
         self._journal = Journal(self.journal_path, self.fingerprint, fresh=not self.resume)
         self._last = time.monotonic()
+
+
+class SweepFile(JournalledFile):
+    """A sweep's HDF5 file and journal (:class:`JournalledFile`): the recorder
+    :func:`cablesim.analyses.sweep.run_sweep` reports to."""
+
+    def nothing_to_resume(self) -> CablesimError:
+        if self.out.exists():
+            return CablesimError(f"{self.out} is already complete (no journal to resume); nothing to do.")
+        return CablesimError(
+            f"There is no interrupted sweep to resume at {self.out} (no {self.journal_path.name}); "
+            "run the command without --resume."
+        )
 
     def point(self, point, result) -> None:
         """Journal one point (a :class:`~cablesim.analyses.sweep_points.SweepPoint`, in its JSON

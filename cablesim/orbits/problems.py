@@ -24,9 +24,12 @@ class OrbitProblem:
         self.last_failure: FlowStatus | None = None
         self.u_scale = np.tile(np.asarray(state_scale, dtype=float), shooting.segments)
         self.lam_scale = float(lam_scale)
+        #: Diagonal blocks the variational equations are carried on (None: the whole Jacobian;
+        #: :meth:`~cablesim.orbits.shooting.Shooting.segment`).
+        self.blocks = None
 
     def evaluate(self, u, lam):
-        ev = self.shooting.evaluate(u, lam)
+        ev = self.shooting.evaluate(u, lam, blocks=self.blocks)
         if ev.status != ok.OK:
             self.last_failure = ev.status
             return None
@@ -57,13 +60,6 @@ class PlanarOrbitProblem(OrbitProblem):
         #: variational equations are then integrated on the blocks alone (about the planar
         #: cable's cost plus the out-of-plane block's instead of the whole spatial Jacobian's).
         self.blocks = mirror.coordinate_blocks()
-
-    def evaluate(self, u, lam):
-        ev = self.shooting.evaluate(u, lam, blocks=self.blocks)
-        if ev.status != ok.OK:
-            self.last_failure = ev.status
-            return None
-        return ev
 
     def test_functions(self, ev: Evaluation) -> np.ndarray:
         return stability.split_test_functions(*split_multipliers(self.mirror, ev.monodromy))

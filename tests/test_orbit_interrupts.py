@@ -202,3 +202,30 @@ def test_continue_stops_within_a_second_inside_a_long_flow(tmp_path, signum, cod
     assert took < 3.0, f"ended {took:.1f} s after {name}"
     assert f"interrupted ({name})" in " ".join(text.split()) and "Traceback" not in text
     assert not (tmp_path / "c.h5").exists()
+
+
+def test_a_flag_raised_while_a_compiled_loop_runs_is_seen():
+    """:func:`~cablesim.dynamics.interrupts.stop_requested` reads the flag from memory at every
+    step: set from another thread 50 ms into a loop of tens of millions of steps (some 0.3 s),
+    it ends the loop at once. (A plain ``flag[0]`` in such a loop was hoisted out of it by the
+    compiler: a long orbit flow of a continuation ran to its end after Ctrl-C;
+    tests/test_api_interrupts.py.)"""
+    import numba
+
+    @numba.njit(nogil=True)
+    def watched(flag, n):
+        s = 0.0
+        for k in range(n):
+            if interrupts.stop_requested(flag):
+                return k, s
+            s += np.sin(k * 1e-3)
+        return -1, s
+
+    n = 30_000_000
+    flag = np.zeros(1, dtype=np.int64)
+    watched(flag, 10)  # compiled
+    timer = threading.Timer(0.05, flag.__setitem__, (0, 1))
+    timer.start()
+    end = watched(flag, n)[0]
+    timer.join()
+    assert 0 < end < n

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..dynamics.interrupts import stop_requested
 from ..jit import njit
 from ..mechanics.banded import half_band, is_band
 from .kernels import INTERRUPTED, NONFINITE, OK, PARAM_NONE, PARAM_OMEGA, advance_state, sample_step
@@ -174,7 +175,7 @@ def flow_mechanical(balance, stiffness_times, load_derivative, model, prm, work,
         xmax[i] = x[i]
         xmin[i] = x[i]
     for k in range(nsteps + 1):
-        if stop[0] != 0:
+        if stop_requested(stop):
             return INTERRUPTED
         last = k == nsteps
         for st in range(s if not last else 1):
@@ -235,7 +236,7 @@ def flow_dense_directions(field, model, prm, work, x0, theta0, omega, duration, 
         xmax[i] = x[i]
         xmin[i] = x[i]
     for k in range(nsteps + 1):
-        if stop[0] != 0:
+        if stop_requested(stop):
             return INTERRUPTED
         last = k == nsteps
         for st in range(s if not last else 1):

@@ -54,7 +54,7 @@ import numpy as np
 
 from ..dynamics import interrupts
 from ..dynamics.extremes import hermite_extreme
-from ..dynamics.interrupts import Deferred
+from ..dynamics.interrupts import Deferred, stop_requested
 from ..dynamics.status import INNER_SOLVE, INTERRUPTED, NONFINITE, OK, SLACK
 from ..jit import njit
 
@@ -490,7 +490,7 @@ def flow_segment(field, model, prm, work, x0, theta0, omega, duration, nsteps, A
     q_chunk = 0.0
     first_chunk = True
     for k in range(nsteps + 1):
-        if stop[0] != 0:
+        if stop_requested(stop):
             return INTERRUPTED
         last = k == nsteps
         # the last sample needs only its rate (first stage), not a step

@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..dynamics.interrupts import stop_requested
 from ..jit import njit
 from ..mechanics.banded import half_band, is_band
 from . import bandlu
@@ -238,7 +239,7 @@ def radau_orbit(balance, stiffness_band, model, prm, work, geo3, Kb3, x0, theta0
         for i in range(nd):
             ap[s, i] = c[s] * h * x[nd + i]  # the first step starts from the linear guess
     for k in range(nsteps + 1):
-        if stop[0] != 0:
+        if stop_requested(stop):
             return INTERRUPTED
         sample_step(k, x, rate, xprev, dprev, h, xmax, xmin, rec)
         if k == nsteps:
@@ -349,7 +350,7 @@ def radau_directions(stiffness_times, load_derivative, model, prm, theta0, omega
     gv = np.zeros((3, nd))
     ld = np.empty(nd)
     for k in range(nsteps):
-        if stop[0] != 0:
+        if stop_requested(stop):
             return INTERRUPTED
         AB, piv, geo3, rates = tape_AB[k], tape_piv[k], tape_geo[k], tape_rate[k]
         _plain_rhs(stiffness_times, model, geo3, W1, h, V, RHS, tmp)

@@ -2,7 +2,10 @@
 
 Each function takes a :class:`~cablesim.case.Case` and returns a *run*: the result objects of
 the analysis together with the case, with :meth:`to_hdf5` writing the same file the command line
-writes (and :meth:`plot` its PNGs). Nothing here prints, exits or writes unless asked to.
+writes (and :meth:`plot` its PNGs). Nothing here prints, exits or writes unless asked to. Ctrl-C interrupts every
+analysis within about a second, inside the compiled flow of a long orbit too (the handlers stay
+the caller's: a script gets ``KeyboardInterrupt``, or the analysis's ``Interrupted`` with what it
+kept).
 
 >>> import cablesim
 >>> case = cablesim.load_case()                    # the paper's example (or a path, or a dict)
@@ -14,7 +17,6 @@ from __future__ import annotations
 
 import subprocess
 import sys
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -34,6 +36,7 @@ from .case import load_case as _read_case_file
 from .case.placement import placements_text
 from .case.numbers import DAMPING_RATIO, DURATION, MODE, OMEGA, OUTPUT_STEP, PEAK_VELOCITY, check_flag
 from .case.files import check_step_flags, step_flag_overrides
+from .dynamics import interrupts
 from .dynamics.integrators import Integrator
 from .dynamics.result import HistoryResult
 from .errors import CablesimError
@@ -49,14 +52,13 @@ from .io.naming import rerun_output as _rerun_output
 from .io.results import ResultFile, load_result  # noqa: F401 (cablesim.load_result)
 from .io.sweeps import write_sweep
 from .orbits import OrbitPoint
-from .plots.base import kept_figures
 from .plots.animation import DEFAULT_FPS, DEFAULT_FRAMES, animate_file, animate_history, save_animation
 from .plots.cable import plot_cable
 from .plots.charts import plot_backbone, plot_stability_chart
 from .plots.continuation import plot_continuation
 from .plots.history import plot_history
 from .plots.modes import DEFAULT_MODES_DRAWN, draw_modes, save_figure
-from .plots.redraw import redraw
+from .plots.redraw import LabelledArrays, redraw
 from .plots.style import figure_output
 from .plots.run_report import write_run_report
 from .plots.sweep import plot_sweep
@@ -88,27 +90,6 @@ def load_case(source: str | Path | dict | None = None, overrides: list[str] | No
     case = case_from_dict(source, overrides) if isinstance(source, dict) else _read_case_file(source, overrides)[0]
     check_step_flags(case, dt)
     return case
-
-
-class LabelledArrays:
-    """``to_xarray()`` for a run: its file, as ``to_hdf5`` writes it, read back as an
-    ``xarray.Dataset`` (:meth:`cablesim.io.results.ResultFile.to_xarray`; needs xarray); and
-    ``figures()``, its standard figures as matplotlib ``Figure`` objects."""
-
-    def to_xarray(self, group: str | None = None):
-        """The run's results as an ``xarray.Dataset`` with named axes, coordinates and units:
-        the same labels as ``cablesim.load_result(file).to_xarray(group)`` on its file."""
-        with tempfile.TemporaryDirectory() as folder:
-            ds = load_result(self.to_hdf5(Path(folder) / "run.h5")).to_xarray(group)
-        ds.attrs.pop("result_file", None)  # a file that no longer exists
-        return ds
-
-    def figures(self) -> list:
-        """The run's standard figures, those its command draws, as matplotlib ``Figure`` objects
-        (in a notebook each shows itself; ``fig.savefig`` writes it in any format)."""
-        with tempfile.TemporaryDirectory() as folder, kept_figures() as kept:
-            redraw([self.to_hdf5(Path(folder) / "run.h5")])
-        return kept
 
 
 @dataclass(frozen=True)
@@ -185,6 +166,7 @@ class Planned:
         """Steps, saved instants, memory and disk of the run."""
         return self.plan.cost()
 
+    @interrupts.interruptible
     def run(self, progress: Callable[[float], None] | None = None) -> HistoryRun:
         """Integrate (``progress`` is called with the simulated time reached, s)."""
         st, hist, integ = self.plan.run(progress)
@@ -278,11 +260,13 @@ def sweep_cost(case: Case, analysis: str | None = None, integrator: str | None =
     return estimate_sweep(case, analysis, integrator)
 
 
+@interrupts.interruptible
 def backbone_cost(case: Case, mode: int | None = None, analysis: str | None = None) -> Cost:
     """The most a backbone of ``mode`` can cost (:func:`cablesim.analyses.estimates.backbone_cost`)."""
     return _backbone_cost(case, mode, analysis)
 
 
+@interrupts.interruptible
 def continuation_cost(case: Case, analysis: str | None = None) -> Cost:
     """What :func:`continuation` will take on its first branch: orbits, Runge-Kutta steps,
     memory and seconds, from a probe of its first few orbits (or the least the range can take,
@@ -290,6 +274,7 @@ def continuation_cost(case: Case, analysis: str | None = None) -> Cost:
     return _continuation_cost(case, analysis)
 
 
+@interrupts.interruptible
 def sweep(
     case: Case,
     jobs: int = 1,
@@ -353,6 +338,7 @@ class ContinuationRun(LabelledArrays):
         return plot_stability_chart(h5_path, path)
 
 
+@interrupts.interruptible
 def continuation(
     case: Case,
     analysis: str | None = None,
@@ -360,6 +346,7 @@ def continuation(
     loci_progress: Callable | None = None,
     output: str | Path | None = None,
     resume: bool = False,
+    force: bool = False,
 ) -> ContinuationRun:
     """Every periodic response over the case's ``continuation:`` range, stable and unstable.
 
@@ -389,18 +376,24 @@ def continuation(
         traced (a killed continuation loses no finished orbit; ``resume=True`` goes on from
         the journal, :mod:`cablesim.io.continuation_journal`); written at the end. Without
         it nothing is written.
+    force : bool
+        With ``continuation.loci``: trace the curves even when their estimate, made once the
+        branches are traced (:func:`cablesim.analyses.charts.loci_cost`), is above the limits.
 
     Raises
     ------
     cablesim.analyses.charts.Interrupted
         Ctrl-C or SIGTERM while the branches or the curves were traced; its ``result`` keeps what
         was done (``complete`` False).
+    cablesim.analyses.charts.CurvesRefused
+        The curves' estimate is above the limits; its ``result`` keeps the branches (with
+        ``output``, in the file and its journal: ``resume=True, force=True`` traces the curves).
     """
     recorder = None
     if output is not None:
         recorder = ContinuationFile(Path(output), fingerprint(case.text, analysis, "continue"), resume=resume,
                                     command=invocation()["command_line"])
-    return ContinuationRun(case, run_continuation(case, analysis, progress, loci_progress, recorder))
+    return ContinuationRun(case, run_continuation(case, analysis, progress, loci_progress, recorder, force))
 
 
 @dataclass(frozen=True)
@@ -422,6 +415,7 @@ class BackboneRun(LabelledArrays):
         return plot_backbone(h5_path, path, responses=responses)
 
 
+@interrupts.interruptible
 def backbone(
     case: Case,
     mode: int | None = None,

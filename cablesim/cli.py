@@ -507,7 +507,7 @@ def continue_(
     say_warnings(cli_guard.check_overlay(overlay, case))
     _effective(ctx, output=out)
     cli_guard.run_continue(case, out, analysis.value if analysis else None, overlay, plot, _note, _echo, _OUT["quiet"],
-                           force, resume)
+                           force, resume, ctx)
 
 
 @app.command()

@@ -182,12 +182,12 @@ def nothing_to_resume(out: Path, fingerprint: str, echo) -> bool:
     raise nothing_to_resume_error(out, fingerprint)
 
 
-def interrupted(result, out: Path) -> None:
+def interrupted(result, out: Path, ctx=None) -> None:
     """Say what an interrupted ``continue -o`` kept (the file written from the journal, beside a
-    complete result of the same name) and the command that finishes it; exit 130 or 143."""
+    complete result of the same name) and the command that finishes it (from the invocation
+    ``ctx``); exit 130 or 143."""
     import shlex
 
-    import click
     import typer
 
     from .dynamics import interrupts
@@ -199,7 +199,6 @@ def interrupted(result, out: Path) -> None:
         say_error(f"interrupted ({interrupts.signal_name()}) before any orbit was computed; nothing was written.")
         raise typer.Exit(interrupts.exit_status())
     target = snapshot_path(out)  # where the run wrote: beside a complete result, never over it
-    ctx = click.get_current_context(silent=True)
     again = shlex.join(command_words(ctx, drop=("resume", "output")) + ["--output", str(out), "--resume"]) if ctx else None
     kept = f" (the complete result {out} is untouched)" if target != out else ""
     say_error(f"interrupted ({interrupts.signal_name()}); {kept_text(result)} until then are in {target}{kept}, marked "
@@ -208,16 +207,40 @@ def interrupted(result, out: Path) -> None:
     raise typer.Exit(interrupts.exit_status())
 
 
+def curves_refused(exc, out: Path, ctx=None) -> None:
+    """Say why the bifurcation curves were not traced, where the branches are and the command
+    that traces the curves from them (from the invocation ``ctx``); exit 2."""
+    import shlex
+
+    import typer
+
+    from .io.journal import snapshot_path
+    from .io.provenance import command_words
+    from .io.terminal import say_error
+
+    target = snapshot_path(out)
+    again = (shlex.join(command_words(ctx, drop=("resume", "output", "force")) + ["--output", str(out), "--resume", "--force"])
+             if ctx else None)
+    cost = exc.cost.text().split(": ", 1)[1]
+    say_error(f"continuation.loci: the bifurcation curves would take {cost}, more than allowed ({exc.why}), so they "
+              f"were not traced. The branches ({kept_text(exc.result)}) are in {target}, marked incomplete, and in the "
+              f"journal {out.name}.journal. Narrow continuation.{exc.second} or continuation.omega, or "
+              "lower continuation.max_points (points per curve direction), and run again; or trace these curves "
+              "from the branches with:", command=again)
+    raise typer.Exit(2)
+
+
 def run_continue(case, out: Path, analysis, overlay, plot: bool, note, echo, quiet: bool, force: bool = False,
-                 resume: bool = False) -> None:
+                 resume: bool = False, ctx=None) -> None:
     """The computing part of ``cablesim continue``, its inputs and outputs checked: bound its
     cost, continue (every orbit journaled and the file kept current; ``resume``: from the
     journal of an interrupted run), say what an interruption kept, refuse an empty result,
-    report and draw."""
+    report and draw; ``ctx``, the invocation, gives the commands that finish an interrupted or
+    refused run."""
     import time
 
     from . import api, cli_charts
-    from .analyses.charts import Interrupted
+    from .analyses.charts import CurvesRefused, Interrupted
     from .io.finish import replace_result
     from .io.journal import fingerprint
     from .io.report import continuation_summary
@@ -237,9 +260,12 @@ def run_continue(case, out: Path, analysis, overlay, plot: bool, note, echo, qui
         t0, c0 = time.perf_counter(), notice.seconds()  # the estimate's time left out
         try:
             run = api.continuation(case, analysis, progress=cli_charts.branch_status(status),
-                                   loci_progress=cli_charts.loci_status(status), output=out, resume=resume)
+                                   loci_progress=cli_charts.loci_status(status), output=out, resume=resume,
+                                   force=force)
         except Interrupted as exc:
-            interrupted(exc.result, out)
+            interrupted(exc.result, out, ctx)
+        except CurvesRefused as exc:
+            curves_refused(exc, out, ctx)
     err = empty_continuation(run.result, case)
     if err is not None:
         raise err

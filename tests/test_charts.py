@@ -157,6 +157,39 @@ def test_plot_redraws_the_response_and_its_chart(loci_run, invoke_cli, tmp_path)
         assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 20_000
 
 
+def test_curves_above_the_limits_are_refused_after_the_branches_and_traced_on_resume(loci_run, tmp_path):
+    """With 100000 points allowed per curve direction, the curves' bound (made once the
+    branches are traced: 3 curves, each point about 6 flows) is above the 1e8 steps allowed: the
+    command stops with status 2 before any curve, the branches kept (file marked incomplete, and
+    the journal), and names the command that traces the curves; that command, run as printed,
+    gives the curves of the run with the default limit (they end on the bounds of gamma long
+    before either limit)."""
+    import shlex
+
+    from typer.testing import CliRunner
+
+    from cablesim.cli import app
+
+    out = tmp_path / "band.h5"
+    wide = LOCI.replace("loci: true,", "loci: true, max_points: 100000,")
+    res = CliRunner().invoke(app, ["continue", str(CONFIG), "--set", wide, "-o", str(out), "--no-plot"])
+    text = " ".join(res.stderr.split())
+    assert res.exit_code == 2 and "Traceback" not in res.stderr, res.stderr
+    assert "continuation.loci" in text and "were not traced" in text and "more than the 1e+08 allowed" in text
+    d = read_continuation(out)
+    assert not d["complete"] and not d.get("loci") and out.with_name("band.h5.journal").exists()
+    words = shlex.split(res.stderr.strip().splitlines()[-1])
+    assert words[:2] == ["cablesim", "continue"] and words[-2:] == ["--resume", "--force"], res.stderr
+    res = CliRunner().invoke(app, words[1:])
+    assert res.exit_code == 0, res.stderr
+    got, want = read_continuation(out), read_continuation(loci_run[0])
+    assert got["complete"] and not out.with_name("band.h5.journal").exists()
+    assert [L["name"] for L in got["loci"]["loci"]] == [L["name"] for L in want["loci"]["loci"]]
+    for a, b in zip(got["loci"]["loci"], want["loci"]["loci"]):
+        for key in ("omega", "gamma", "state"):
+            np.testing.assert_array_equal(a[key], b[key])
+
+
 @pytest.mark.parametrize("setting, words", [
     ("continuation={omega: {start: 4.9, stop: 5.2}, loci: true}", "continuation.loci needs"),
     ("continuation={omega: {start: 4.9, stop: 5.2}, loci: true, gamma: {start: 0.5, stop: 1.0, at: 2.0}}",

@@ -239,3 +239,26 @@ def test_progress_lines_when_standard_error_is_not_a_terminal(monkeypatch, capsy
         for text in ("a", "b", "c", "d", "e"):  # at t = 1, 4, 5.5, 6, 11
             status(text)
     assert capsys.readouterr().err.split("\n") == ["c", "e", ""]
+
+
+@pytest.mark.parametrize("signum, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_an_interrupted_run_names_the_command_that_finishes_it(tmp_path, reference, signum, code):
+    """Ctrl-C or SIGTERM once orbits are journaled: the message says what was kept, and the
+    command it prints, run as printed, completes the branches of an uninterrupted run."""
+    import shlex
+
+    args = ["continue", CONFIG, "--set", NEAR_2W1, "-o", "out.h5", "--no-plot"]
+    out, journal = tmp_path / "out.h5", tmp_path / "out.h5.journal"
+    proc = start_cli(args, tmp_path)
+    wait_for_orbits(proc, journal, 15)
+    proc.send_signal(signum)
+    status, _, stderr = finish_cli(proc)
+    assert status == code, stderr
+    assert "Traceback" not in stderr and "Finish the continuation with:" in flat(stderr)
+    words = shlex.split(stderr.strip().splitlines()[-1])
+    assert words[:2] == ["cablesim", "continue"] and words[-1] == "--resume", stderr
+    assert len([r for r in records(journal) if r["record"] == "orbit"]) >= 15
+    status, _, stderr = finish_cli(start_cli(words[1:], tmp_path))
+    assert status == 0, stderr
+    assert read_continuation(out)["complete"] and not journal.exists()
+    assert_same_branches(file_branches(out), reference)

@@ -28,8 +28,10 @@ from ..errors import CablesimError, ConvergenceError
 from ..orbits import cable_scales, cable_system
 from ..orbits.backbone import BackbonePoint, linear_modes, trace_backbone
 from ..orbits.conservative import conservative_cable_system
+from ..orbits.budget import orbit_budget
 from ..orbits.continuation import Settings
-from ..orbits.curves import Locus, LociInterrupted, trace_loci
+from ..orbits.curves import CURVE_KINDS, Locus, LociInterrupted, trace_loci
+from .cost import ContinuationCost
 from .setup import build_equations
 from .static import run_static
 
@@ -44,6 +46,9 @@ DEFAULT_BACKBONE_AMPLITUDE = 0.02
 #: never converged at 1e-9 on modes 2 to 4 of the paper example. Newton converges
 #: quadratically, so a correction of 1e-7 leaves an error at the round-off level.
 BACKBONE_NEWTON_TOL = {"exact": 1e-9, "approximate": 1e-7}
+#: Flows one point of a bifurcation curve takes (the orbit with both parameters' derivatives and
+#: the directional flows of its defining function, over a couple of Newton steps).
+LOCUS_FLOWS = 6
 
 
 class Interrupted(KeyboardInterrupt):
@@ -52,6 +57,23 @@ class Interrupted(KeyboardInterrupt):
     def __init__(self, result):
         super().__init__("interrupted")
         self.result = result
+
+
+class CurvesRefused(CablesimError):
+    """The bifurcation curves of a traced response diagram would cost more than the limits
+    (:func:`loci_cost`): ``result`` holds the branches (``complete`` False), ``cost`` the
+    estimate that refused them."""
+
+    def __init__(self, result, cost: ContinuationCost, why: str, second: str = "gamma"):
+        super().__init__(f"continuation.loci: the bifurcation curves of the {len(result.branches)} branches traced would "
+                         f"take {cost.text().split(': ', 1)[1]}, more than allowed ({why}). Narrow "
+                         f"continuation.{second} or "
+                         "continuation.omega, or lower continuation.max_points (points per curve direction); "
+                         "force=True traces them anyway.", field="continuation.loci")
+        self.result = result
+        self.cost = cost
+        self.why = why
+        self.second = second
 
 
 @dataclass(frozen=True)
@@ -235,6 +257,27 @@ def case_loci(case: Case, eom, diagram, idx: np.ndarray, progress: Callable | No
     stats = {"loci_evaluations": sum(L.evaluations for L in loci), "loci_points": sum(len(L.points) for L in loci),
              "loci_seconds": sum(L.seconds for L in loci)}
     return (*_results(case, loci, diagram, idx), stats)
+
+
+def loci_cost(case: Case, eom, diagram) -> ContinuationCost:
+    """The most the bifurcation curves of ``diagram`` (traced, with ``continuation.loci``) can
+    take, before they start: a curve from every located, trusted bifurcation of a kind that is
+    followed (some turn out to be covered by another's curve: an upper bound), each up to
+    ``continuation.max_points`` points in both directions, each point about
+    :data:`LOCUS_FLOWS` flows of its orbit's period (the shooting's own step rule over the
+    omega range); seconds from the branches' pace, steps per second."""
+    spec = case.continuation
+    w = spec.omega
+    budget = orbit_budget(eom, "omega", w.start, w.stop, 1, spec.segments, spec.fixed_gamma, spec.fixed_support)
+    starts = [b for b in diagram.bifurcations if b.kind in CURVE_KINDS and b.located and b.trusted]
+    points = 2 * spec.max_points * len(starts)
+    steps = 2.0 * spec.max_points * LOCUS_FLOWS * budget.mean_steps * sum(b.period for b in starts)
+    taken, seconds = diagram.stats.get("steps", 0), diagram.stats.get("seconds", 0.0)
+    pace = seconds / taken if taken > 0 and seconds > 0 else float("nan")
+    return ContinuationCost("bifurcation curves", steps, points, budget.working + budget.per_orbit * points, 0.0,
+                            f"{len(starts)} curves of up to {2 * spec.max_points} points, each about {LOCUS_FLOWS} "
+                            f"flows of {budget.mean_steps:.3g} steps per forcing period", seconds=pace * steps,
+                            most=True)
 
 
 def finish_loci(case: Case, eom, diagram, idx: np.ndarray, progress=None):

@@ -25,7 +25,7 @@ from ..orbits.diagram import BranchEnd, BranchesInterrupted
 from ..orbits.resume import TraceLog
 from ..orbits.stability import frequency_ratio
 from ..orbits.symmetry import in_plane_whirling, rotation_sense
-from .charts import Interrupted, finish_loci
+from .charts import CurvesRefused, Interrupted, finish_loci, loci_cost
 from .orbit_strain import orbit_strains, strain_warning
 from .setup import build_equations, frequency_of_interest, make_integrator
 from .static import beyond_small_strains, run_static
@@ -477,6 +477,7 @@ def run_continuation(
     progress: Callable[[OrbitPoint], None] | None = None,
     loci_progress: Callable | None = None,
     recorder: ContinuationRecorder | None = None,
+    force: bool = False,
 ) -> ContinuationResult:
     """Continue the periodic responses of a case over its ``continuation:`` range.
 
@@ -496,6 +497,9 @@ def run_continuation(
         ``previous()`` records (an interrupted run of the same case) are restored and the
         tracing goes on from them (:mod:`cablesim.orbits.resume`). The bifurcation curves
         are traced again.
+    force : bool
+        Trace the bifurcation curves even where their estimate (:func:`~.charts.loci_cost`,
+        made once the branches are known) is above the limits.
 
     Returns
     -------
@@ -506,6 +510,9 @@ def run_continuation(
     Interrupted
         Ctrl-C or SIGTERM while the branches or the bifurcation curves were traced: ``result``
         holds the orbits and the curves traced so far (``complete`` False).
+    CurvesRefused
+        The curves' estimate is above the limits (and not ``force``): ``result`` holds the
+        branches (``complete`` False; the recorder keeps them, and its journal resumes).
     """
     start = prepare_continuation(case, analysis)
     spec, eom = start.spec, start.eom
@@ -524,6 +531,7 @@ def run_continuation(
         result, diagram = _branches(start, case, callback, log)
         result.warnings[:0] = list(getattr(recorder, "warnings", ()))  # journal records skipped
         if result.complete and spec.loci:
+            _check_loci_cost(case, eom, diagram, result, force)
             result.loci, result.codim2, more, interrupted = finish_loci(case, eom, diagram, start.idx, loci_progress)
             result.loci_parameter = spec.loci_parameter
             result.loci_range = (spec.loci_range.start, spec.loci_range.stop)
@@ -536,6 +544,20 @@ def run_continuation(
     if not result.complete:
         raise Interrupted(result)
     return result
+
+
+def _check_loci_cost(case: Case, eom, diagram, result: ContinuationResult, force: bool) -> None:
+    """Refuse bifurcation curves whose estimate is above the limits (unless ``force``), the
+    branches kept in ``result`` (marked incomplete)."""
+    if force:
+        return
+    cost = loci_cost(case, eom, diagram)
+    # steps and memory only: the count of curve points is a loose bound (a curve usually leaves
+    # the range long before max_points), which the default max_points of a few curves exceeds
+    why = cost.excess(count_samples=False)
+    if why is not None:
+        result.complete = False
+        raise CurvesRefused(result, cost, why, case.continuation.loci_parameter)
 
 
 def _branches(start: ContinuationStart, case: Case, callback, log) -> tuple:

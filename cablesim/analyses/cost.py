@@ -229,11 +229,13 @@ class ContinuationCost(Cost):
     def long(self) -> bool:
         return not self.seconds <= LONG_SECONDS or self.memory > 1e8
 
-    def excess(self) -> str | None:
+    def excess(self, count_samples: bool = True) -> str | None:
+        """Why the run is above the limits (None if it is not); ``count_samples`` False leaves
+        the number of orbits out (steps and memory bound it)."""
         why = []
         if not self.steps <= MAX_ORBIT_STEPS:
             why.append(f"{self.steps:.3g} Runge-Kutta steps, more than the {MAX_ORBIT_STEPS:.0e} allowed")
-        if not self.samples <= MAX_ORBITS:
+        if count_samples and not self.samples <= MAX_ORBITS:
             why.append(f"{self.samples:.0f} orbits, more than the {MAX_ORBITS} allowed")
         if not self.memory <= MAX_MEMORY:
             why.append(f"{_size(self.memory)} of memory, more than the {_size(MAX_MEMORY)} allowed")

@@ -21,6 +21,7 @@ from ..orbits.budget import orbit_budget
 from ..orbits.conservative import conservative_cable_system
 from ..orbits.diagram import BranchEnd
 from ..orbits.shooting import Shooting
+from .charts import LOCUS_FLOWS
 from .continuation import prepare_continuation, trace
 from .dynamic import HistoryPlan, plan_free_vibration, plan_history
 from .setup import build_equations
@@ -32,9 +33,6 @@ from .cost import ContinuationCost, seconds_text
 PROBE_STEPS = 2000
 #: Orbits of a continuation's first branch computed to time it and find its pace.
 PROBE_ORBITS = 6
-#: Flows one point of a bifurcation curve takes (the orbit with both parameters' derivatives and
-#: the directional flows of its defining function, over a couple of Newton steps).
-LOCUS_FLOWS = 6
 
 
 def wall_per_simulated_second(plan: HistoryPlan) -> float:

@@ -12,6 +12,7 @@ given with continuation files is drawn over their frequency responses.
 
 from __future__ import annotations
 
+import tempfile
 from pathlib import Path
 
 from ..case import parse_case, read_figure
@@ -20,7 +21,8 @@ from ..channels import normalise_channel
 from ..errors import CablesimError
 from ..io.charts import has_loci
 from ..io.hdf5 import FAMILY_TEXT, ResultInfo, inspect_result, read_history, read_static_drawing
-from .base import stamp_figures
+from ..io.results import load_result
+from .base import kept_figures, stamp_figures
 from .cable import plot_cable
 from .charts import plot_backbone, plot_stability_chart
 from .composite import draw_figure
@@ -180,3 +182,24 @@ def _snapshots(infos: list[ResultInfo], output, count: int) -> list[Path]:
         png = Path(output) if output is not None else info.path.with_name(info.path.stem + "-snapshots.png")
         written.append(plot_snapshots(read_history(info.path), case.to_cable(), png, case.name, count))
     return written
+
+
+class LabelledArrays:
+    """``to_xarray()`` for a run: its file, as ``to_hdf5`` writes it, read back as an
+    ``xarray.Dataset`` (:meth:`cablesim.io.results.ResultFile.to_xarray`; needs xarray); and
+    ``figures()``, its standard figures as matplotlib ``Figure`` objects."""
+
+    def to_xarray(self, group: str | None = None):
+        """The run's results as an ``xarray.Dataset`` with named axes, coordinates and units:
+        the same labels as ``cablesim.load_result(file).to_xarray(group)`` on its file."""
+        with tempfile.TemporaryDirectory() as folder:
+            ds = load_result(self.to_hdf5(Path(folder) / "run.h5")).to_xarray(group)
+        ds.attrs.pop("result_file", None)  # a file that no longer exists
+        return ds
+
+    def figures(self) -> list:
+        """The run's standard figures, those its command draws, as matplotlib ``Figure`` objects
+        (in a notebook each shows itself; ``fig.savefig`` writes it in any format)."""
+        with tempfile.TemporaryDirectory() as folder, kept_figures() as kept:
+            redraw([self.to_hdf5(Path(folder) / "run.h5")])
+        return kept

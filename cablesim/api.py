@@ -166,7 +166,7 @@ class Planned:
         """Steps, saved instants, memory and disk of the run."""
         return self.plan.cost()
 
-    @interrupts.interruptible
+    @interrupts.watching()
     def run(self, progress: Callable[[float], None] | None = None) -> HistoryRun:
         """Integrate (``progress`` is called with the simulated time reached, s)."""
         st, hist, integ = self.plan.run(progress)
@@ -260,13 +260,13 @@ def sweep_cost(case: Case, analysis: str | None = None, integrator: str | None =
     return estimate_sweep(case, analysis, integrator)
 
 
-@interrupts.interruptible
+@interrupts.watching()
 def backbone_cost(case: Case, mode: int | None = None, analysis: str | None = None) -> Cost:
     """The most a backbone of ``mode`` can cost (:func:`cablesim.analyses.estimates.backbone_cost`)."""
     return _backbone_cost(case, mode, analysis)
 
 
-@interrupts.interruptible
+@interrupts.watching()
 def continuation_cost(case: Case, analysis: str | None = None) -> Cost:
     """What :func:`continuation` will take on its first branch: orbits, Runge-Kutta steps,
     memory and seconds, from a probe of its first few orbits (or the least the range can take,
@@ -274,7 +274,7 @@ def continuation_cost(case: Case, analysis: str | None = None) -> Cost:
     return _continuation_cost(case, analysis)
 
 
-@interrupts.interruptible
+@interrupts.watching()
 def sweep(
     case: Case,
     jobs: int = 1,
@@ -338,7 +338,7 @@ class ContinuationRun(LabelledArrays):
         return plot_stability_chart(h5_path, path)
 
 
-@interrupts.interruptible
+@interrupts.watching()
 def continuation(
     case: Case,
     analysis: str | None = None,
@@ -415,7 +415,7 @@ class BackboneRun(LabelledArrays):
         return plot_backbone(h5_path, path, responses=responses)
 
 
-@interrupts.interruptible
+@interrupts.watching()
 def backbone(
     case: Case,
     mode: int | None = None,

@@ -22,7 +22,6 @@
 from __future__ import annotations
 
 import contextlib
-import functools
 import signal
 import socket
 import threading
@@ -100,7 +99,8 @@ def watching():
     the signal handlers are left as they are (the caller's: a script's Ctrl-C raises
     ``KeyboardInterrupt`` as usual, only within about a second even in the flow of a long
     orbit). Nested uses, and uses under :func:`install`, share the one watcher; the outermost
-    removes it. Without this a compiled loop of the orbits runs to its end before Python's
+    removes it. Also a decorator (``@watching()``, the functions of the
+    Python API). Without this a compiled loop of the orbits runs to its end before Python's
     handler can act."""
     mine = not _wakeup and _main_thread()
     if mine:
@@ -110,17 +110,6 @@ def watching():
     finally:
         if mine:
             _unwatch()
-
-
-def interruptible(func):
-    """``func`` run under :func:`watching` (the functions of the Python API)."""
-
-    @functools.wraps(func)
-    def wrapper(*args, **kwargs):
-        with watching():
-            return func(*args, **kwargs)
-
-    return wrapper
 
 
 def _watch() -> None:

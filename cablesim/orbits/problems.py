@@ -9,7 +9,7 @@ import numpy as np
 from . import kernels as ok
 from . import stability
 from .shooting import Evaluation, FlowStatus, Shooting
-from .symmetry import Mirror, split_multipliers
+from .symmetry import Mirror
 
 
 class OrbitProblem:
@@ -27,9 +27,12 @@ class OrbitProblem:
         #: Diagonal blocks the variational equations are carried on (None: the whole Jacobian;
         #: :meth:`~cablesim.orbits.shooting.Shooting.segment`).
         self.blocks = None
+        #: Keep every evaluation's orbit at its steps (:attr:`Evaluation.steps`), for the measures
+        #: of the converged orbits (strain, whirling) without integrating them once more.
+        self.record = False
 
     def evaluate(self, u, lam):
-        ev = self.shooting.evaluate(u, lam, blocks=self.blocks)
+        ev = self.shooting.evaluate(u, lam, blocks=self.blocks, record=self.record)
         if ev.status != ok.OK:
             self.last_failure = ev.status
             return None
@@ -62,17 +65,35 @@ class PlanarOrbitProblem(OrbitProblem):
         self.blocks = mirror.coordinate_blocks()
 
     def test_functions(self, ev: Evaluation) -> np.ndarray:
-        return stability.split_test_functions(*split_multipliers(self.mirror, ev.monodromy))
+        return stability.split_test_functions(*block_multipliers(self.mirror, ev))
 
     def confirm(self, name: str, ev: Evaluation) -> str | None:
-        mu_in, mu_out = split_multipliers(self.mirror, ev.monodromy)
+        mu_in, mu_out = block_multipliers(self.mirror, ev)
         if name.startswith("out-of-plane "):
             base = stability.confirm(name[len("out-of-plane "):], mu_out)
             return None if base is None else name
         return stability.confirm(name, mu_in)
 
 
-def labelled_multipliers(mirror: Mirror, monodromy: np.ndarray) -> tuple[np.ndarray, tuple]:
-    """The multipliers of a planar orbit from the two blocks of its monodromy, sorted together
-    (:func:`~cablesim.orbits.stability.sort_multipliers`), and the block of each."""
-    return mirror.labelled(*split_multipliers(mirror, monodromy))
+def block_multipliers(mirror: Mirror, ev: Evaluation) -> tuple[np.ndarray, np.ndarray]:
+    """The in-plane and out-of-plane multipliers of a planar orbit's evaluation
+    (:func:`~cablesim.orbits.symmetry.split_multipliers` of its monodromy), computed once per
+    evaluation: the tests, their confirmation and the orbit's labels all ask for them."""
+    if ev.blocks_mu is None:
+        Pe, Po = monodromy_blocks(mirror, ev)
+        ev.blocks_mu = (stability.sort_multipliers(np.linalg.eigvals(Pe)), stability.sort_multipliers(np.linalg.eigvals(Po)))
+    return ev.blocks_mu
+
+
+def monodromy_blocks(mirror: Mirror, ev: Evaluation) -> tuple[np.ndarray, np.ndarray]:
+    """The in-plane and out-of-plane blocks of a planar orbit's monodromy
+    (:meth:`~cablesim.orbits.symmetry.Mirror.blocks`), computed once per evaluation."""
+    if ev.blocks_phi is None:
+        ev.blocks_phi = mirror.blocks(ev.monodromy)[:2]
+    return ev.blocks_phi
+
+
+def labelled_multipliers(mirror: Mirror, ev: Evaluation) -> tuple[np.ndarray, tuple]:
+    """The multipliers of a planar orbit's evaluation from the two blocks of its monodromy,
+    sorted together (:func:`~cablesim.orbits.stability.sort_multipliers`), and the block of each."""
+    return mirror.labelled(*block_multipliers(mirror, ev))

@@ -55,6 +55,9 @@ class PlanarOrbitProblem(OrbitProblem):
     pitchfork, never a fold or branch point of the planar branch."""
 
     test_names = stability.TEST_NAMES + stability.OUT_OF_PLANE_TESTS
+    #: Judge the out-of-plane block's steps on its matrix (:meth:`step_ratio`); False: on all the
+    #: multipliers together, as the matrix-free path does (it forms no block).
+    block_step_rule = True
 
     def __init__(self, shooting: Shooting, state_scale: np.ndarray, lam_scale: float, mirror: Mirror):
         super().__init__(shooting, state_scale, lam_scale)
@@ -66,6 +69,20 @@ class PlanarOrbitProblem(OrbitProblem):
 
     def test_functions(self, ev: Evaluation) -> np.ndarray:
         return stability.split_test_functions(*block_multipliers(self.mirror, ev))
+
+    def step_ratio(self, ev_a: Evaluation, ev_b: Evaluation) -> float:
+        """Each block in its own terms: the in-plane multipliers as the planar cable's
+        (:func:`~cablesim.orbits.stability.step_ratio`), the out-of-plane block on its matrix
+        (:func:`~cablesim.orbits.stability.interpolated_step_ratio`). The out-of-plane
+        multipliers of a lightly damped string turn fast with the parameter and pass near
+        ``+1`` and ``-1`` again and again without approaching the circle; judged as multipliers
+        they held the steps of the planar branch to a fraction of the planar cable's."""
+        if not self.block_step_rule:
+            return super().step_ratio(ev_a, ev_b)
+        in_a, in_b = block_multipliers(self.mirror, ev_a)[0], block_multipliers(self.mirror, ev_b)[0]
+        return max(stability.step_ratio(in_a, in_b),
+                   stability.interpolated_step_ratio(monodromy_blocks(self.mirror, ev_a)[1],
+                                                     monodromy_blocks(self.mirror, ev_b)[1]))
 
     def confirm(self, name: str, ev: Evaluation) -> str | None:
         mu_in, mu_out = block_multipliers(self.mirror, ev)
@@ -81,7 +98,7 @@ def block_multipliers(mirror: Mirror, ev: Evaluation) -> tuple[np.ndarray, np.nd
     evaluation: the tests, their confirmation and the orbit's labels all ask for them."""
     if ev.blocks_mu is None:
         Pe, Po = monodromy_blocks(mirror, ev)
-        ev.blocks_mu = (stability.sort_multipliers(np.linalg.eigvals(Pe)), stability.sort_multipliers(np.linalg.eigvals(Po)))
+        ev.blocks_mu = tuple(stability.sort_multipliers(np.linalg.eigvals(P)) for P in (Pe, Po))
     return ev.blocks_mu
 
 

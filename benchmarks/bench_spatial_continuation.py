@@ -8,7 +8,10 @@ out-of-plane blocks with the out-of-plane tests. After a warm-up of each that co
 the kernels, the planar and the spatial runs alternate ``--repeats`` times in this process;
 quoted: the median CPU (``time.process_time``) and wall seconds of each, their ratio (the
 target is at most 3), and what each found. ``--profile`` adds the top of a cProfile of one
-spatial run. Run with ``python benchmarks/bench_spatial_continuation.py`` (part of
+spatial run; ``--check-steps`` one more spatial run that re-solves the orbit at the middle of
+every accepted step of its planar branches and compares the out-of-plane multipliers of the
+step rule's linear interpolant of the block (:func:`~cablesim.orbits.stability.interpolated_step_ratio`)
+with the true ones there. Run with ``python benchmarks/bench_spatial_continuation.py`` (part of
 ``make bench``).
 """
 
@@ -24,6 +27,9 @@ from pathlib import Path
 import numpy as np
 
 from cablesim import api
+from cablesim.orbits import problems
+from cablesim.orbits.shooting import solve_orbit
+from cablesim.orbits.stability import sort_multipliers
 
 CASE = Path(__file__).resolve().parents[1] / "configs" / "paper-example.yaml"
 #: The same range and the same two channels (vertical of both nodes) in both runs.
@@ -72,11 +78,42 @@ def profile(case, top: int) -> str:
     return out.getvalue()
 
 
+def check_steps(case) -> str:
+    """The largest error of the out-of-plane multipliers of the interpolated block at mid-step,
+    over the accepted steps of the planar branches, relative to the true multipliers' distance
+    from the unit circle there (the orbit re-solved at the chord's middle parameter)."""
+    rule = problems.PlanarOrbitProblem.step_ratio
+    worst = []
+
+    def checked(self, ev_a, ev_b):
+        ratio = rule(self, ev_a, ev_b)
+        if ratio <= 1.0:
+            sol = solve_orbit(self.shooting, 0.5 * (ev_a.u + ev_b.u), 0.5 * (ev_a.lam + ev_b.lam),
+                              scale=self.u_scale[: self.shooting.n])
+            if sol.converged:
+                true = sort_multipliers(np.linalg.eigvals(self.mirror.blocks(sol.evaluation.monodromy)[1]))
+                mid = np.linalg.eigvals(0.5 * (problems.monodromy_blocks(self.mirror, ev_a)[1]
+                                               + problems.monodromy_blocks(self.mirror, ev_b)[1]))
+                err = max(float(np.abs(mid - mu).min()) for mu in true)
+                worst.append(err / float(np.abs(np.abs(true) - 1.0).min()))
+        return ratio
+
+    problems.PlanarOrbitProblem.step_ratio = checked
+    try:
+        api.continuation(case)
+    finally:
+        problems.PlanarOrbitProblem.step_ratio = rule
+    return (f"  mid-step check of {len(worst)} accepted steps: the interpolated out-of-plane multipliers within "
+            f"{max(worst):.3f} of the true ones' distance from the unit circle (median {np.median(worst):.3f})")
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=3, help="alternations of planar and spatial runs (median quoted)")
     ap.add_argument("--profile", type=int, default=0, metavar="N", help="print the top N functions of a profile "
                     "of one spatial run")
+    ap.add_argument("--check-steps", action="store_true", help="check the out-of-plane step rule's interpolant "
+                    "against orbits re-solved at mid-step")
     args = ap.parse_args(argv)
     case = cases()
     last = {sp: timed(case[sp])[2] for sp in (False, True)}  # compile or load the kernels
@@ -102,6 +139,8 @@ def main(argv=None) -> None:
             for run in branch_cpu[True]]
     print(f"  the branches both compute (the spatial run's planar ones): {np.median(same):.2f} s CPU, "
           f"{np.median(same) / np.median(cpu[False]):.2f} times the planar run", flush=True)
+    if args.check_steps:
+        print(check_steps(case[True]), flush=True)
     if args.profile:
         print(profile(case[True], args.profile))
 

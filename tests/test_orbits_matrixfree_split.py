@@ -23,6 +23,7 @@ from cablesim.case import case_from_dict, parse_case
 from cablesim.orbits import Shooting, cable_system, continue_branches, linear_response_state, solve_orbit
 from cablesim.orbits import floquet
 from cablesim.orbits.matrixfree import MatrixFreeShooting
+from cablesim.orbits.problems import PlanarOrbitProblem
 from cablesim.orbits.starting import cable_scales
 from cablesim.orbits.splitleading import split_leading
 from cablesim.orbits.symmetry import split_multipliers
@@ -42,6 +43,16 @@ loads: {gravity: 9.81, point: [{node: 1, FL: [0.0, 200.0, 0.0]}]}
 analysis: exact
 damping: {ratio: 0.005, modes: [1, 2]}
 """
+
+
+@pytest.fixture(autouse=True)
+def dense_steps_on_the_multipliers(monkeypatch):
+    """The matrix-free path forms no monodromy block, so it judges a step on the leading
+    multipliers of both blocks together; the dense path it is compared with takes its steps by
+    that rule too (its own judges the out-of-plane block on its matrix,
+    :func:`~cablesim.orbits.stability.interpolated_step_ratio`), so that both visit the same
+    points."""
+    monkeypatch.setattr(PlanarOrbitProblem, "block_step_rule", False)
 
 
 def bead(FL: float, omega: float):

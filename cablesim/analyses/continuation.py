@@ -26,7 +26,7 @@ from ..orbits.resume import TraceLog
 from ..orbits.stability import frequency_ratio
 from ..orbits.symmetry import in_plane_whirling, rotation_sense
 from .charts import CurvesRefused, Interrupted, finish_loci, loci_cost
-from .orbit_strain import orbit_strains, strain_warning
+from .orbit_strain import orbit_strains, strain_measure, strain_warning
 from .setup import build_equations, frequency_of_interest, make_integrator
 from .static import beyond_small_strains, run_static
 
@@ -402,6 +402,7 @@ def trace(start: ContinuationStart, callback, max_points: int | None = None, swi
         callback=callback, gamma=spec.fixed_gamma, support=spec.fixed_support, initial_state=start.initial,
         segments=spec.segments, max_period=spec.max_period,
         settings=Settings(max_points=spec.max_points if max_points is None else max_points), log=log,
+        measure=strain_measure(start.eom),
     )
 
 

@@ -1,8 +1,11 @@
 """The largest strain of every orbit of a continuation, and the warning for orbits beyond the model.
 
-An orbit is integrated once more from its shooting unknowns, without the variational equations
-(a small fraction of what Newton's method spent on it), and the strain ``(l - S) / S`` of every
-segment is taken at every step from the node positions ``y0 + z``: in the exact analysis this
+The strain ``(l - S) / S`` of every segment is taken at every integration step of the orbit
+from the node positions ``y0 + z``: on the steps of the flow that converged, recorded while the
+orbit was traced (:func:`strain_measure`, the tracing's ``measure``), or, for an orbit traced
+without them (restored from a journal, or shot matrix-free), on the steps of one more
+integration from its shooting unknowns without the variational equations (the same numbers:
+the state's arithmetic does not depend on them). in the exact analysis this
 is ``T / EA``; in the approximate one it is the stretch of the displaced cable (the supports
 taken at their places at rest: a moving support's own motion is not counted). Orbits whose
 largest strain is beyond the model's small strains
@@ -19,10 +22,24 @@ from ..orbits.systems import cable_system
 from .static import SMALL_STRAINS_TEXT, beyond_small_strains
 
 
+def strain_measure(eom):
+    """The largest strain ``(l - S) / S`` of an orbit of ``eom`` from its steps (a function of
+    :meth:`~cablesim.orbits.shooting.Shooting.steps`; the ``measure`` of
+    :func:`~cablesim.orbits.continue_branches`)."""
+    nd, cable, y0 = eom.n_dof, eom.cable, eom.y0
+
+    def largest(steps: list) -> float:
+        z = np.concatenate([rec[:, :nd] for _, rec in steps])
+        return float(np.max(segment_strains(cable, y0 + z)))
+
+    return largest
+
+
 def orbit_strains(eom, branch, parameter: str, gamma: float, support: float) -> np.ndarray:
     """The largest strain ``(l - S) / S`` over each orbit of ``branch`` (an
-    :class:`~cablesim.orbits.diagram.OrbitBranch`), from its integration steps; NaN where the
-    orbit cannot be integrated again.
+    :class:`~cablesim.orbits.diagram.OrbitBranch`): its :attr:`~cablesim.orbits.diagram.OrbitPoint.measure`
+    if the tracing took it (:func:`strain_measure`), else from the steps of one more
+    integration; NaN where the orbit cannot be integrated again.
 
     Parameters
     ----------
@@ -36,23 +53,28 @@ def orbit_strains(eom, branch, parameter: str, gamma: float, support: float) -> 
     """
     if not branch.points:
         return np.zeros(0)
+    out = np.full(len(branch.points), np.nan)
+    todo = [i for i, p in enumerate(branch.points) if p.measure is None]
+    for i, p in enumerate(branch.points):
+        if p.measure is not None:
+            out[i] = p.measure
+    if not todo:
+        return out
     g0 = branch.points[0].parameter if parameter == "gamma" else gamma
     s0 = branch.points[0].parameter if parameter == "support" else support
     system = cable_system(eom, gamma=g0, support=s0)
     # the orbit's own period and segments; a dense flow whatever shot it (no variational equations)
     segments = max(1, branch.points[-1].u.size // system.dim)
     sh = Shooting(system, period=branch.period, segments=segments, parameter=parameter)
-    nd, cable = eom.n_dof, eom.cable
-    out = np.full(len(branch.points), np.nan)
-    for i, p in enumerate(branch.points):
+    largest = strain_measure(eom)
+    for i in todo:
+        p = branch.points[i]
         if p.u.size != segments * system.dim:
             continue
         try:
-            steps = sh.steps(p.u, p.parameter)
+            out[i] = largest(sh.steps(p.u, p.parameter))
         except FloatingPointError:
             continue
-        z = np.concatenate([rec[:, :nd] for _, rec in steps])
-        out[i] = float(np.max(segment_strains(cable, eom.y0 + z)))
     return out
 
 

@@ -31,15 +31,15 @@ from typing import Callable
 import numpy as np
 
 from . import kernels as ok
-from . import stability
 from .continuation import Settings, continuation
 from .matrixfree import MatrixFreeShooting, orbit_leading, solve_orbit_mf
 from .mfproblem import MatrixFreeOrbitProblem, uses_matrix_free
+from .orbitpoint import bifurcation_at, orbit_point
 from .diagram import Bifurcation, BranchEnd, BranchesInterrupted, OrbitBranch, OrbitPoint, ResponseDiagram
-from .problems import OrbitProblem, PlanarOrbitProblem, labelled_multipliers
+from .problems import OrbitProblem, PlanarOrbitProblem
 from .resume import TraceLog
-from .shooting import Evaluation, FlowStatus, Shooting, solve_orbit
-from .splitleading import PlanarMatrixFreeProblem, labelled_leading, split_leading
+from .shooting import FlowStatus, Shooting, solve_orbit
+from .splitleading import PlanarMatrixFreeProblem, split_leading
 from .starting import cable_scales, integrate_to_steady, linear_response_state
 from .switching import (
     MergeWatch,
@@ -50,7 +50,7 @@ from .switching import (
     pitchfork_direction,
     start_factor,
 )
-from .symmetry import Mirror, in_plane_whirling, orbit_whirling
+from .symmetry import in_plane_whirling
 from .systems import OdeSystem, cable_system
 
 
@@ -61,53 +61,6 @@ SWITCH_ATTEMPTS = 3
 #: eigenvector nearest -1 of the whole monodromy is then the out-of-plane one.
 DOUBLINGS = {None: "period-doubling", "in-plane": "period-doubling",
              "out-of-plane": "out-of-plane period-doubling"}
-#: Samples per forcing period of a nonplanar orbit for its whirling measures.
-WHIRL_SAMPLES = 256
-
-
-def _orbit_point(system: OdeSystem, shooting: Shooting, cp, branch: int, index: int, residual_tol: float,
-                 liouville_tol: float, mirror: Mirror | None = None) -> OrbitPoint:
-    ev: Evaluation = cp.evaluation
-    d = system.displacements
-    xmax, xmin = ev.xmax[d], ev.xmin[d]
-    mu, planes, whirl = ev.multipliers, None, None
-    if mirror is not None:  # the blocks of the dense monodromy, or the leading multipliers of each
-        mu, planes = labelled_multipliers(mirror, ev.monodromy) if ev.monodromy is not None \
-            else labelled_leading(mirror, ev.split)
-    elif getattr(system, "frame", None) is not None and hasattr(shooting, "trajectory"):
-        # a nonplanar orbit of a spatial cable (of a symmetric one, or one forced out of its plane)
-        whirl = orbit_whirling(system.frame, shooting, cp.u, cp.lam, WHIRL_SAMPLES)
-    # Liouville's formula needs the whole spectrum; the leading multipliers' eigenpair residuals
-    # are the check of a matrix-free orbit
-    check = ev.liouville <= liouville_tol if ev.monodromy is not None or ev.leading is None \
-        else ev.leading.residual <= liouville_tol
-    trusted = bool(cp.residual <= 10.0 * residual_tol and check and np.all(np.isfinite(mu)))
-    return OrbitPoint(
-        branch=branch, index=index, parameter=float(cp.lam), omega=ev.omega, period=shooting.period,
-        state=cp.u[: shooting.n].copy(), u=cp.u.copy(), amplitude=np.maximum(np.abs(xmax), np.abs(xmin)),
-        halfrange=0.5 * (xmax - xmin), multipliers=mu.copy(), stable=stability.is_stable(mu), trusted=trusted,
-        residual=float(cp.residual), liouville=float(ev.liouville), special=cp.special, located=cp.located,
-        planes=planes, whirl=whirl,
-    )
-
-
-def _bifurcation(p: OrbitPoint, branch: int) -> Bifurcation:
-    """The bifurcation at special point ``p`` of branch ``branch`` (on a planar branch of a
-    symmetric system: its kind and the block of the critical multiplier)."""
-    kind, plane, mu = p.special, None, p.multipliers
-    if p.planes is not None:
-        kind, plane = stability.SPLIT_KINDS[p.special]
-        mu = p.multipliers[np.array(p.planes) == plane]
-    crit = stability.critical_multiplier(kind, mu)
-    return Bifurcation(
-        kind=kind, parameter=p.parameter, branch=branch, period=p.period,
-        amplitude=p.amplitude, halfrange=p.halfrange, state=p.state,
-        multiplier=crit, multipliers=p.multipliers,
-        located=p.located, trusted=p.trusted, point=p.index, plane=plane,
-        frequency_ratio=stability.frequency_ratio(crit),
-    )
-
-
 class _Tracer:
     """The branches of one :func:`trace_branches` call: shootings (one per period and segment
     count, shared by the branches), the continuation of each branch and the switching at
@@ -115,7 +68,8 @@ class _Tracer:
 
     def __init__(self, system: OdeSystem, parameter: str, settings: Settings, direction: float,
                  state_scale: np.ndarray, lam_scale: float, callback, integration: dict,
-                 liouville_tol: float, switch_size: float, matrix_free: bool = False, log: TraceLog | None = None):
+                 liouville_tol: float, switch_size: float, matrix_free: bool = False, log: TraceLog | None = None,
+                 measure: Callable | None = None):
         self.system = system
         #: Where the runs are recorded as they come, and replayed from (:mod:`cablesim.orbits.resume`).
         self.log = log if log is not None else TraceLog()
@@ -132,6 +86,8 @@ class _Tracer:
         self.integration = integration
         self.liouville_tol = liouville_tol
         self.switch_size = switch_size
+        #: The measure of every orbit (:func:`trace_branches`), or None.
+        self.measure = measure
         self.diagram = ResponseDiagram(parameter=parameter)
         self.shootings: dict = {}
         #: Scaled size of the perturbation that started each period-doubled branch, by index.
@@ -210,6 +166,9 @@ class _Tracer:
         br.segments = sh.segments
         self.diagram.branches.append(br)
         problem, mirror = self.problem(sh, br, u_start)
+        # the dense flows keep their steps when an orbit's measures would integrate it again
+        problem.record = not self.matrix_free and (self.measure is not None or (
+            self.system.frame is not None and not br.planar))
         watch = self.watch(br, sh, size)
         for p in prefix:
             p.branch, p.index = idx, len(br.points)
@@ -232,7 +191,8 @@ class _Tracer:
             return bool(self.callback(op)) if self.callback is not None else False
 
         def on_point(cp) -> bool:
-            op = _orbit_point(self.system, sh, cp, idx, -1, self.settings.residual_tol, self.liouville_tol, mirror)
+            op = orbit_point(self.system, sh, cp, idx, -1, self.settings.residual_tol, self.liouville_tol, mirror,
+                              self.measure)
             return deliver(op) if watch is None else watch.observe(cp, op, deliver)
 
         def checkpoint(cp, ds: float, count: int) -> None:
@@ -356,7 +316,7 @@ class _Tracer:
             for p in list(br.points):
                 if not self.is_own_bifurcation(br, p):
                     continue
-                bif = _bifurcation(p, br.index)
+                bif = bifurcation_at(p, br.index)
                 self.diagram.bifurcations.append(bif)
                 if switch_branches and bif.kind == "pitchfork" and (br.index, p.index) not in done_pd:
                     child = self.switch_pitchfork(br, p, bif)
@@ -384,7 +344,7 @@ class _Tracer:
         branch whose period doubling was being switched at), without switching at them."""
         d = self.diagram if diagram is None else diagram
         done = {(b.branch, b.point) for b in d.bifurcations}
-        d.bifurcations += [_bifurcation(p, br.index) for br in d.branches for p in br.points
+        d.bifurcations += [bifurcation_at(p, br.index) for br in d.branches for p in br.points
                            if (br.index, p.index) not in done and self.is_own_bifurcation(br, p)]
 
     def partial(self, seconds: float = 0.0) -> ResponseDiagram:
@@ -431,6 +391,7 @@ def trace_branches(
     switch_size: float = 0.02,
     matrix_free: bool | None = None,
     log: TraceLog | None = None,
+    measure: Callable[[list], float] | None = None,
 ) -> ResponseDiagram:
     """Continue the period-``period`` branch through ``u0`` from ``start`` to ``stop`` and the
     branches born at its period doublings (module docstring).
@@ -480,6 +441,11 @@ def trace_branches(
         Receives every run's records as they come (what the tracing needs to go on after a
         kill), and replays those of an interrupted tracing of the same system and settings
         (:mod:`cablesim.orbits.resume`); its ``partial`` is set to give the diagram so far.
+    measure : callable, optional
+        ``measure(steps)`` of every orbit traced by dense shooting, from the steps of the flow
+        that converged (:meth:`~cablesim.orbits.shooting.Shooting.steps`), in
+        :attr:`OrbitPoint.measure` (for the cable: its largest strain, without integrating the
+        orbit again).
 
     Returns
     -------
@@ -506,7 +472,7 @@ def trace_branches(
     integration = dict(scheme=scheme, steps_per_period=steps_per_period, step_rate=step_rate)
     mf = uses_matrix_free(system, matrix_free)
     tracer = _Tracer(system, parameter, st, np.sign(stop - start) or 1.0, state_scale, lam_scale, callback,
-                     integration, liouville_tol, switch_size, mf, log)
+                     integration, liouville_tol, switch_size, mf, log, measure)
     tracer.log.partial = lambda: tracer.partial(time.perf_counter() - t_start)
     try:
         tracer.first_branch(u0, start, period, segments)
@@ -539,6 +505,7 @@ def continue_branches(
     matrix_free: bool | None = None,
     support: float = 1.0,
     log: TraceLog | None = None,
+    measure: Callable[[list], float] | None = None,
 ) -> ResponseDiagram:
     """Periodic responses of the cable over a range of forcing frequency, load factor or support
     motion multiplier.
@@ -565,7 +532,7 @@ def continue_branches(
     initial_state : ndarray, optional
         Guess of ``(z, y')`` (or ``(z, y', y'')``) at forcing phase 0 at ``start`` (default:
         the linear response).
-    segments, max_period, settings, scheme, steps_per_period, step_rate, liouville_tol, matrix_free, log
+    segments, max_period, settings, scheme, steps_per_period, step_rate, liouville_tol, matrix_free, log, measure
         See :func:`trace_branches`.
     support : float
         Multiplier ``s`` of the supports' motion when continuing in ``omega`` or ``gamma``.
@@ -590,5 +557,5 @@ def continue_branches(
         system, u0, parameter, start, stop, period=period, segments=segments, state_scale=scale,
         lam_scale=lam_scale, switch_branches=switch_branches, max_period=max_period, callback=callback,
         settings=settings, scheme=scheme, steps_per_period=steps_per_period, step_rate=step_rate,
-        liouville_tol=liouville_tol, matrix_free=matrix_free, log=log,
+        liouville_tol=liouville_tol, matrix_free=matrix_free, log=log, measure=measure,
     )

@@ -342,7 +342,9 @@ def _locate(sp, a: Point, b: Point, k: int, name: str, st: Settings):
         if p is None:
             return best, False
         fs = p.tests[k]
-        best = p
+        # the trial nearest the zero: the last one may be the far end of the final bracket
+        if best is None or abs(fs) <= abs(best.tests[k]):
+            best = p
         if fs == 0.0:
             return p, True
         if np.sign(fs) == np.sign(f_lo):

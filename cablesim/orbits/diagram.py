@@ -76,6 +76,10 @@ class OrbitPoint:
         On a nonplanar orbit of a spatial cable whose equilibrium lies in a plane: the signed
         area of every node's path across the plane, its largest ``|w|`` and the tilt of the
         orbit's mean plane (:func:`~cablesim.orbits.symmetry.whirling_measures`).
+    measure : float or None
+        The tracing's ``measure`` of the orbit (:func:`~cablesim.orbits.branches.trace_branches`:
+        for the cable its largest strain), taken on the steps of the flow that converged; None
+        where it was not taken then (an orbit restored from a journal, or no ``measure``).
     """
 
     branch: int
@@ -96,6 +100,7 @@ class OrbitPoint:
     located: bool = True
     planes: tuple | None = None
     whirl: object = None
+    measure: float | None = None
 
 
 @dataclass

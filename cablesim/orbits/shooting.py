@@ -103,6 +103,14 @@ class Evaluation:
     status : FlowStatus
         ``OK`` or why the flow could not be computed (a slack segment, a failed inner solve,
         a non-finite state).
+    steps : list or None
+        With ``record``: the orbit at the integrator's steps, as :meth:`Shooting.steps` gives
+        it (the same flow, so the same numbers), for measures taken on the orbit without
+        integrating it again; None otherwise (or once they have been used and released).
+    blocks_mu, blocks_phi : tuple or None
+        On a planar orbit of a mirror-symmetric system: the in-plane and the out-of-plane
+        multipliers and blocks of the monodromy, once computed
+        (:func:`cablesim.orbits.problems.block_multipliers`, :func:`~cablesim.orbits.problems.monodromy_blocks`).
     """
 
     u: np.ndarray
@@ -122,6 +130,9 @@ class Evaluation:
     xmax: np.ndarray
     xmin: np.ndarray
     status: FlowStatus = FlowStatus.OK
+    steps: list | None = None
+    blocks_mu: tuple | None = None
+    blocks_phi: tuple | None = None
 
     @property
     def liouville(self) -> float:
@@ -261,9 +272,13 @@ class Shooting:
             out["rec"] = rec
         return out
 
-    def evaluate(self, u: np.ndarray, lam: float, jac: bool = True, blocks: tuple | None = None) -> Evaluation:
+    def evaluate(self, u: np.ndarray, lam: float, jac: bool = True, blocks: tuple | None = None,
+                 record: bool = False) -> Evaluation:
         """Residual (and derivatives) at ``(u, lam)``; ``status`` says whether it succeeded.
-        ``blocks``: the variational equations on these diagonal blocks only (:meth:`segment`)."""
+        ``blocks``: the variational equations on these diagonal blocks only (:meth:`segment`);
+        ``record``: keep the orbit at every step (:attr:`Evaluation.steps`; the state's
+        arithmetic does not depend on the variational equations, so these are the steps of
+        :meth:`steps` bit for bit)."""
         n, m = self.n, self.segments
         u = np.asarray(u, dtype=float)
         S = np.array([flushed(s) for s in u.reshape(m, n)])  # the map and its residual of the same states
@@ -278,12 +293,15 @@ class Shooting:
         sign = 1.0
         div = 0.0
         status = ok.OK
+        steps = [] if record else None
         for k in range(m):
-            seg = self.segment(k, S[k], lam, jac=jac, blocks=blocks)
+            seg = self.segment(k, S[k], lam, jac=jac, blocks=blocks, record=record)
             if seg["status"] != ok.OK:
                 status = seg["status"]
                 break
             ends[k] = seg["x"]
+            if record:
+                steps.append((seg["t"], seg["rec"]))
             np.maximum(xmax, seg["xmax"], out=xmax)
             np.minimum(xmin, seg["xmin"], out=xmin)
             if jac:
@@ -310,7 +328,7 @@ class Shooting:
             mu = np.linalg.eigvals(mono)
             mu = sort_multipliers(mu)
         return Evaluation(u.copy(), float(lam), omega, self.period, T, r, J_u, J_lam, ends, G, mono, mu, logdet,
-                          div, xmax, xmin, status)
+                          div, xmax, xmin, status, steps)
 
     # ------------------------------------------------------------------------------------------
     def spread(self, s0: np.ndarray, lam: float) -> np.ndarray | None:

@@ -19,6 +19,8 @@ in the monodromy matrix, so they are robust to multipliers colliding and leaving
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 TEST_NAMES = ("period-doubling", "neimark-sacker", "branch-point")
@@ -45,13 +47,24 @@ def sort_multipliers(mu: np.ndarray) -> np.ndarray:
 
 
 def test_functions(mu: np.ndarray) -> np.ndarray:
-    """``[prod(1 + mu), prod_{i<j}(mu_i mu_j - 1), prod(mu - 1)]`` (real parts)."""
+    """``[prod(1 + mu), prod_{i<j}(mu_i mu_j - 1), prod(mu - 1)]`` (real parts); of every row
+    of a 2-d ``mu``, one row per set of multipliers."""
     mu = np.asarray(mu, dtype=complex)
-    pd = np.prod(1.0 + mu).real
-    i, j = np.triu_indices(mu.size, k=1)
-    ns = np.prod(mu[i] * mu[j] - 1.0).real
-    bp = np.prod(mu - 1.0).real
-    return np.array([pd, ns, bp])
+    pd = np.prod(1.0 + mu, axis=-1).real
+    i, j = _pairs(mu.shape[-1])
+    ns = np.prod(mu[..., i] * mu[..., j] - 1.0, axis=-1).real
+    bp = np.prod(mu - 1.0, axis=-1).real
+    return np.stack([pd, ns, bp], axis=-1)
+
+
+@functools.lru_cache(maxsize=64)
+def _pairs(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The index pairs ``i < j`` of ``n`` multipliers (``numpy.triu_indices``, kept: every point
+    of a branch asks for them)."""
+    i, j = np.triu_indices(n, k=1)
+    i.flags.writeable = False
+    j.flags.writeable = False
+    return i, j
 
 
 def split_test_functions(mu_in: np.ndarray, mu_out: np.ndarray) -> np.ndarray:
@@ -120,6 +133,50 @@ def step_ratio(mu_a: np.ndarray, mu_b: np.ndarray, floor: float = 0.005, near: f
         moved = float(np.abs(mu_b - mu_a[k]).min())  # to its nearest partner at b
         ratio = max(ratio, moved / max(0.5 * float(dist[k]), floor))
     return ratio
+
+
+#: Sub-steps of the linear interpolant of a monodromy block (:func:`interpolated_step_ratio`).
+INTERPOLANT_SUBSTEPS = 8
+
+
+def interpolated_step_ratio(P_a: np.ndarray, P_b: np.ndarray, substeps: int = INTERPOLANT_SUBSTEPS,
+                            floor: float = 0.005, near: float = 0.3) -> float:
+    """:func:`step_ratio` of a block of the monodromy between two points, judged on the matrix
+    instead of its multipliers: the matrix is smooth along a branch, the multipliers are not
+    (a conjugate pair meeting on the real axis, the start of a period-doubling or a +1 tongue,
+    moves as a square root of the parameter there), so their linear motion between the points,
+    which :func:`step_ratio` bounds, is a poor model exactly where it matters.
+
+    The block is interpolated linearly, ``P(t) = (1 - t) P_a + t P_b``, and the step's ratio is
+    the largest of
+
+    - :func:`step_ratio` between the multipliers of ``P`` at consecutive sub-steps
+      ``t = k / substeps`` (the moduli and the motion near ``+1`` and ``-1``, now of a path that
+      goes through the collisions on the real axis as the true multipliers do);
+    - 2 (reject) if a test function (:func:`test_functions`) of ``P`` changes sign inside the
+      step but not between its ends: a multiplier that passes ``-1`` or ``+1`` and back, or a
+      pair through the circle and back, within the step;
+    - the linear model's error against the distance of ``P``'s multipliers from the unit circle
+      (at most half of it, or of ``floor``, as :func:`step_ratio`): the defect
+      ``|det P(1/2) / sqrt(det P_a det P_b) - 1|``, since ``log det`` of the true block is
+      smooth and nearly linear along the branch (Liouville's formula) while the interpolant's
+      determinant falls short by ``(dtheta / 2)^2`` for every pair turning by ``dtheta`` over the
+      step, about twice the error that turn gives its multipliers at mid-step.
+    """
+    P_a, P_b = np.asarray(P_a, dtype=float), np.asarray(P_b, dtype=float)
+    ts = np.linspace(0.0, 1.0, substeps + 1)
+    mus = [sort_multipliers(mu) for mu in np.linalg.eigvals(np.array([(1.0 - t) * P_a + t * P_b for t in ts]))]
+    ratio = max(step_ratio(mus[k], mus[k + 1], floor, near) for k in range(substeps))
+    signs = np.sign(test_functions(np.array(mus)))
+    hidden = (np.count_nonzero(signs[1:] != signs[:-1], axis=0) > 0) & (signs[0] == signs[-1])
+    if np.any(hidden):
+        ratio = max(ratio, 2.0)
+    mean = np.sqrt(abs(np.linalg.det(P_a) * np.linalg.det(P_b)))
+    if mean > 0.0:
+        defect = abs(np.linalg.det(0.5 * (P_a + P_b)) / mean - 1.0)
+        crit = float(np.abs(np.abs(np.concatenate(mus)) - 1.0).min())
+        ratio = max(ratio, defect / max(0.5 * crit, floor))
+    return float(ratio)
 
 
 def is_stable(mu: np.ndarray) -> bool:

@@ -180,8 +180,9 @@ def doubled_point(p, period: int, u: np.ndarray, **changes):
     mu = p.multipliers**2
     order = np.lexsort((-mu.imag, -np.abs(mu)))  # the order of stability.sort_multipliers
     planes = None if p.planes is None else tuple(p.planes[k] for k in order)
+    # its measure is of the orbit of one lap, taken on its steps: the doubled orbit's is taken anew
     return replace(p, period=period, u=u, special="period-doubling", multipliers=mu[order], planes=planes,
-                   **changes)
+                   **{"measure": None, **changes})
 
 
 class MergeWatch:

@@ -265,11 +265,13 @@ def whirling_measures(mirror: Mirror, x: np.ndarray, dt: float, max_w: np.ndarra
     return Whirling(area=area, tilt=tilt, max_w=np.asarray(max_w, dtype=float))
 
 
-def orbit_whirling(frame: Mirror, shooting, u: np.ndarray, lam: float, samples: int = 256) -> Whirling:
+def orbit_whirling(frame: Mirror, shooting, u: np.ndarray, lam: float, samples: int = 256,
+                   steps: list | None = None) -> Whirling:
     """The whirling measures of the orbit through the shooting unknowns ``u`` at parameter
-    ``lam`` (a :class:`~cablesim.orbits.shooting.Shooting`), integrated once: ``samples`` per
+    ``lam`` (a :class:`~cablesim.orbits.shooting.Shooting`), integrated once (unless its
+    ``steps`` are given, :meth:`~cablesim.orbits.shooting.Shooting.steps`): ``samples`` per
     forcing period for the area and tilt, the steps themselves for the largest ``|w|``."""
-    steps = shooting.steps(u, lam)
+    steps = shooting.steps(u, lam) if steps is None else steps
     t, x = shooting.trajectory(u, lam, samples_per_period=samples, steps=steps)
     return whirling_measures(frame, x, float(t[1] - t[0]), largest_w(frame, steps, float(t[-1])))
 

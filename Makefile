@@ -35,6 +35,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_continuation.py
 	$(PY) benchmarks/bench_charts.py
 	$(PY) benchmarks/bench_accelerate.py
+	$(PY) benchmarks/bench_accelerate_heavy.py
 	$(PY) benchmarks/bench_heavy.py
 	$(PY) benchmarks/bench_approximate.py
 	$(PY) benchmarks/bench_adaptive.py

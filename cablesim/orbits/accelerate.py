@@ -41,18 +41,44 @@ Cost: an orbit found once is remembered (stable or not), so later checks against
 integration at all; Newton stops at the first step that does not halve the residual (the
 trajectory is then too far from the orbit for the acceptance test anyway), and fruitless
 attempts back off geometrically.
+
+**Heavy cables: matrix-free shooting.** Above the crossover the continuation measured
+(:func:`~cablesim.orbits.mfproblem.uses_matrix_free`: more than
+:data:`~cablesim.orbits.mfproblem.MATRIX_FREE_DOF` states) the monodromy is never formed
+(:class:`~cablesim.orbits.matrixfree.MatrixFreeShooting`, the scheme chosen by cost: Radau IIA
+for stiff heavy cables, else rk8 at :data:`STEP_RATE`):
+
+- Newton's steps are solved by GMRES on the action of ``M - I``, preconditioned by the deflation
+  of the leading invariant subspace at the first iterate (:func:`newton_mf`; same full steps,
+  abandonment rule and tolerance as the dense :func:`newton`);
+- the leading multipliers (modulus above :data:`LEADING_BOUND`) come from subspace iteration on
+  ``M v`` (:func:`~cablesim.orbits.matrixfree.orbit_leading`), with the largest discarded
+  modulus; ``rho`` is the largest of them, and "every multiplier inside the unit circle" means
+  every leading one with its Ritz residual inside, and the bound on the discarded ones below 1
+  (a search stopped at its cap on products establishes no bound: not accepted);
+- the linearisation test takes ``M e_j`` as one directional derivative along the orbit per test
+  vector (the oldest first, so that a failing test costs one), remembered for the next checks.
+
+Cables at or below the crossover (the paper's examples among them) are shot densely, exactly as
+before; those between it and :data:`DENSE_DOF` degrees of freedom, shot densely before, are now
+shot matrix-free; a cable asked to be shot densely (``matrix_free=False``) above
+:data:`DENSE_DOF` is integrated alone, as every cable above it was.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..dynamics.equations import EquationsOfMotion
 from ..dynamics.integrators import DOPRI5, Integrator
 from ..dynamics.steady import DECIDE_EVERY, PointResult, SteadyCriterion, periodic_response, steady_response
+from .floquet import DEFAULT_BOUND, Deflation
 from .kernels import OK
+from .krylov import gmres
+from .matrixfree import MatrixFreeShooting, MFEvaluation, orbit_leading
+from .mfproblem import uses_matrix_free
 from .shooting import Evaluation, Shooting
 from .systems import cable_system
 
@@ -105,6 +131,21 @@ CHECKS_PER_DECAY = 8
 #: attempt from it (it would find the same orbit again). A cost rule only, like
 #: :data:`REPEATS`: acceptance does not depend on it.
 NEAR = 0.2
+#: Most degrees of freedom of the dense shooting: above, a cable whose orbits are not shot
+#: matrix-free is integrated alone (a dense monodromy per attempt would cost more than it saves).
+DENSE_DOF = 40
+#: Matrix-free path: multipliers of modulus above this bound are computed, the rest are stated
+#: to be below it (:class:`~cablesim.orbits.floquet.Leading`); the deflation by their subspace
+#: preconditions Newton's GMRES.
+LEADING_BOUND = DEFAULT_BOUND
+#: Residual of the kept Ritz pairs at the orbit (scaled coordinates), and at the first Newton
+#: iterate, where they only precondition.
+LEADING_TOL = 1e-9
+PRECONDITION_TOL = 1e-6
+#: GMRES relative tolerance of a matrix-free Newton step (the steps then converge linearly at
+#: this rate, well inside :data:`NEWTON_SHRINK`) and its most iterations.
+KRYLOV_TOL = 1e-6
+MAX_KRYLOV = 200
 
 
 @dataclass
@@ -126,6 +167,10 @@ class Orbit:
     noise : float
         Scaled prediction residual the strobes' integration leaves even on the orbit
         (:data:`NOISE_FACTOR`).
+    shooting : MatrixFreeShooting or None
+        The matrix-free shooting of the orbit (its monodromy is then used through its action
+        only, ``evaluation`` an :class:`~cablesim.orbits.matrixfree.MFEvaluation` with the
+        leading multipliers); None for the dense shooting.
     """
 
     period: int
@@ -134,15 +179,45 @@ class Orbit:
     scale: np.ndarray
     phase: int
     noise: float = 0.0
+    shooting: MatrixFreeShooting | None = None
+    actions: dict = field(default_factory=dict, repr=False)
 
     @property
     def rho(self) -> float:
-        """Largest multiplier modulus."""
-        return float(np.abs(self.evaluation.multipliers[0]))
+        """Largest multiplier modulus (matrix-free: of the leading ones, or the largest
+        discarded modulus when none is above the bound)."""
+        if self.shooting is None:
+            return float(np.abs(self.evaluation.multipliers[0]))
+        lead = self.evaluation.leading
+        return max(float(np.abs(lead.multipliers).max(initial=0.0)), float(lead.discarded))
 
     @property
     def stable(self) -> bool:
-        return bool(np.all(np.abs(self.evaluation.multipliers) < 1.0))
+        """Every multiplier inside the unit circle. Matrix-free: every leading one, with its
+        Ritz residual, and the bound on the discarded ones below 1 (it is below
+        :data:`LEADING_BOUND` only when the search converged, i.e. stopped before its cap on
+        products)."""
+        if self.shooting is None:
+            return bool(np.all(np.abs(self.evaluation.multipliers) < 1.0))
+        lead = self.evaluation.leading
+        converged = lead.complete or lead.products < max(200, 20 * self.u.size)
+        inside = bool(np.all(np.abs(lead.multipliers) + lead.residuals < 1.0))
+        return bool(converged and inside and lead.discarded < lead.bound < 1.0)
+
+    def scaled_action(self, e: np.ndarray) -> np.ndarray | None:
+        """``M e`` in the scaled coordinates ``x / scale``, by one directional derivative along
+        the orbit (matrix-free orbits; remembered, as the same strobes are tested again at the
+        next checks); None if the variational equations cannot be integrated."""
+        key = e.tobytes()
+        if key not in self.actions:
+            try:
+                Me = self.shooting.monodromy_apply(self.evaluation, (e * self.scale)[:, None])[:, 0] / self.scale
+            except FloatingPointError:
+                Me = None
+            if len(self.actions) >= 4 * LINEAR_PERIODS:
+                self.actions.pop(next(iter(self.actions)))
+            self.actions[key] = Me
+        return self.actions[key]
 
 
 def _third_order(eom: EquationsOfMotion, x: np.ndarray) -> np.ndarray:
@@ -206,6 +281,8 @@ def in_linear_neighbourhood(states: np.ndarray, k: int, orbit: Orbit) -> bool:
     j = k - ((k - orbit.phase) % p)  # last passage near orbit.u
     if j - LINEAR_PERIODS * p < 0:
         return False
+    if orbit.shooting is not None:
+        return _linear_matrix_free(states[j - LINEAR_PERIODS * p : j + 1 : p], orbit)
     M = orbit.evaluation.monodromy
     Ms = (M / orbit.scale[:, None]) * orbit.scale[None, :]  # M in scaled coordinates
     margin = NONLINEAR * abs(1.0 - orbit.rho)  # |.|: an unstable orbit is tested alike, never accepted
@@ -213,6 +290,21 @@ def in_linear_neighbourhood(states: np.ndarray, k: int, orbit: Orbit) -> bool:
     for i in range(LINEAR_PERIODS):
         unexplained = float(np.abs(e[i + 1] - Ms @ e[i]).max())
         if unexplained > margin * float(np.abs(e[i]).max()) + orbit.noise:
+            return False
+    return True
+
+
+def _linear_matrix_free(passages: np.ndarray, orbit: Orbit) -> bool:
+    """:func:`in_linear_neighbourhood` on the last :data:`LINEAR_PERIODS` + 1 passages near a
+    matrix-free orbit: ``M e_j`` by one directional derivative per test vector, the oldest first
+    (the likeliest to fail: the others are then not needed)."""
+    margin = NONLINEAR * abs(1.0 - orbit.rho)
+    e = (passages - orbit.u) / orbit.scale
+    for i in range(LINEAR_PERIODS):
+        Me = orbit.scaled_action(e[i])
+        if Me is None:
+            return False
+        if float(np.abs(e[i + 1] - Me).max()) > margin * float(np.abs(e[i]).max()) + orbit.noise:
             return False
     return True
 
@@ -246,15 +338,60 @@ def newton(eom: EquationsOfMotion, shooting: Shooting, x: np.ndarray) -> Evaluat
     return None
 
 
+def newton_mf(eom: EquationsOfMotion, shooting: MatrixFreeShooting, x: np.ndarray,
+              start: np.ndarray | None = None) -> MFEvaluation | None:
+    """:func:`newton` by the matrix-free shooting: each step by GMRES on the action of
+    ``J_u = M - I``, preconditioned by the deflation of the leading invariant subspace at the
+    first iterate (from ``start``, a basis of a nearby orbit's, if given); the same full steps,
+    abandonment rule and tolerance. The converged evaluation carries its leading multipliers
+    (:data:`LEADING_BOUND`, :data:`LEADING_TOL`), or None."""
+    omega = eom.omega
+    jac = shooting.scheme == "radau"  # the directions of a Radau orbit replay its tape
+    ev = shooting.evaluate(x, omega, jac=jac)
+    if ev.status != OK:
+        return None
+    scale = _orbit_scale(eom, ev.xmax, ev.xmin)
+    bound = NEWTON_TOL * scale + np.broadcast_to(np.asarray(shooting.system.noise, dtype=float), x.shape)
+    res = float(np.abs(ev.r / scale).max())
+    try:
+        lead = orbit_leading(shooting, ev, scale, bound=LEADING_BOUND, tol=PRECONDITION_TOL, start=start)
+        pre = Deflation(lead.basis, lead.schur)
+        for _ in range(MAX_NEWTON):
+            def apply(v, ev=ev):
+                return shooting.jacobian_apply(ev, (v * scale)[:, None])[:, 0] / scale
+
+            du = gmres(apply, -ev.r / scale, tol=KRYLOV_TOL, max_iter=MAX_KRYLOV, precondition=pre).x * scale
+            if not np.all(np.isfinite(du)):
+                return None
+            if np.all(np.abs(du) <= bound) and np.all(np.abs(ev.r) <= bound):
+                ev.leading = None  # computed to precondition only: again, to full accuracy
+                orbit_leading(shooting, ev, scale, bound=LEADING_BOUND, tol=LEADING_TOL, start=lead.basis)
+                return ev
+            trial = shooting.evaluate(ev.u + du, omega, jac=jac)
+            if trial.status != OK:
+                return None
+            tres = float(np.abs(trial.r / scale).max())
+            if tres > NEWTON_SHRINK * res and not np.all(np.abs(trial.r) <= bound):
+                return None
+            ev, res = trial, tres
+    except (FloatingPointError, np.linalg.LinAlgError):  # the variational equations or the deflation failed
+        return None
+    return None
+
+
 class _Shooter:
     """The ``decide`` hook of :func:`~cablesim.dynamics.steady.steady_response` (module
     docstring): finds the orbits the trajectory may be approaching, and accepts a stable one once
     its linearisation describes the trajectory."""
 
-    def __init__(self, eom, integrator, transient, channels, criterion, every: int):
+    def __init__(self, eom, integrator, transient, channels, criterion, every: int, system=None,
+                 matrix_free: bool = False, scheme: str = "auto"):
         self.eom, self.integrator, self.channels, self.criterion = eom, integrator, channels, criterion
         self.transient = transient
-        self.system = cable_system(eom, gamma=1.0)
+        self.system = cable_system(eom, gamma=1.0) if system is None else system
+        self.matrix_free, self.scheme = matrix_free, scheme
+        self.mf: dict[int, MatrixFreeShooting] = {}
+        self.basis = None  # the latest matrix-free orbit's leading subspace (warm start)
         self.orbits: list[Orbit] = []  # stable and unstable orbits found so far
         self.next_try = 0  # forcing periods; Newton attempts back off after fruitless ones
         self.wait = every
@@ -263,9 +400,26 @@ class _Shooter:
         # the integration, and a late acceptance comes at most 25 % late)
         self.max_wait = CHECKS_PER_DECAY * every
 
-    def shooting(self, p: int) -> Shooting:
-        """Single shooting over ``p`` forcing periods with the step of :data:`STEP_RATE`."""
-        return Shooting(self.system, p, 1, "omega", step_rate=STEP_RATE)
+    def shooting(self, p: int) -> Shooting | MatrixFreeShooting:
+        """Single shooting over ``p`` forcing periods, dense or matrix-free; an explicit scheme
+        with the step of :data:`STEP_RATE`."""
+        if not self.matrix_free:
+            return Shooting(self.system, p, 1, "omega", step_rate=STEP_RATE)
+        if p not in self.mf:
+            sh = MatrixFreeShooting(self.system, p, 1, "omega", scheme=self.scheme)
+            if sh.scheme != "radau":
+                sh = MatrixFreeShooting(self.system, p, 1, "omega", scheme=sh.scheme, step_rate=STEP_RATE)
+            self.mf[p] = sh
+        return self.mf[p]
+
+    def newton(self, p: int, x: np.ndarray) -> Evaluation | None:
+        """The orbit of period ``p`` near ``x`` (:func:`newton` or :func:`newton_mf`)."""
+        if not self.matrix_free:
+            return newton(self.eom, self.shooting(p), x)
+        ev = newton_mf(self.eom, self.shooting(p), x, start=self.basis)
+        if ev is not None:
+            self.basis = ev.leading.basis
+        return ev
 
     def likely_periods(self, strobes: np.ndarray) -> list[int]:
         """Periods at which the trajectory nearly repeats already (lag differences of the last
@@ -294,7 +448,7 @@ class _Shooter:
     def shoot(self, k: int, x: np.ndarray, p: int) -> bool:
         """Seek a ``p``-periodic orbit from ``x`` (strobe ``k``); remember it if new. Whether a
         new orbit was found."""
-        ev = newton(self.eom, self.shooting(p), x)
+        ev = self.newton(p, x)
         if ev is None:
             return False
         scale = _orbit_scale(self.eom, ev.xmax, ev.xmin)
@@ -302,11 +456,12 @@ class _Shooter:
             return False  # one already known (Newton at lag p found a divisor's orbit again)
         q = self.minimal_period(ev.u, p, scale)
         if q != p:  # the same orbit, its monodromy over its own period
-            ev = newton(self.eom, self.shooting(q), ev.u)
+            ev = self.newton(q, ev.u)
             if ev is None:
                 return False
         self.orbits.append(Orbit(q, ev.u.copy(), ev, scale, k % q,
-                                 strobe_noise(self.eom, self.transient, ev.u, q, scale)))
+                                 strobe_noise(self.eom, self.transient, ev.u, q, scale),
+                                 self.shooting(q) if self.matrix_free else None))
         return True
 
 
@@ -346,15 +501,34 @@ def accelerated_steady_response(
     channels: np.ndarray,
     criterion: SteadyCriterion,
     s0: np.ndarray | None = None,
+    matrix_free: bool | None = None,
+    scheme: str = "auto",
 ) -> PointResult:
     """The steady response at one forcing frequency, by integration and shooting (module
     docstring); the same contract as :func:`cablesim.dynamics.steady.steady_response`.
 
+    Parameters
+    ----------
+    eom, integrator, channels, criterion, s0
+        As for :func:`~cablesim.dynamics.steady.steady_response`.
+    matrix_free : bool, optional
+        Shoot matrix-free (True) or with the dense monodromy (False); by default as the
+        continuation does, above :data:`~cablesim.orbits.mfproblem.MATRIX_FREE_DOF` states
+        (:func:`~cablesim.orbits.mfproblem.uses_matrix_free`).
+    scheme : str
+        The matrix-free shooting's scheme (:class:`~cablesim.orbits.matrixfree.MatrixFreeShooting`:
+        ``"auto"``, ``"rk8"``, ``"rk4"``, ``"radau"``).
+
     Integration alone for the approximate analysis (its shooting state does not give ``y''`` at
-    forcing phase 0 without an inner solve) and for cables of more than 40 degrees of freedom
-    (a dense monodromy per attempt would cost more than it saves).
+    forcing phase 0 without an inner solve) and for cables of more than :data:`DENSE_DOF`
+    degrees of freedom shot densely (a dense monodromy per attempt would cost more than it
+    saves).
     """
-    if not eom.exact or eom.n_dof > 40:
+    if not eom.exact:
+        return steady_response(eom, integrator, channels, criterion, s0=s0)
+    system = cable_system(eom, gamma=1.0)
+    mf = uses_matrix_free(system, matrix_free)
+    if not mf and eom.n_dof > DENSE_DOF:
         return steady_response(eom, integrator, channels, criterion, s0=s0)
     # the transient only has to bring the response near its orbit; the orbit, once accepted, is
     # measured with the sweep's own integrator. An adaptive scheme's absolute tolerance stays:
@@ -364,5 +538,6 @@ def accelerated_steady_response(
     # default 1e-10 chord; see TRANSIENT_RTOL)
     transient = integrator.for_transient(TRANSIENT_RTOL)
     every = check_interval(eom)
-    return steady_response(eom, transient, channels, criterion, s0=s0,
-                           decide=_Shooter(eom, integrator, transient, channels, criterion, every), decide_every=every)
+    shooter = _Shooter(eom, integrator, transient, channels, criterion, every, system=system, matrix_free=mf,
+                       scheme=scheme)
+    return steady_response(eom, transient, channels, criterion, s0=s0, decide=shooter, decide_every=every)

@@ -206,10 +206,12 @@ class MatrixFreeShooting:
         dur = T / self.segments
         theta0 = 2.0 * np.pi * self.period * k / self.segments
         ns = self.segment_steps(omega)
-        xend, xmax, xmin = np.empty(n), np.empty(n), np.empty(n)
         dp = np.zeros(n)
         rec = np.empty((ns + 1, 2 * n)) if record else _EMPTY_REC
         x0 = np.ascontiguousarray(x0, dtype=float)
+        # the extremes start from the segment's start state: the Radau kernel only updates them
+        # (the explicit ones set them first)
+        xend, xmax, xmin = np.empty(n), x0.copy(), x0.copy()
         work = ok.copy_work(self.system.work)
         prm = self._prm(lam)
         pmode = self._pmode if param else ok.PARAM_NONE

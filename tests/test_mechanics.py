@@ -92,12 +92,14 @@ def test_the_displaced_form_is_the_configuration_form(dim):
     nd, zero = cable.n_dof, (0.0,) * dim
     x = np.concatenate([z, np.zeros(nd)])  # the orbits' state (z, v)
     P1, J = np.empty(nd), np.zeros((2 * nd, 2 * nd))
-    assert asm.displaced_force_and_stiffness(x, y0, cable.S, cable.EA, cable.support_A, cable.support_B,
-                                             zero, zero, P1, J, nd, 0) == -1
-    P2, K = np.empty(nd), np.empty((nd, nd))
-    asm.force_and_stiffness(y0 + z, cable.S, cable.EA, cable.support_A, cable.support_B, np.ones(5), P2, K)
-    np.testing.assert_allclose(P1, P2, rtol=0, atol=1e-9 * np.abs(P2).max())
-    np.testing.assert_allclose(J[nd:, :nd], K, rtol=1e-12, atol=1e-12 * np.abs(K).max())
+    # every segment taut, and one in the slack mode (no force, no stiffness: the orbits through slack)
+    for taut in (np.ones(5), np.array([1.0, 1.0, 0.0, 1.0, 1.0])):
+        assert asm.displaced_force_and_stiffness(x, y0, cable.S, cable.EA, cable.support_A, cable.support_B,
+                                                 zero, zero, taut, P1, J, nd, 0) == -1
+        P2, K = np.empty(nd), np.empty((nd, nd))
+        asm.force_and_stiffness(y0 + z, cable.S, cable.EA, cable.support_A, cable.support_B, taut, P2, K)
+        np.testing.assert_allclose(P1, P2, rtol=0, atol=1e-9 * np.abs(P2).max())
+        np.testing.assert_allclose(J[nd:, :nd], K, rtol=1e-12, atol=1e-12 * np.abs(K).max())
 
 
 @pytest.mark.parametrize("dim", [2, 3])

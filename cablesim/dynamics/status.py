@@ -21,6 +21,7 @@ class Status(IntEnum):
     INTERRUPTED = 5
     OUTPUT_NONFINITE = 6
     UNKNOWN = 7
+    CHATTER = 8
 
     @property
     def text(self) -> str:
@@ -42,6 +43,7 @@ _TEXT = {
     Status.INTERRUPTED: "interrupted",
     Status.OUTPUT_NONFINITE: "derived outputs became non-finite (inner solve failed)",
     Status.UNKNOWN: "stopped early (the stored message says why)",
+    Status.CHATTER: "a segment changed mode twice within 1e-6 s (chatter), which periodic orbits do not follow",
 }
 
 
@@ -52,3 +54,4 @@ SLACK = int(Status.SLACK)
 INNER_SOLVE = int(Status.INNER_SOLVE)
 STEP_UNDERFLOW = int(Status.STEP_UNDERFLOW)
 INTERRUPTED = int(Status.INTERRUPTED)
+CHATTER = int(Status.CHATTER)

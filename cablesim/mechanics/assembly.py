@@ -152,9 +152,10 @@ def force_and_stiffness_band(y, S, EA, A, B, taut, P, Kb):
 
 
 @njit
-def displaced_force_and_stiffness(z, y0, S, EA, A, B, zA, zB, P, J, row, col):
-    """Resisting force and tangent stiffness at ``y0 + z``, all segments taut, from the change of
-    each segment vector (module docstring).
+def displaced_force_and_stiffness(z, y0, S, EA, A, B, zA, zB, taut, P, J, row, col):
+    """Resisting force and tangent stiffness at ``y0 + z`` of the segments in their modes
+    ``taut`` (1 taut, 0 slack; all ones: every segment a spring whatever its length), from the
+    change of each segment vector (module docstring).
 
     ``z`` holds the interior nodes' displacements (its first ``n DIM`` entries are read), ``A``
     and ``B`` the supports' reference positions and ``zA``, ``zB`` their displacements. ``P``
@@ -176,8 +177,9 @@ def displaced_force_and_stiffness(z, y0, S, EA, A, B, zA, zB, P, J, row, col):
         T = tension_of_stretch(displaced_stretch(d0, dd, l, S[k]), S[k], EA)
         if T <= 0.0 and slack < 0:
             slack = k
+        T *= taut[k]  # (times 1.0 for a taut segment: bitwise the spring's force)
         e = vdiv(dvec, l)
-        ka, kg = block_coefficients(l, T, S[k], EA, 1.0)
+        ka, kg = block_coefficients(l, T, S[k], EA, taut[k])
         a, b = dim * (k - 1), dim * k
         if k < n:
             vadd_to(P, b, e, T)
@@ -197,15 +199,28 @@ def displaced_force_and_stiffness(z, y0, S, EA, A, B, zA, zB, P, J, row, col):
 
 
 @njit
-def displaced_block(z, y0, k, S, EA, A, B, zA, zB):
+def displaced_block(z, y0, k, S, EA, A, B, zA, zB, mode):
     """Segment ``k``'s tangent block at ``y0 + z`` (supports at ``A + zA``, ``B + zB``), as a
-    flat ``DIM x DIM`` tuple in the displaced form of :func:`displaced_force_and_stiffness`."""
+    flat ``DIM x DIM`` tuple in the displaced form of :func:`displaced_force_and_stiffness`
+    (``mode``: 1.0 taut, 0.0 slack)."""
     n = S.size - 1
     d0 = segment_vector(y0, k, n, A, B)
     dd = vsub(node(z, k, n, zA, zB), node(z, k - 1, n, zA, zB))
     dvec = vadd(d0, dd)
     l = length(dvec)
-    T = tension_of_stretch(displaced_stretch(d0, dd, l, S[k]), S[k], EA)
-    ka, kg = block_coefficients(l, T, S[k], EA, 1.0)
+    T = tension_of_stretch(displaced_stretch(d0, dd, l, S[k]), S[k], EA) * mode
+    ka, kg = block_coefficients(l, T, S[k], EA, mode)
     e = vdiv(dvec, l)
     return madd_outer(madd_diag(mzero(A), kg), e, e, ka - kg)
+
+
+@njit
+def displaced_gaps(z, y0, S, A, B, zA, zB, g):
+    """``g[k] = l_k - S_k`` of every segment at ``y0 + z`` (negative: shorter than its natural
+    length), m, in the displaced form of :func:`displaced_force_and_stiffness` (the same
+    stretches, so a gap and the tension the field uses change sign together)."""
+    n = S.size - 1
+    for k in range(n + 1):
+        d0 = segment_vector(y0, k, n, A, B)
+        dd = vsub(node(z, k, n, zA, zB), node(z, k - 1, n, zA, zB))
+        g[k] = displaced_stretch(d0, dd, length(vadd(d0, dd)), S[k])

@@ -13,7 +13,11 @@ constant, in both analyses.
   (:func:`cablesim.mechanics.assembly.displaced_force_and_stiffness`): the segment stretch is
   computed from the equilibrium segment vector and its change, so the force follows a small
   ``z`` with full relative precision instead of the round-off of ``y0 + z`` (about 1e-14 of the
-  coordinates). A slack segment stops the integration with ``SLACK``.
+  coordinates). A slack segment stops the integration with ``SLACK``, unless the flow tracks
+  the segments' modes (``work``'s ``track[0] = 1``, set by the kernel of
+  :mod:`cablesim.orbits.slackflow`): the segments then count as their modes ``taut`` say (a
+  slack one: no force, no stiffness), as in the time histories, and :func:`exact_gaps` gives
+  the gaps the kernel checks the modes against.
 - Approximate analysis: ``P`` is defined implicitly by ``y = x(P) + u(P)``; an inner damped
   Newton iteration ``P <- P + a N(P)^-1 (y - x(P) - u(P))`` (``N = D + f = dy/dP``; the step
   is ``K r`` by the factored stiffness of :mod:`cablesim.mechanics.flexibility`, O(n), no solve),
@@ -89,9 +93,10 @@ class ApproximateWork(NamedTuple):
 
 
 def exact_work(eom) -> tuple:
-    """Scratch space of :func:`exact_field`: the resisting force ``P`` and the support terms
-    of the acceleration."""
-    return (np.zeros(eom.n_dof), np.zeros(eom.n_dof))
+    """Scratch space of :func:`exact_field`: the resisting force ``P``, the support terms of
+    the acceleration, the segment modes ``taut`` (1 taut, 0 slack; all taut) and ``track``
+    (``track[0] = 1`` while a flow tracks the modes; 0: a slack segment stops the flow)."""
+    return (np.zeros(eom.n_dof), np.zeros(eom.n_dof), np.ones(eom.cable.n_nodes + 1), np.zeros(1))
 
 
 def approximate_work(eom) -> ApproximateWork:
@@ -161,8 +166,8 @@ def _support_derivatives(theta, omega, x, model, prm, dp, ipar, zA, zB):
     elif ipar == GAMMA or ipar == SUPPORT:
         per = prm[SUPPORT] if ipar == GAMMA else prm[GAMMA]
         dA, dB, wA, wB = _support_motion(theta, omega, model, per)
-        kA = asm.displaced_block(x, model.y0, 0, model.S, model.EA, model.A, model.B, zA, zB)
-        kB = asm.displaced_block(x, model.y0, model.S.size - 1, model.S, model.EA, model.A, model.B, zA, zB)
+        kA = asm.displaced_block(x, model.y0, 0, model.S, model.EA, model.A, model.B, zA, zB, 1.0)
+        kB = asm.displaced_block(x, model.y0, model.S.size - 1, model.S, model.EA, model.A, model.B, zA, zB, 1.0)
         rA = vadd(mvec(kA, dA), mvec(model.cA, wA))
         rB = vadd(mvec(kB, dB), mvec(model.cB, wB))
     else:
@@ -176,19 +181,37 @@ def _support_derivatives(theta, omega, x, model, prm, dp, ipar, zA, zB):
 def exact_field(theta, omega, x, model, prm, work, dx, J, dp, ipar):
     """Exact analysis (module docstring)."""
     nd = model.mass.size
-    P, extra = work
+    P, extra, taut, track = work
     if model.moving:  # extra: minus the supports' part of the damping force, a1 K0s s'
         zA, zB, vA, vB = _support_motion(theta, omega, model, prm[GAMMA] * prm[SUPPORT])
         extra[:] = 0.0
         add_support_damping(model, vA, vB, extra, 1.0)
     else:
         zA = zB = sg.zero_rate(model.A)
-    if asm.displaced_force_and_stiffness(x, model.y0, model.S, model.EA, model.A, model.B, zA, zB, P, J, nd, 0) >= 0:
+    slack = asm.displaced_force_and_stiffness(x, model.y0, model.S, model.EA, model.A, model.B, zA, zB, taut, P, J,
+                                              nd, 0)
+    if slack >= 0 and track[0] == 0.0:
         return SLACK
     _second_order(theta, x, model, prm, P, dx, J, dp, ipar, nd, extra)
     if model.moving:
         _support_derivatives(theta, omega, x, model, prm, dp, ipar, zA, zB)
     return OK
+
+
+@njit
+def exact_gaps(theta, omega, x, model, prm, work, g):
+    """The gaps ``g[k] = l_k - S_k`` (m) at state ``x`` of the exact analysis' segments, in the
+    stretches :func:`exact_field` uses (supports at rest: the slack-tracking flows are offered
+    for fixed supports only, :func:`cablesim.orbits.systems.cable_system`)."""
+    z = sg.zero_rate(model.A)
+    asm.displaced_gaps(x, model.y0, model.S, model.A, model.B, z, z, g)
+
+
+@njit
+def exact_modes(work):
+    """The segment modes and the tracking flag of :func:`exact_field`'s ``work``:
+    ``(taut, track)``."""
+    return work[2], work[3]
 
 
 @njit

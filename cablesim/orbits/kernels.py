@@ -439,6 +439,18 @@ def _advance_jacobian(Yf, KYf, b, h):
                 Yf[i] += hb * KYf[st, i]
 
 
+#: The step's pieces, shared with the kernel that tracks slack segments
+#: (:mod:`cablesim.orbits.slackflow`), whose steps are these same sums.
+stage_state = _stage_state
+variational_rate_whole = _variational_rate_whole
+variational_rate = _variational_rate
+compact_size = _compact_size
+blocks_to_full = _blocks_to_full
+close_chunk = _close_chunk
+start_segment = _start_segment
+advance_jacobian = _advance_jacobian
+
+
 @njit(nogil=True)
 def flow_segment(field, model, prm, work, x0, theta0, omega, duration, nsteps, A, b, c, ipar, pmode, jac,
                  rows, bounds, xend, Mout, pout, xmax, xmin, rec, info, stop):

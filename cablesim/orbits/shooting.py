@@ -36,6 +36,7 @@ from enum import IntEnum
 import numpy as np
 
 from . import kernels as ok
+from . import slackflow as sf
 from .stability import sort_multipliers
 from .systems import OdeSystem
 from .tableaux import TABLEAUX
@@ -44,6 +45,7 @@ from .tableaux import TABLEAUX
 DEFAULT_STEPS = {"rk8": (48, 1.25), "rk4": (256, 0.15)}
 
 _EMPTY_REC = np.zeros((0, 0))
+_NO_EVENTS = np.zeros((0, 3))
 
 
 class FlowStatus(IntEnum):
@@ -53,6 +55,8 @@ class FlowStatus(IntEnum):
     NONFINITE = ok.NONFINITE
     SLACK = ok.SLACK
     INNER_SOLVE = ok.INNER_SOLVE
+    INTERRUPTED = ok.INTERRUPTED
+    CHATTER = sf.CHATTER
 
 
 class SolveStatus(IntEnum):
@@ -111,6 +115,10 @@ class Evaluation:
         On a planar orbit of a mirror-symmetric system: the in-plane and the out-of-plane
         multipliers and blocks of the monodromy, once computed
         (:func:`cablesim.orbits.problems.block_multipliers`, :func:`~cablesim.orbits.problems.monodromy_blocks`).
+    events : ndarray (k, 3)
+        The segments' mode changes over the orbit, ``(t, segment, new mode)`` rows in time
+        order, ``t`` in s from the orbit's start, mode 0 slack (an onset) and 1 taut (a
+        re-tightening); empty for an orbit that stays taut (:mod:`cablesim.orbits.slackflow`).
     """
 
     u: np.ndarray
@@ -133,6 +141,7 @@ class Evaluation:
     steps: list | None = None
     blocks_mu: tuple | None = None
     blocks_phi: tuple | None = None
+    events: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
     @property
     def liouville(self) -> float:
@@ -164,6 +173,12 @@ class Shooting:
         :data:`DEFAULT_STEPS`).
     step_rate : float, optional
         Upper bound of ``h * fastest_rate``.
+    through_slack : bool
+        Follow the flows through slack segments (:mod:`cablesim.orbits.slackflow`) where the
+        system can (its ``slack`` functions: the exact analysis of a cable with its supports at
+        rest and ``slack: continue``); otherwise (the default, and the continuation's: its
+        branches end at the first orbit with a slack segment) a flow that meets one stops with
+        ``SLACK``.
     """
 
     def __init__(
@@ -175,6 +190,7 @@ class Shooting:
         scheme: str = "rk8",
         steps_per_period: int | None = None,
         step_rate: float | None = None,
+        through_slack: bool = False,
     ):
         if period < 1 or segments < 1:
             raise ValueError("period and segments must be positive")
@@ -196,6 +212,8 @@ class Shooting:
         self._b = np.ascontiguousarray(self.tableau.b)
         self._c = np.ascontiguousarray(self.tableau.c)
         self._flow = ok.EntryPoint(ok.flow_segment)
+        self._flow_modes = ok.EntryPoint(sf.flow_segment_modes)
+        self.through_slack = bool(through_slack) and system.slack is not None
         self._whole = (np.arange(system.dim, dtype=np.int64), np.array([0, system.dim], dtype=np.int64))
         self._ipar = -1 if parameter == "omega" else int(system.parameters[parameter])
         self._pmode = ok.PARAM_OMEGA if parameter == "omega" else ok.PARAM_PRM
@@ -236,8 +254,13 @@ class Shooting:
         Returns
         -------
         dict with ``status``, ``x`` (end state), ``G``, ``dp`` (with ``jac``), ``info``,
-        ``xmax``, ``xmin`` and, with ``record``, ``t`` (times from the segment start) and
-        ``rec`` (state and rate at every step).
+        ``xmax``, ``xmin``, ``events`` (the segments' mode changes, ``(t, segment, new mode)``
+        from the segment's start) and, with ``record``, ``t`` (times from the segment start)
+        and ``rec`` (state and rate at every step).
+
+        With ``through_slack``, a flow that meets a slack segment is taken again through slack
+        (:mod:`cablesim.orbits.slackflow`); a flow that stays taut is the plain kernel's, so
+        orbits without slack are unchanged bit for bit.
         """
         omega = self.omega_of(lam)
         if not omega > 0.0:
@@ -256,14 +279,22 @@ class Shooting:
         rec = np.empty((ns + 1, 2 * n)) if record else _EMPTY_REC
         work = ok.copy_work(self.system.work)
         rows, bounds = blocks if blocks is not None else self._whole
-        code = self._flow(
-            self.system.field, self.system.model, self._prm(lam), work, flushed(x0),
-            float(theta0), float(omega), float(dur), int(ns), self._A, self._b, self._c, self._ipar, self._pmode,
-            bool(jac), rows, bounds, xend, G, dp, xmax, xmin, rec, info,
-        )
+        args = (self.system.model, self._prm(lam), work, flushed(x0), float(theta0), float(omega), float(dur), int(ns),
+                self._A, self._b, self._c, self._ipar, self._pmode, bool(jac), rows, bounds, xend, G, dp, xmax, xmin,
+                rec, info)
+        code = self._flow(self.system.field, *args)
+        events = _NO_EVENTS
+        if code == ok.SLACK and self.through_slack:
+            gaps, modes = self.system.slack
+            nseg = modes(work)[0].size
+            ev, nev = np.zeros((sf.EVENTS_PER_SEGMENT * nseg, 3)), np.zeros(1, dtype=np.int64)
+            work = ok.copy_work(self.system.work)
+            code = self._flow_modes(self.system.field, gaps, modes, *args[:2], work, *args[3:], ev, nev)
+            events = ev[: nev[0]]
         self.calls += 1
         self.steps_taken += ns
-        out = {"status": int(code), "x": xend, "xmax": xmax, "xmin": xmin, "info": info, "steps": ns}
+        out = {"status": int(code), "x": xend, "xmax": xmax, "xmin": xmin, "info": info, "steps": ns,
+               "events": events}
         if jac:
             out["G"] = G
             out["dp"] = dp
@@ -294,6 +325,7 @@ class Shooting:
         div = 0.0
         status = ok.OK
         steps = [] if record else None
+        events = []
         for k in range(m):
             seg = self.segment(k, S[k], lam, jac=jac, blocks=blocks, record=record)
             if seg["status"] != ok.OK:
@@ -302,6 +334,8 @@ class Shooting:
             ends[k] = seg["x"]
             if record:
                 steps.append((seg["t"], seg["rec"]))
+            if seg["events"].size:
+                events.append(seg["events"] + np.array([k * T / m, 0.0, 0.0]))
             np.maximum(xmax, seg["xmax"], out=xmax)
             np.minimum(xmin, seg["xmin"], out=xmin)
             if jac:
@@ -328,7 +362,8 @@ class Shooting:
             mu = np.linalg.eigvals(mono)
             mu = sort_multipliers(mu)
         return Evaluation(u.copy(), float(lam), omega, self.period, T, r, J_u, J_lam, ends, G, mono, mu, logdet,
-                          div, xmax, xmin, status, steps)
+                          div, xmax, xmin, status, steps,
+                          events=np.concatenate(events) if events else _NO_EVENTS)
 
     # ------------------------------------------------------------------------------------------
     def spread(self, s0: np.ndarray, lam: float) -> np.ndarray | None:

@@ -17,6 +17,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..mechanics.banded import band_rows
+from ..mechanics.model import CONTINUE
 from ..modal import fastest_rate
 from . import cablefield
 from . import mechanical as mech
@@ -71,6 +72,11 @@ class OdeSystem:
         The same system in mechanical form, for the matrix-free shooting
         (:mod:`cablesim.orbits.matrixfree`); None if it has none (any vector field can still be
         shot matrix-free, its Jacobian formed at every stage).
+    slack : tuple or None
+        ``(gaps, modes)``: the compiled functions with which the dense shooting can follow the
+        flow through slack segments (:mod:`cablesim.orbits.slackflow`; a
+        :class:`~cablesim.orbits.shooting.Shooting` made with ``through_slack=True``), or None
+        (a flow that meets a slack segment stops there).
     """
 
     field: object
@@ -88,6 +94,7 @@ class OdeSystem:
     mechanical: object = None
     mirror: object = None
     frame: object = None
+    slack: object = None
 
     def __post_init__(self):
         object.__setattr__(self, "prm", np.ascontiguousarray(self.prm, dtype=float).copy())
@@ -228,4 +235,8 @@ def cable_system(eom, gamma: float = 1.0, support: float = 1.0) -> OdeSystem:
         mechanical=mechanical,
         mirror=cable_mirror(eom),
         frame=cable_frame(eom),
+        # orbits through slack: the exact analysis with the supports at rest, unless the case
+        # says slack: stop
+        slack=((cablefield.exact_gaps, cablefield.exact_modes)
+               if eom.exact and not eom.moving_supports and model.slack == CONTINUE else None),
     )

@@ -31,6 +31,7 @@ from cablesim.orbits.accelerate import (
 from cablesim.orbits.shooting import Shooting, solve_orbit
 from cablesim.orbits.systems import cable_system
 from helpers_sweep import do_sweep
+from test_orbits_slack import Reference
 
 CONFIG = Path(__file__).resolve().parents[1] / "configs" / "paper-example.yaml"
 CHANNELS = np.array([1, 3])
@@ -87,6 +88,37 @@ def test_slack_failure_stays_a_failure(paper):
     plain, fast = _both(paper, 2.45, SteadyCriterion(cap=600.0), scale=10.0, slack="stop")
     assert plain.failed and fast.failed and fast.status == plain.status
     assert fast.t_end == pytest.approx(plain.t_end, rel=1e-6)
+
+
+def test_slack_orbit_is_decided_by_shooting_with_the_orbits_snap_loads(paper):
+    """FL x 13.5 at 2.45 rad/s: segment 3 goes slack once a period. The accelerated point is
+    decided by shooting through slack (it was left to integration alone), and both points report
+    the steady orbit's snap loads and slack fractions (they reported the transient's), checked
+    against an independent event-driven integration (scipy DOP853, own tension-only segments) of
+    one period from each point's final state, which must also close the orbit."""
+    case, static = paper
+    plain, fast = _both(paper, 2.45, SteadyCriterion(cap=600.0), scale=13.5)
+    assert plain.decided == "integrated" and fast.decided == "shooting"
+    assert fast.period == plain.period == 1 and fast.steady and plain.steady
+    assert fast.t_end < 0.5 * plain.t_end
+    np.testing.assert_allclose(fast.amplitude, plain.amplitude, rtol=1e-5)
+    np.testing.assert_allclose(fast.peak_tension, plain.peak_tension, rtol=1e-5)
+    np.testing.assert_allclose(fast.slack_fraction, plain.slack_fraction, atol=1e-5)
+    eom = build_equations(case, static, omega=2.45, load_scale=13.5)
+    ref = Reference(eom)
+    nd = eom.n_dof
+    for point in (plain, fast):
+        x0 = point.final_state[: 2 * nd]
+        peaks = np.zeros(eom.cable.n_segments)
+        x1, events = ref.flow(x0, rtol=1e-11, peaks=peaks)
+        assert np.abs(x1 - x0).max() < 1e-5 * np.abs(x0).max()  # on the orbit
+        np.testing.assert_allclose(point.peak_tension, peaks, rtol=1e-5)
+        slack_time = np.zeros(eom.cable.n_segments)
+        for (t_on, k_on, m_on), (t_off, k_off, m_off) in zip(events[::2], events[1::2]):
+            assert k_on == k_off and (m_on, m_off) == (0.0, 1.0)  # an onset, then the re-tightening
+            slack_time[k_on] += t_off - t_on
+        assert slack_time[2] > 0.0 and slack_time[:2].max() == 0.0
+        np.testing.assert_allclose(point.slack_fraction, slack_time / ref.T, atol=1e-6)
 
 
 def test_sweep_records_how_points_were_decided(tmp_path):

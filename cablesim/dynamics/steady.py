@@ -111,9 +111,11 @@ class PointResult:
     multipliers : ndarray (complex) or None
         Floquet multipliers of the orbit, by decreasing modulus, where computed.
     peak_tension, slack_fraction : ndarray or None
-        Per segment, the largest tension (N) and the fraction of the time slack over the whole
-        integration of the point (transient included), when the exact analysis continues through
-        slack segments (None otherwise).
+        Per segment, the largest tension (N) and the fraction of the time slack, when the exact
+        analysis continues through slack segments (None otherwise): over the steady orbit (one
+        orbit period from forcing phase 0: its snap loads, the same whether the point was
+        decided by integration or by shooting) for a steady point; over the whole integration
+        (transient included) for one that is not steady or failed.
     """
 
     omega: float
@@ -254,12 +256,15 @@ def steady_response(
     return _with_slack_stats(r, eom, track.get("state"), track.get("t0", 0.0))
 
 
-def _with_slack_stats(r: PointResult, eom: EquationsOfMotion, state, t0: float) -> PointResult:
-    """``r`` with the per-segment peak tension and slack fraction of the integration from ``t0``."""
+def _with_slack_stats(r: PointResult, eom: EquationsOfMotion, state, t0: float, t_end: float | None = None
+                      ) -> PointResult:
+    """``r`` with the per-segment peak tension and slack fraction of the integration from ``t0``
+    to ``t_end`` (the integrator's own time if None; an adaptive one may have stepped past the
+    last instant measured), kept if ``r`` has them already: a steady point's are its orbit's."""
     ex = {} if state is None else state.extra
-    if not ex.get("track"):
+    if not ex.get("track") or r.peak_tension is not None:
         return r
-    span = state.t - t0
+    span = (state.t if t_end is None else t_end) - t0
     if span <= 0:
         return r
     rec = SlackRecord.from_events([(t - t0, k, kind) for t, k, kind in ex["events"]], eom.cable.n_segments, span,
@@ -331,7 +336,9 @@ def _steady(eom, integrator, channels, criterion, s0, decide, track, decide_ever
                 # An unstable orbit: keep integrating; look again after it has had time to leave.
                 recheck_after = k + max(50, 10 * p)
                 continue
-        return _finish_steady(eom, integrator, model, state, channels, p, k, T, spp, floquet)
+        # measured from the state at phase 0 (out[-1]; the integrator may have stepped past it),
+        # as an orbit found by shooting is: the same orbit, the same measurement
+        return _finish_steady(eom, integrator, model, out[-1].copy(), channels, p, k, T, spp, floquet)
 
     # the state at the last forcing phase 0 (the integrator's own state may have stepped past it)
     return _cap_reached(eom, channels, state, fine, spp, floquet, out[-1].copy(), float(t_out[-1]))
@@ -440,16 +447,19 @@ def periodic_response(
     """
     T = 2.0 * np.pi / eom.omega
     k = int(round(t0 / T))
-    state = integrator.start(eom, np.asarray(s0, dtype=float), t0)
-    r = _finish_steady(eom, integrator, eom.model(), state, channels, period, k, T, criterion.samples_per_period,
-                       floquet)
+    r = _finish_steady(eom, integrator, eom.model(), np.asarray(s0, dtype=float), channels, period, k, T,
+                       criterion.samples_per_period, floquet)
     r.decided = decided if not r.failed else "failed"
     r.multipliers = multipliers
     return r
 
 
-def _finish_steady(eom, integrator, model, state, channels, p, k, T, spp, floquet) -> PointResult:
+def _finish_steady(eom, integrator, model, s_k, channels, p, k, T, spp, floquet) -> PointResult:
+    """The steady point measured over one orbit from ``s_k``, the state at ``t = k T``; with
+    slack tracking, the peak tensions and slack fractions are the orbit's (the steady snap loads),
+    not the transient's."""
     nd = eom.n_dof
+    state = integrator.start(eom, s_k, k * T)
     t_out = T * (k + np.arange(1, p * spp + 1) / spp)
     out = np.empty((t_out.size, 3 * nd))
     # the orbit whose amplitudes are measured: an adaptive scheme's saved states come from the
@@ -462,7 +472,7 @@ def _finish_steady(eom, integrator, model, state, channels, p, k, T, spp, floque
     z = out[:, :nd][:, channels]
     # the record spans one orbit: its last sample is the image of the one before the first
     amp, half = _amplitudes(out, t_out, nd, channels, period=p * T)
-    return PointResult(
+    return _with_slack_stats(PointResult(
         omega=eom.omega,
         amplitude=amp,
         halfrange=half,
@@ -474,7 +484,7 @@ def _finish_steady(eom, integrator, model, state, channels, p, k, T, spp, floque
         final_state=out[-1].copy(),
         status=Status.COMPLETED,
         message="steady",
-    )
+    ), eom, state, k * T, float(t_out[-1]))
 
 
 def _failed(eom, integrator, channels, out, state, code, fine) -> PointResult:

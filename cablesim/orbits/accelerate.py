@@ -36,6 +36,10 @@ found so with it, only sooner when an orbit is accepted; the exception is a poin
 alone leaves at the cap because its transient decays too slowly for the periodicity test (a
 multiplier near -1 next to a period doubling), which shooting may decide. The amplitudes of an accepted orbit are
 measured exactly as for an integrated one (:func:`~cablesim.dynamics.steady.periodic_response`).
+Orbits with slack intervals are shot through them (dense shooting with the saltation matrices of
+the events, :mod:`~cablesim.orbits.slackflow`), under the same acceptance rule; the point's snap
+loads are then its orbit's, as an integrated steady point's are. The matrix-free shooting stops at
+a slack segment: such a heavy-cable point is left to integration.
 
 Cost: an orbit found once is remembered (stable or not), so later checks against it need no
 integration at all; Newton stops at the first step that does not halve the residual (the
@@ -404,7 +408,7 @@ class _Shooter:
         """Single shooting over ``p`` forcing periods, dense or matrix-free; an explicit scheme
         with the step of :data:`STEP_RATE`."""
         if not self.matrix_free:
-            return Shooting(self.system, p, 1, "omega", step_rate=STEP_RATE)
+            return Shooting(self.system, p, 1, "omega", step_rate=STEP_RATE, through_slack=True)
         if p not in self.mf:
             sh = MatrixFreeShooting(self.system, p, 1, "omega", scheme=self.scheme)
             if sh.scheme != "radau":

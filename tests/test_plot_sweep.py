@@ -384,19 +384,21 @@ def test_failed_points_are_never_peaks_nor_part_of_a_curve(tmp_path, figures):
 
 
 def test_points_that_went_slack_are_marked(tmp_path):
-    """A sweep of the exact analysis continues through slack episodes; the points on which a
-    segment went slack are read back as such (from /sweep/slack_fraction) and marked."""
+    """A sweep of the exact analysis continues through slack episodes; the points whose steady
+    orbit has a slack segment (FL x 13.5 at 2.45 rad/s: segment 3 once a period) are read back as
+    such (from /sweep/slack_fraction) and marked."""
     from cablesim import api
     from cablesim.io.sweeps import read_sweep
 
-    case = api.load_case(None, ["loads.FL=[-60.0e3, 220.0e3, -180.0e3, 1200.0e3]", "sweep.omega=[1.0, 2.45]",
-                                "sweep.duration=300", "sweep.window=50", "sweep.channels=[z2]"])
+    case = api.load_case(None, ["loads.FL=[-81.0e3, 297.0e3, -243.0e3, 1620.0e3]", "sweep.omega=[1.0, 2.45]",
+                                "sweep.duration=600", "sweep.window=50", "sweep.channels=[z2]"])
     out = tmp_path / "slack.h5"
     run = api.sweep(case, jobs=1, output=out)
     frac = run.result.data[0]["slack_fraction"]
     curve = read_sweep(out).curves[0]
     assert list(curve.data["went_slack"]) == list((np.nan_to_num(frac) > 0).any(axis=1))
     assert curve.data["went_slack"][1] and not curve.data["went_slack"][0]
+    assert run.result.data[0]["steady"][1]
     assert plot_sweep(out, tmp_path / "slack.png").stat().st_size > 10_000
 
 

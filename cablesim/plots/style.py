@@ -104,7 +104,7 @@ WORDS = {
     "down": "decreasing frequency (from the previous state)",
     "not steady": "not steady within the time limit",
     "failed": "stopped early: a segment went slack\n(partial value, not a peak)",
-    "went slack": "a segment went slack during the run",
+    "went slack": "a segment goes slack (on the steady orbit; in the run if not steady)",
     "subharmonic": "subharmonic response (period p > 1),\nlabelled 1/p",
 }
 

@@ -170,12 +170,12 @@ def companions(pngs):
 def nothing_to_resume(out: Path, fingerprint: str, echo) -> bool:
     """``--resume`` without a journal beside ``out``: True (said so) when ``out`` already holds
     this continuation, complete; refused otherwise."""
-    from .io.continuation import stored_continuation_state
+    from .io.journal import stored_state
     from .io.continuation_journal import nothing_to_resume_error
 
     if out.with_name(out.name + ".journal").exists():
         return False
-    complete, fp = stored_continuation_state(out)
+    complete, fp = stored_state(out, "continuation", complete_if_unmarked=True)
     if complete and fp in (None, fingerprint):
         echo(f"Nothing to do: {out} already holds this continuation, complete (there is no journal to resume).")
         return True

@@ -39,7 +39,6 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import h5py
 import numpy as np
 
 from ..errors import CablesimError
@@ -261,17 +260,3 @@ def _read(f, path: Path) -> dict:
     spatial = any("whirl_area" in b for b in branches)  # (files written before the attribute)
     out["components"] = int(g.attrs.get("components", 3 if spatial else 2))
     return out
-
-
-def stored_continuation_state(path) -> tuple[bool, str | None]:
-    """``(complete, fingerprint)`` of the continuation file ``path`` (``(False, None)`` if it is
-    missing, unreadable or not a continuation file)."""
-    try:
-        with h5py.File(path, "r") as f:
-            g = f.get("continuation")
-            if not isinstance(g, h5py.Group):
-                return False, None
-            fp = g.attrs.get("fingerprint")
-            return bool(g.attrs.get("complete", True)), None if fp is None else attr_text(fp)
-    except (OSError, KeyError, ValueError):
-        return False, None

@@ -16,8 +16,8 @@ import time
 from pathlib import Path
 
 from ..errors import CablesimError
-from .continuation import stored_continuation_state, write_continuation
-from .journal import JournalledFile
+from .continuation import write_continuation
+from .journal import JournalledFile, stored_state
 from .paths import write_error
 
 
@@ -80,7 +80,7 @@ class ContinuationFile(JournalledFile):
 
 def nothing_to_resume_error(out: Path, fingerprint_now: str) -> CablesimError:
     """Why ``--resume`` has nothing to go on from at ``out`` (no journal beside it)."""
-    complete, fp = stored_continuation_state(out)
+    complete, fp = stored_state(out, "continuation", complete_if_unmarked=True)
     if complete and fp in (None, fingerprint_now):
         return CablesimError(f"Nothing to resume: {out} already holds this continuation, complete (there is no "
                              f"{out.name}.journal). Run the command without --resume to compute it again.",

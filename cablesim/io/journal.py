@@ -15,10 +15,12 @@ import os
 import time
 from pathlib import Path
 
+import h5py
+
 from ..errors import CablesimError
-from .hdf5 import is_complete_result
+from .hdf5 import attr_text, is_complete_result
 from .paths import OutputLock, beside
-from .sweeps import stored_sweep_state, write_sweep
+from .sweeps import write_sweep
 
 
 def fingerprint(case_text: str, analysis, integrator) -> str:
@@ -241,9 +243,24 @@ def nothing_to_resume(out: Path, fingerprint_now: str) -> bool:
     """Whether ``--resume`` finds ``out`` already complete with these settings (nothing to do)."""
     if out.with_name(out.name + ".journal").exists() or not out.is_file():
         return False
-    complete, fp = stored_sweep_state(out)
+    complete, fp = stored_state(out, "sweep", complete_if_unmarked=False)
     if complete and fp not in (None, fingerprint_now):
         raise CablesimError(
             f"{out} holds a complete sweep of another case or other settings, so there is nothing to resume: "
             "run the command without --resume to replace it, or give another -o.", field="sweep")
     return complete
+
+
+def stored_state(path, group: str, complete_if_unmarked: bool) -> tuple[bool, str | None]:
+    """``(complete, fingerprint)`` of the result file ``path`` whose results are in ``/group``
+    (``(False, None)`` if it is missing, unreadable or has no such group); a group without a
+    ``complete`` attribute counts as ``complete_if_unmarked`` (files written before the mark)."""
+    try:
+        with h5py.File(path, "r") as f:
+            g = f.get(group)
+            if not isinstance(g, h5py.Group):
+                return False, None
+            fp = g.attrs.get("fingerprint")
+            return bool(g.attrs.get("complete", complete_if_unmarked)), None if fp is None else attr_text(fp)
+    except (OSError, KeyError, ValueError):
+        return False, None

@@ -99,19 +99,6 @@ def write_sweep(path: str | Path, res, fingerprint: str | None = None) -> Path:
     return Path(path)
 
 
-def stored_sweep_state(path) -> tuple[bool, str | None]:
-    """``(complete, fingerprint)`` of the sweep file ``path`` (``(False, None)`` if unreadable)."""
-    try:
-        with h5py.File(path, "r") as f:
-            g = f.get("sweep")
-            if not isinstance(g, h5py.Group):
-                return False, None
-            fp = g.attrs.get("fingerprint")
-            return bool(g.attrs.get("complete", False)), None if fp is None else attr_text(fp)
-    except (OSError, KeyError, ValueError):
-        return False, None
-
-
 @dataclass
 class StoredCurve:
     """One sweep curve: one gamma value (or none) and one direction; its columns over P points

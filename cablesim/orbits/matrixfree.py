@@ -40,7 +40,7 @@ from . import kernels as ok
 from . import radau as rd
 from .floquet import DEFAULT_BOUND, DEFAULT_TOL, Deflation, Leading, leading_multipliers
 from .krylov import gmres
-from .shooting import DEFAULT_STEPS, Evaluation, FlowStatus, OrbitSolution, Shooting, SolveStatus
+from .shooting import DEFAULT_STEPS, Evaluation, FlowStatus, OrbitSolution, Shooting, SolveStatus, line_search
 from .stability import sort_multipliers
 from .systems import OdeSystem
 from .tableaux import TABLEAUX
@@ -417,18 +417,10 @@ def solve_orbit_mf(shooting: MatrixFreeShooting, u0: np.ndarray, lam: float | No
         if np.all(np.abs(du) <= bound_abs) and np.all(np.abs(ev.r) <= bound_abs):
             ev.newton_krylov = spent
             return OrbitSolution(u, ev, SolveStatus.CONVERGED, it, res, hist)
-        a = 1.0
-        while True:
-            trial = shooting.evaluate(u + a * du, lam)
-            if trial.status == ok.OK:
-                tres = float(np.abs(trial.r / sc).max())
-                if tres < (1.0 - 0.25 * a) * res or np.all(np.abs(trial.r) <= bound_abs):
-                    break
-            a *= 0.5
-            if a < 1.0 / 1024:
-                return OrbitSolution(u, ev, SolveStatus.LINE_SEARCH_FAILED, it, res, hist)
-        u = u + a * du
-        ev, res = trial, tres
+        step = line_search(shooting, u, du, lam, res, sc, bound_abs)
+        if step is None:
+            return OrbitSolution(u, ev, SolveStatus.LINE_SEARCH_FAILED, it, res, hist)
+        u, ev, res = step
         hist.append(res)
     return OrbitSolution(u, ev, SolveStatus.MAX_ITERATIONS, max_iter, res, hist)
 

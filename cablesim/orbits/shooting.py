@@ -523,17 +523,26 @@ def solve_orbit(
             return OrbitSolution(u, ev, SolveStatus.SINGULAR, it, res, hist)
         if np.all(np.abs(du) <= bound) and np.all(np.abs(ev.r) <= bound):
             return OrbitSolution(u, ev, SolveStatus.CONVERGED, it, res, hist)
-        a = 1.0
-        while True:
-            trial = shooting.evaluate(u + a * du, lam)
-            if trial.status == ok.OK:
-                tres = float(np.abs(trial.r / sc).max())
-                if tres < (1.0 - 0.25 * a) * res or np.all(np.abs(trial.r) <= bound):
-                    break
-            a *= 0.5
-            if a < 1.0 / 1024:
-                return OrbitSolution(u, ev, SolveStatus.LINE_SEARCH_FAILED, it, res, hist)
-        u = u + a * du
-        ev, res = trial, tres
+        step = line_search(shooting, u, du, lam, res, sc, bound)
+        if step is None:
+            return OrbitSolution(u, ev, SolveStatus.LINE_SEARCH_FAILED, it, res, hist)
+        u, ev, res = step
         hist.append(res)
     return OrbitSolution(u, ev, SolveStatus.MAX_ITERATIONS, max_iter, res, hist)
+
+
+def line_search(shooting, u: np.ndarray, du: np.ndarray, lam: float, res: float, sc: np.ndarray,
+                bound: np.ndarray) -> tuple[np.ndarray, Evaluation, float] | None:
+    """The damped Newton step of the orbit solvers: ``u + a du`` for the first ``a = 1, 1/2,
+    ...`` whose flow succeeds and whose scaled residual falls below ``(1 - a/4) res`` (or within
+    ``bound``); ``(u, evaluation, residual)`` there, None if ``a`` falls below 1/1024."""
+    a = 1.0
+    while True:
+        trial = shooting.evaluate(u + a * du, lam)
+        if trial.status == ok.OK:
+            tres = float(np.abs(trial.r / sc).max())
+            if tres < (1.0 - 0.25 * a) * res or np.all(np.abs(trial.r) <= bound):
+                return u + a * du, trial, tres
+        a *= 0.5
+        if a < 1.0 / 1024:
+            return None

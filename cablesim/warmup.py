@@ -19,6 +19,9 @@ _SMALL = ["sweep.omega=[2.0, 5.0]", "sweep.duration=40.0", "sweep.window=10.0", 
           "continuation={omega: {start: 2.40, stop: 2.42}, channels: [z2]}"]
 _SLACKENING = ["loads.FL=[-0.3e6, 1.1e6, -0.9e6, 6.0e6]"]  # a segment goes slack within seconds
 _HEAVY = ["cable.nodes=60", "history.duration=1.0"]
+#: segment 3 slack once a period on the steady orbit at 2.45 rad/s, which is shot through slack
+_SLACK_ORBIT = ["loads.FL=[-81.0e3, 297.0e3, -243.0e3, 1620.0e3]", "sweep.omega=[2.45]", "sweep.duration=200.0",
+                "sweep.window=20.0", "sweep.refine=false"]
 
 
 def _written(run: StaticRun) -> None:
@@ -59,6 +62,7 @@ def _warm_up_runs() -> list[tuple[str, Callable[[], object]]]:
         ("sweep: shooting and Floquet multipliers", lambda: sweep(base, jobs=1)),
         ("sweep: integration alone, up and down", lambda: sweep(load_case(None, [
             *_SMALL, "sweep.accelerate=false", "sweep.direction=both"]), jobs=1)),
+        ("sweep: shooting through slack segments", lambda: sweep(load_case(None, [*_SMALL, *_SLACK_ORBIT]), jobs=1)),
         ("continuation: exact analysis", lambda: continuation(base)),
         ("continuation: approximate analysis", lambda: continuation(base, "approximate")),
     ]

@@ -17,17 +17,8 @@ import h5py
 import numpy as np
 import pytest
 
-from helpers_cli import assert_refused, flat
+from helpers_cli import ONE_NODE, assert_refused, flat
 
-#: The one-node cable of tests/test_hostile_continue.py (a continuation of about half a second).
-ONE_NODE = """\
-name: one
-cable: {L: 10.0, H: 0.0, S: [5.2, 5.2], EA: 1.0e6, masses: [100.0]}
-loads: {F0: [0.0, 2000.0], FL: [0.0, 100.0]}
-damping: {ratio: 0.02, modes: [1, 2]}
-history: {omega: 3.0, duration: 5.0, channels: [z2]}
-continuation: {omega: {start: 2.0, stop: 3.0}, channels: [z1, z2]}
-"""
 #: A stiff cable at the lowest frequencies: a forcing period of 3e4 to 6e4 s, integrated at the
 #: step of a 2000 rad/s axial mode, takes 5e7 to 9e7 steps per orbit.
 SLOW = ["--set", "continuation.omega={start: 1.0e-4, stop: 2.0e-4}", "--set", "cable.EA=1.0e9"]

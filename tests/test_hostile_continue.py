@@ -20,18 +20,7 @@ import h5py
 import numpy as np
 import pytest
 
-from helpers_cli import assert_refused, flat
-
-#: A one-node cable whose continuation over 2-3 rad/s takes about half a second.
-ONE_NODE = """\
-name: one
-cable: {L: 10.0, H: 0.0, S: [5.2, 5.2], EA: 1.0e6, masses: [100.0]}
-loads: {F0: [0.0, 2000.0], FL: [0.0, 100.0]}
-damping: {ratio: 0.02, modes: [1, 2]}
-history: {omega: 3.0, duration: 5.0, channels: [z2]}
-continuation: {omega: {start: 2.0, stop: 3.0}, channels: [z1, z2]}
-sweep: {omega: [2.2, 2.8], duration: 60.0, window: 20.0, channels: [z1, z2]}
-"""
+from helpers_cli import ONE_NODE, assert_refused, flat
 
 
 @pytest.fixture(scope="module")

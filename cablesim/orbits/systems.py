@@ -21,7 +21,7 @@ from ..mechanics.model import CONTINUE
 from ..modal import fastest_rate
 from . import cablefield
 from . import mechanical as mech
-from .symmetry import cable_frame, cable_mirror
+from .symmetry import cable_frame, cable_mirror, component_frequencies
 from .kernels import copy_work
 
 
@@ -205,9 +205,10 @@ def cable_system(eom, gamma: float = 1.0, support: float = 1.0) -> OdeSystem:
     # 1e-15 of the chord in displacement (measured 6e-14 m on the paper's cable, exact
     # analysis); the approximate analysis works on absolute coordinates (y0 + z) and inner
     # solves: 1e-13 of the chord.
-    w1 = float(w[0])
+    # (velocities: times each component's fundamental frequency, as the continuation's scales)
+    mirror = cable_mirror(eom)
     level = (1e-15 if eom.analysis == "exact" else 1e-13) * float(eom.cable.chord_length)
-    noise = np.concatenate([np.full(nd, level), np.full(nd, level * w1)])
+    noise = np.concatenate([np.full(nd, level), level * component_frequencies(eom, mirror)])
     # The sustained load is taken as the resisting force at y0 itself, so that z = 0 is an exact
     # equilibrium of the field (the static solve leaves |P(y0) - F0| at its tolerance, which
     # would otherwise offset tiny orbits). The third-order time integration does the same: F0
@@ -233,7 +234,7 @@ def cable_system(eom, gamma: float = 1.0, support: float = 1.0) -> OdeSystem:
         noise=noise,
         names=names,
         mechanical=mechanical,
-        mirror=cable_mirror(eom),
+        mirror=mirror,
         frame=cable_frame(eom),
         # orbits through slack: the exact analysis with the supports at rest, unless the case
         # says slack: stop

@@ -21,6 +21,7 @@ from ..mechanics.model import CONTINUE
 from ..modal import fastest_rate
 from . import cablefield
 from . import mechanical as mech
+from .rotation import cable_rotation
 from .symmetry import cable_frame, cable_mirror, component_frequencies
 from .kernels import copy_work
 
@@ -72,6 +73,10 @@ class OdeSystem:
         The same system in mechanical form, for the matrix-free shooting
         (:mod:`cablesim.orbits.matrixfree`); None if it has none (any vector field can still be
         shot matrix-free, its Jacobian formed at every stage).
+    rotation : Rotation or None
+        The rotations about the chord of a cable that lies straight along it
+        (:mod:`cablesim.orbits.rotation`), if the system is invariant under them: the monodromy
+        of an orbit they move has a multiplier +1 that the bifurcation tests exclude.
     slack : tuple or None
         ``(gaps, modes)``: the compiled functions with which the dense shooting can follow the
         flow through slack segments (:mod:`cablesim.orbits.slackflow`; a
@@ -95,6 +100,7 @@ class OdeSystem:
     mirror: object = None
     frame: object = None
     slack: object = None
+    rotation: object = None
 
     def __post_init__(self):
         object.__setattr__(self, "prm", np.ascontiguousarray(self.prm, dtype=float).copy())
@@ -236,6 +242,7 @@ def cable_system(eom, gamma: float = 1.0, support: float = 1.0) -> OdeSystem:
         mechanical=mechanical,
         mirror=mirror,
         frame=cable_frame(eom),
+        rotation=cable_rotation(eom),
         # orbits through slack: the exact analysis with the supports at rest, unless the case
         # says slack: stop
         slack=((cablefield.exact_gaps, cablefield.exact_modes)

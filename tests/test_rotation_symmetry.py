@@ -10,6 +10,7 @@ rotation of an orbit by a finite angle (Rodrigues' formula) integrated by that f
 
 from __future__ import annotations
 
+import h5py
 import numpy as np
 import pytest
 import yaml
@@ -18,6 +19,7 @@ from cablesim.analyses.continuation import run_continuation
 from cablesim.analyses.setup import build_equations
 from cablesim.analyses.static import run_static
 from cablesim.case import case_from_dict
+from cablesim.io.continuation import write_continuation
 from cablesim.orbits.rotation import cable_rotation
 
 from helpers_whirl import Motion, cable_from_case, flow
@@ -110,3 +112,19 @@ def test_the_period_two_branches_of_the_stay_have_no_spurious_branch_points(stay
     assert sorted((b.kind, b.plane, b.branch) for b in res.bifurcations) == [
         ("period-doubling", "in-plane", 0), ("period-doubling", "out-of-plane", 0)]
     assert res.branches[0].neutral_residual is None  # the axial response: nothing moved, nothing excluded
+
+
+def test_the_excluded_multiplier_is_recorded_in_the_results_file(stay_branches, tmp_path):
+    """The HDF5 file holds, per point of each period-2 branch, the residual ``|M g - g| / |g|`` of
+    the excluded multiplier (NaN at the branch's first point, the period doubling on the axial
+    response, where nothing is excluded); the axial branch has none."""
+    _, _, res = stay_branches
+    path = write_continuation(tmp_path / "stay.h5", res)
+    with h5py.File(path, "r") as f:
+        groups = f["continuation/branches"]
+        axial = groups[res.branches[0].name]
+        assert "neutral_residual" not in axial
+        for b in res.branches[1:]:
+            stored = groups[b.name]["neutral_residual"][()]
+            assert np.isnan(stored[0]) and np.all(stored[1:] < 1e-9)
+            assert "excluded" in groups[b.name]["neutral_residual"].attrs["description"]

@@ -87,6 +87,12 @@ class BranchResult:
     strain : ndarray (points,) or None
         The largest strain ``(l - S) / S`` over each orbit (:mod:`cablesim.analyses.orbit_strain`;
         NaN: not measured), which :attr:`strained` judges.
+    neutral_residual : ndarray (points,) or None
+        A cable symmetric about rotations of its chord (a taut stay without sag): on orbits that
+        the rotation moves, one multiplier is +1 by the symmetry and is excluded from the
+        bifurcation tests and the stability (:mod:`cablesim.orbits.rotation`); here
+        ``|M g - g| / |g|`` of its eigenvector ``g`` (NaN: nothing excluded at that point).
+        None if no point of the branch excluded one.
     """
 
     name: str
@@ -111,6 +117,7 @@ class BranchResult:
     max_w: np.ndarray | None = None
     whirl_sense: np.ndarray | None = None
     strain: np.ndarray | None = None
+    neutral_residual: np.ndarray | None = None
 
     @property
     def strained(self) -> np.ndarray:
@@ -312,8 +319,16 @@ def _branch(k: int, br, spec, idx: np.ndarray, dim: int = 2, strain: np.ndarray 
         planar=bool(getattr(br, "planar", False)),
         mirror_image=bool(getattr(br, "mirror_image", False)),
         strain=np.full(len(pts), np.nan) if strain is None else strain,
+        neutral_residual=_neutral(pts),
         **_whirling(br, dim),
     )
+
+
+def _neutral(points) -> np.ndarray | None:
+    """``|M g - g| / |g|`` of every point's excluded multiplier (NaN: none), or None if none."""
+    res = np.array([p.neutral.residual if getattr(p, "neutral", None) is not None else np.nan for p in points],
+                   dtype=float)
+    return res if np.isfinite(res).any() else None
 
 
 def _whirling(br, dim: int) -> dict:

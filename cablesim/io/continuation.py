@@ -74,6 +74,14 @@ SUPPORT_TEXT = ("support motion multiplier s: multiplies the amplitudes of suppo
                 "the supports move by gamma s times them)")
 
 
+def _put_neutral(h, b) -> None:
+    """A branch's residuals of the multiplier excluded by a rotation symmetry, if any."""
+    if getattr(b, "neutral_residual", None) is not None:
+        put(h, "neutral_residual", b.neutral_residual, "1", "the orbit's multiplier +1 forced by the cable's "
+            "rotation symmetry about its chord, excluded from the bifurcation tests and from stable: "
+            "|M g - g| / |g| of its eigenvector g, the rotation's generator (NaN: none excluded)", allow_nan=True)
+
+
 def _put_support(group, values, amplitudes: dict):
     """The support multiplier column, with the amplitude (m) of each moving support at s = 1."""
     ds = put(group, "support", values, "1", SUPPORT_TEXT)
@@ -126,7 +134,8 @@ def write_continuation(path: str | Path, res, fingerprint: str | None = None) ->
             _put_support(h, b.support if b.support is not None else np.ones(b.parameter.size), amplitudes)
             put(h, "amplitude", b.amplitude, "m", "largest |z| over the orbit, per channel")
             put(h, "halfrange", b.halfrange, "m", "half the peak-to-peak range over the orbit, per channel")
-            put(h, "stable", b.stable, "1", "all Floquet multipliers inside the unit circle")
+            put(h, "stable", b.stable, "1", "all Floquet multipliers inside the unit circle (but a neutral one "
+                "forced by a symmetry, neutral_residual)")
             put(h, "trusted", b.trusted, "1", "multipliers passed the residual and Liouville checks")
             put(h, "multipliers", b.multipliers, "1", "Floquet multipliers, by decreasing modulus")
             put(h, "state", b.state, "m, m/s", "(z, y') at forcing phase 0")
@@ -134,6 +143,7 @@ def write_continuation(path: str | Path, res, fingerprint: str | None = None) ->
                 put(h, "strain", b.strain, "1", "largest strain (l - S) / S of any segment over the orbit (NaN: not "
                     "measured)", allow_nan=True)
                 put(h, "strained", b.strained, "1", "the orbit's strain is beyond the model's small strains")
+            _put_neutral(h, b)
             if b.planes is not None:
                 put(h, "multiplier_plane", np.asarray(b.planes, dtype="S"), "1",
                     "block of each multiplier: in-plane, out-of-plane (a planar orbit of a symmetric "

@@ -191,6 +191,7 @@ class _Tracer:
             return bool(self.callback(op)) if self.callback is not None else False
 
         def on_point(cp) -> bool:
+            getattr(problem, "anchor", lambda u: None)(cp.u)  # the rotation's phase at the accepted orbit, if the system has one
             op = orbit_point(self.system, sh, cp, idx, -1, self.settings.residual_tol, self.liouville_tol, mirror,
                               self.measure)
             return deliver(op) if watch is None else watch.observe(cp, op, deliver)

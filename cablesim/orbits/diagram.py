@@ -80,6 +80,11 @@ class OrbitPoint:
         The tracing's ``measure`` of the orbit (:func:`~cablesim.orbits.branches.trace_branches`:
         for the cable its largest strain), taken on the steps of the flow that converged; None
         where it was not taken then (an orbit restored from a journal, or no ``measure``).
+    neutral : Neutral or None
+        The multiplier forced to +1 by a rotation symmetry of the system, excluded from the
+        bifurcation tests and the stability (:mod:`cablesim.orbits.rotation`; among
+        ``multipliers``, of the out-of-plane block on a planar orbit), with its residual
+        ``|M g - g| / |g|``; None where no multiplier was excluded.
     """
 
     branch: int
@@ -101,6 +106,7 @@ class OrbitPoint:
     planes: tuple | None = None
     whirl: object = None
     measure: float | None = None
+    neutral: object = None
 
 
 @dataclass

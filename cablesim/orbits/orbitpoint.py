@@ -8,6 +8,7 @@ from typing import Callable
 
 import numpy as np
 
+from ..modal import OUT_OF_PLANE
 from . import stability
 from .diagram import Bifurcation, OrbitPoint
 from .problems import labelled_multipliers
@@ -49,12 +50,17 @@ def orbit_point(system: OdeSystem, shooting: Shooting, cp, branch: int, index: i
     check = ev.liouville <= liouville_tol if ev.monodromy is not None or ev.leading is None \
         else ev.leading.residual <= liouville_tol
     trusted = bool(cp.residual <= 10.0 * residual_tol and check and np.all(np.isfinite(mu)))
+    # a multiplier forced to +1 by a rotation symmetry is reported but judged neutral: the
+    # orbit's stability is that of the others (as an autonomous orbit's, orbital stability)
+    nt = ev.neutral or None
+    seen = mu if nt is None else np.concatenate([nt.multipliers, ev.blocks_mu[0]] if mirror is not None else
+                                                [nt.multipliers])
     return OrbitPoint(
         branch=branch, index=index, parameter=float(cp.lam), omega=ev.omega, period=shooting.period,
         state=cp.u[: shooting.n].copy(), u=cp.u.copy(), amplitude=np.maximum(np.abs(xmax), np.abs(xmin)),
-        halfrange=0.5 * (xmax - xmin), multipliers=mu.copy(), stable=stability.is_stable(mu), trusted=trusted,
+        halfrange=0.5 * (xmax - xmin), multipliers=mu.copy(), stable=stability.is_stable(seen), trusted=trusted,
         residual=float(cp.residual), liouville=float(ev.liouville), special=cp.special, located=cp.located,
-        planes=planes, whirl=whirl, measure=value,
+        planes=planes, whirl=whirl, measure=value, neutral=nt,
     )
 
 
@@ -65,6 +71,8 @@ def bifurcation_at(p: OrbitPoint, branch: int) -> Bifurcation:
     if p.planes is not None:
         kind, plane = stability.SPLIT_KINDS[p.special]
         mu = p.multipliers[np.array(p.planes) == plane]
+    if p.neutral is not None and (p.planes is None or plane == OUT_OF_PLANE):
+        mu = p.neutral.multipliers  # the critical one is never the neutral multiplier
     crit = stability.critical_multiplier(kind, mu)
     return Bifurcation(
         kind=kind, parameter=p.parameter, branch=branch, period=p.period,

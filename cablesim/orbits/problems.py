@@ -1,6 +1,9 @@
 """The periodicity condition of a shooting as a continuation problem
 (:mod:`cablesim.orbits.continuation`): the dense one, and the one of a branch of planar orbits
-of a mirror-symmetric system whose bifurcation tests run on the two blocks of the monodromy."""
+of a mirror-symmetric system whose bifurcation tests run on the two blocks of the monodromy.
+On a system invariant under rotations about an axis (:mod:`cablesim.orbits.rotation`), the
+tests, the step rule and the stability of an orbit the rotation moves exclude the multiplier +1
+that the symmetry forces."""
 
 from __future__ import annotations
 
@@ -8,8 +11,23 @@ import numpy as np
 
 from . import kernels as ok
 from . import stability
+from .rotation import Neutral, Rotation, neutral
 from .shooting import Evaluation, FlowStatus, Shooting
 from .symmetry import Mirror
+
+
+#: The phase of a problem with a rotation symmetry before its first evaluation.
+UNSET = object()
+
+
+def _with_phase(ev: Evaluation, u_ref: np.ndarray, q: np.ndarray) -> None:
+    """The periodicity condition of ``ev`` with its equation along ``q`` replaced by the phase
+    condition ``q . (u - u_ref) = 0`` (:meth:`OrbitProblem.anchor`), in place."""
+    ev.r = ev.r - q * float(q @ ev.r) + q * float(q @ (ev.u - u_ref))
+    if ev.J_u is not None:
+        ev.J_u = ev.J_u - np.outer(q, q @ ev.J_u) + np.outer(q, q)
+    if ev.J_lam is not None:
+        ev.J_lam = ev.J_lam - q * float(q @ ev.J_lam)
 
 
 class OrbitProblem:
@@ -30,22 +48,65 @@ class OrbitProblem:
         #: Keep every evaluation's orbit at its steps (:attr:`Evaluation.steps`), for the measures
         #: of the converged orbits (strain, whirling) without integrating them once more.
         self.record = False
+        #: The system's rotation symmetry, if any (its neutral multiplier is excluded).
+        self.rotation: Rotation | None = getattr(shooting.system, "rotation", None)
+        #: ``(u_ref, q)`` of the phase condition that picks one orbit of a family of rotated
+        #: orbits (:meth:`anchor`); None: none; UNSET: anchored at the first evaluation.
+        self.phase = UNSET if self.rotation is not None else None
+
+    def anchor(self, u: np.ndarray) -> None:
+        """Fix the rotation's phase at the orbit through ``u`` (called at every accepted point).
+
+        The rotations of an orbit they move are orbits too, so ``J_u`` of the periodicity
+        condition ``r(u) = 0`` has the generator ``g`` (tiled over the segments) in its null
+        space besides the branch's tangent, and Newton's bordered systems are singular. The
+        equation along ``q = g / |g|`` is replaced by the phase condition
+        ``q . (u - u_ref) = 0``: ``r' = (I - q q^T) r + q q^T (u - u_ref)``. Near the branch
+        ``(I - q q^T) r = 0`` with the phase condition is ``r = 0`` with it (both define one
+        curve through the solutions, ``[(I - q q^T) J_u, (I - q q^T) J_lam; q^T, 0]`` being of
+        full rank where ``q`` is not orthogonal to the left null vector of ``J_u``), so the
+        orbits found are the periodic ones; the phase is moved to every accepted point so that
+        ``q`` follows the branch's shape."""
+        if self.rotation is None:
+            return
+        n, m = self.shooting.n, self.shooting.segments
+        u = np.asarray(u, dtype=float)
+        g = [self.rotation.moved(u[k * n : (k + 1) * n], self.u_scale[k * n : (k + 1) * n]) for k in range(m)]
+        if any(x is None for x in g):
+            self.phase = None
+            return
+        q = np.concatenate(g)
+        self.phase = (u[: m * n].copy(), q / np.linalg.norm(q))
 
     def evaluate(self, u, lam):
         ev = self.shooting.evaluate(u, lam, blocks=self.blocks, record=self.record)
         if ev.status != ok.OK:
             self.last_failure = ev.status
             return None
+        if self.phase is UNSET:
+            self.anchor(u)
+        if self.phase is not None:
+            _with_phase(ev, *self.phase)
         return ev
 
+    def neutral(self, ev: Evaluation) -> Neutral | None:
+        """The multiplier the rotation symmetry forces to +1 on this orbit, with the deflated
+        multipliers (:func:`evaluation_neutral`), or None."""
+        return evaluation_neutral(self.rotation, self.u_scale[: self.shooting.n], ev)
+
+    def tested(self, ev: Evaluation) -> np.ndarray:
+        """The multipliers the tests and the step rule see: without the neutral one, if any."""
+        nt = self.neutral(ev)
+        return ev.multipliers if nt is None else nt.multipliers
+
     def test_functions(self, ev: Evaluation) -> np.ndarray:
-        return stability.test_functions(ev.multipliers)
+        return stability.test_functions(self.tested(ev))
 
     def confirm(self, name: str, ev: Evaluation) -> str | None:
-        return stability.confirm(name, ev.multipliers)
+        return stability.confirm(name, self.tested(ev))
 
     def step_ratio(self, ev_a: Evaluation, ev_b: Evaluation) -> float:
-        return stability.step_ratio(ev_a.multipliers, ev_b.multipliers)
+        return stability.step_ratio(self.tested(ev_a), self.tested(ev_b))
 
 
 class PlanarOrbitProblem(OrbitProblem):
@@ -67,8 +128,19 @@ class PlanarOrbitProblem(OrbitProblem):
         #: cable's cost plus the out-of-plane block's instead of the whole spatial Jacobian's).
         self.blocks = mirror.coordinate_blocks()
 
+    def neutral(self, ev: Evaluation) -> Neutral | None:
+        """The out-of-plane multiplier the rotation symmetry forces to +1 (a planar orbit that
+        leaves the chord: the generator is odd), with the deflated out-of-plane block, or None."""
+        return evaluation_neutral(self.rotation, self.u_scale[: self.shooting.n], ev, self.mirror)
+
+    def tested_blocks(self, ev: Evaluation) -> tuple[np.ndarray, np.ndarray]:
+        """The in-plane and out-of-plane multipliers the tests see."""
+        mu_in, mu_out = block_multipliers(self.mirror, ev)
+        nt = self.neutral(ev)
+        return mu_in, (mu_out if nt is None else nt.multipliers)
+
     def test_functions(self, ev: Evaluation) -> np.ndarray:
-        return stability.split_test_functions(*block_multipliers(self.mirror, ev))
+        return stability.split_test_functions(*self.tested_blocks(ev))
 
     def step_ratio(self, ev_a: Evaluation, ev_b: Evaluation) -> float:
         """Each block in its own terms: the in-plane multipliers as the planar cable's
@@ -81,11 +153,16 @@ class PlanarOrbitProblem(OrbitProblem):
             return super().step_ratio(ev_a, ev_b)
         in_a, in_b = block_multipliers(self.mirror, ev_a)[0], block_multipliers(self.mirror, ev_b)[0]
         return max(stability.step_ratio(in_a, in_b),
-                   stability.interpolated_step_ratio(monodromy_blocks(self.mirror, ev_a)[1],
-                                                     monodromy_blocks(self.mirror, ev_b)[1]))
+                   stability.interpolated_step_ratio(self.out_of_plane_block(ev_a), self.out_of_plane_block(ev_b)))
+
+    def out_of_plane_block(self, ev: Evaluation) -> np.ndarray:
+        """The out-of-plane block of the monodromy, deflated by the neutral multiplier if any
+        (the deflation is smooth along the branch, so the step rule may interpolate it)."""
+        nt = self.neutral(ev)
+        return monodromy_blocks(self.mirror, ev)[1] if nt is None else nt.matrix
 
     def confirm(self, name: str, ev: Evaluation) -> str | None:
-        mu_in, mu_out = block_multipliers(self.mirror, ev)
+        mu_in, mu_out = self.tested_blocks(ev)
         if name.startswith("out-of-plane "):
             base = stability.confirm(name[len("out-of-plane "):], mu_out)
             return None if base is None else name
@@ -114,3 +191,22 @@ def labelled_multipliers(mirror: Mirror, ev: Evaluation) -> tuple[np.ndarray, tu
     """The multipliers of a planar orbit's evaluation from the two blocks of its monodromy,
     sorted together (:func:`~cablesim.orbits.stability.sort_multipliers`), and the block of each."""
     return mirror.labelled(*block_multipliers(mirror, ev))
+
+
+def evaluation_neutral(rotation: Rotation | None, scale: np.ndarray, ev: Evaluation,
+                       mirror: Mirror | None = None) -> Neutral | None:
+    """The neutral multiplier of an evaluation's orbit under ``rotation``
+    (:func:`~cablesim.orbits.rotation.neutral`, of the out-of-plane block with a ``mirror``),
+    computed once per evaluation; None without the symmetry, without a monodromy, or on an orbit
+    the rotation leaves in place."""
+    if rotation is None or ev.monodromy is None:
+        return None
+    if ev.neutral is None:
+        g = rotation.moved(ev.u[: ev.monodromy.shape[0]], scale)
+        if g is None:
+            ev.neutral = False
+        elif mirror is None:
+            ev.neutral = neutral(ev.monodromy, g)
+        else:
+            ev.neutral = neutral(monodromy_blocks(mirror, ev)[1], mirror.odd.T @ g)
+    return ev.neutral or None

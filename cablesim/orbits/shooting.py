@@ -115,6 +115,10 @@ class Evaluation:
         On a planar orbit of a mirror-symmetric system: the in-plane and the out-of-plane
         multipliers and blocks of the monodromy, once computed
         (:func:`cablesim.orbits.problems.block_multipliers`, :func:`~cablesim.orbits.problems.monodromy_blocks`).
+    neutral : Neutral, False or None
+        The multiplier forced to +1 by a rotation symmetry and the deflated multipliers the
+        tests see (:mod:`cablesim.orbits.rotation`), once computed; False: none (no symmetry, or
+        an orbit the rotation leaves in place).
     events : ndarray (k, 3)
         The segments' mode changes over the orbit, ``(t, segment, new mode)`` rows in time
         order, ``t`` in s from the orbit's start, mode 0 slack (an onset) and 1 taut (a
@@ -141,6 +145,7 @@ class Evaluation:
     steps: list | None = None
     blocks_mu: tuple | None = None
     blocks_phi: tuple | None = None
+    neutral: object = None
     events: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
     @property

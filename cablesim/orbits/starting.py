@@ -16,6 +16,7 @@ import numpy as np
 
 from . import kernels as ok
 from .shooting import Shooting
+from .symmetry import cable_mirror, component_frequencies
 
 
 def linear_response(eom, omega: float, gamma: float = 1.0, support: float = 1.0) -> np.ndarray:
@@ -65,10 +66,12 @@ def cable_scales(eom, parameter: str, start: float, stop: float, gamma: float = 
     range (a grid of 64 values) and at every linear resonance (the modal frequencies), floored at
     1e-6 of the chord: a nonlinear branch born far from resonance (a period doubling near
     ``2 w1``) grows to amplitudes of the primary resonance, which a range-local scale would not
-    see. Velocities: that times the fundamental frequency. Parameter: its largest magnitude.
+    see. Velocities: that times the fundamental frequency of each component
+    (:func:`~cablesim.orbits.symmetry.component_frequencies`: of its block on a cable with a
+    mirror symmetry, so that a planar branch is traced in the planar cable's steps). Parameter:
+    its largest magnitude.
     In ``s`` (support): at least the supports' largest amplitude at the largest ``s`` (and 1).
     """
-    w1 = float(eom.frequencies[0])
     if parameter == "omega":
         g = gamma
         freqs = np.concatenate([np.linspace(min(start, stop), max(start, stop), 64), eom.frequencies])
@@ -81,6 +84,6 @@ def cable_scales(eom, parameter: str, start: float, stop: float, gamma: float = 
         amp = max(amp, g * max(1.0, abs(start), abs(stop)) * float(np.abs(np.concatenate([eom.uA, eom.uB])).max()))
     amp = max(amp, 1e-6 * eom.cable.chord_length)
     nd = eom.n_dof
-    scale = np.concatenate([np.full(nd, amp), np.full(nd, amp * w1)])
+    scale = np.concatenate([np.full(nd, amp), amp * component_frequencies(eom, cable_mirror(eom))])
     lam_scale = max(abs(start), abs(stop))
     return scale, lam_scale

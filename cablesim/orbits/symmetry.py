@@ -276,6 +276,39 @@ def orbit_whirling(frame: Mirror, shooting, u: np.ndarray, lam: float, samples: 
     return whirling_measures(frame, x, float(t[1] - t[0]), largest_w(frame, steps, float(t[-1])))
 
 
+def component_frequencies(eom, mirror: Mirror | None) -> np.ndarray:
+    """The fundamental frequency of each displacement component of a cable, rad/s (n_dof,):
+    the lowest modal frequency ``w1`` for every component, unless the cable has a mirror
+    symmetry. Then the in-plane and the out-of-plane motions are separate linear problems
+    (:func:`~cablesim.modal.planar_modes`), and component ``i`` gets
+    ``sqrt(sum_b |P_b e_i|^2 w_b^2)``: ``P_b`` the projection onto the displacements of block
+    ``b`` (even, odd), ``w_b`` the lowest frequency of that block; for a plane whose normal is a
+    coordinate axis, the in-plane components get the planar cable's ``w1`` and the normal one
+    the lowest out-of-plane frequency.
+
+    Why: the velocity scales of a continuation are the displacement scale times these. A
+    planar orbit of a symmetric spatial cable moves in the in-plane components alone; scaled
+    with the lowest frequency of all modes (often an out-of-plane one, lower) its velocities
+    would weigh more in the arclength than on the planar cable, and the same curve would be
+    traced in smaller steps."""
+    w = np.asarray(eom.frequencies, dtype=float)
+    nd = int(eom.n_dof)
+    if mirror is None:
+        return np.full(nd, float(w[0]))
+    mass = np.asarray(eom.mass, dtype=float)
+    K0 = np.asarray(eom.K0, dtype=float)
+    sq = np.zeros(nd)
+    for cols in (mirror.even[:nd], mirror.odd[:nd]):
+        B = cols[:, np.abs(cols).max(axis=0) > 0.0]  # the block's displacement coordinates
+        # lowest eigenvalue of (B^T K0 B) q = w^2 (B^T M B) q; B^T M B is diagonal (isotropic
+        # nodal masses, orthonormal columns node by node)
+        m = np.einsum("ik,i,ik->k", B, mass, B)
+        r = 1.0 / np.sqrt(m)
+        lam = float(np.linalg.eigvalsh(r[:, None] * (B.T @ K0 @ B) * r[None, :])[0])
+        sq += np.einsum("ik,ik->i", B, B) * max(lam, 0.0)
+    return np.sqrt(sq)
+
+
 def cable_frame(eom) -> Mirror | None:
     """The :class:`Mirror` of the plane of a spatial cable's equilibrium, whether or not its
     loads lie in it (the frame of the whirling measures of a cable without the symmetry), or

@@ -21,7 +21,8 @@ from ..mechanics.model import CONTINUE
 from ..modal import fastest_rate
 from . import cablefield
 from . import mechanical as mech
-from .symmetry import cable_frame, cable_mirror
+from .rotation import cable_rotation
+from .symmetry import cable_frame, cable_mirror, component_frequencies
 from .kernels import copy_work
 
 
@@ -72,6 +73,10 @@ class OdeSystem:
         The same system in mechanical form, for the matrix-free shooting
         (:mod:`cablesim.orbits.matrixfree`); None if it has none (any vector field can still be
         shot matrix-free, its Jacobian formed at every stage).
+    rotation : Rotation or None
+        The rotations about the chord of a cable that lies straight along it
+        (:mod:`cablesim.orbits.rotation`), if the system is invariant under them: the monodromy
+        of an orbit they move has a multiplier +1 that the bifurcation tests exclude.
     slack : tuple or None
         ``(gaps, modes)``: the compiled functions with which the dense shooting can follow the
         flow through slack segments (:mod:`cablesim.orbits.slackflow`; a
@@ -95,6 +100,7 @@ class OdeSystem:
     mirror: object = None
     frame: object = None
     slack: object = None
+    rotation: object = None
 
     def __post_init__(self):
         object.__setattr__(self, "prm", np.ascontiguousarray(self.prm, dtype=float).copy())
@@ -205,9 +211,10 @@ def cable_system(eom, gamma: float = 1.0, support: float = 1.0) -> OdeSystem:
     # 1e-15 of the chord in displacement (measured 6e-14 m on the paper's cable, exact
     # analysis); the approximate analysis works on absolute coordinates (y0 + z) and inner
     # solves: 1e-13 of the chord.
-    w1 = float(w[0])
+    # (velocities: times each component's fundamental frequency, as the continuation's scales)
+    mirror = cable_mirror(eom)
     level = (1e-15 if eom.analysis == "exact" else 1e-13) * float(eom.cable.chord_length)
-    noise = np.concatenate([np.full(nd, level), np.full(nd, level * w1)])
+    noise = np.concatenate([np.full(nd, level), level * component_frequencies(eom, mirror)])
     # The sustained load is taken as the resisting force at y0 itself, so that z = 0 is an exact
     # equilibrium of the field (the static solve leaves |P(y0) - F0| at its tolerance, which
     # would otherwise offset tiny orbits). The third-order time integration does the same: F0
@@ -233,8 +240,9 @@ def cable_system(eom, gamma: float = 1.0, support: float = 1.0) -> OdeSystem:
         noise=noise,
         names=names,
         mechanical=mechanical,
-        mirror=cable_mirror(eom),
+        mirror=mirror,
         frame=cable_frame(eom),
+        rotation=cable_rotation(eom),
         # orbits through slack: the exact analysis with the supports at rest, unless the case
         # says slack: stop
         slack=((cablefield.exact_gaps, cablefield.exact_modes)

@@ -1,0 +1,173 @@
+"""The continuous symmetry of a cable that lies straight along its chord: rotation about the chord.
+
+A spatial cable whose equilibrium lies on the chord line (a taut stay without gravity sag), whose
+sustained and harmonic loads and support motions are all along the chord and whose stiffness and
+damping at the equilibrium commute with rotations about it, is invariant under every rotation
+``R_theta`` about the chord through support A: the field is equivariant, ``f(R x) = R f(x)``, so
+the rotation of a periodic orbit is again a periodic orbit. Differentiating
+``P(R_theta x*) = R_theta x*`` (``P`` the period map, ``x*`` the orbit's start) at ``theta = 0``::
+
+    M g = g,   g = d/dtheta R_theta x* = (e x (y0 + z - A), e x v) at every node
+
+(``e`` the chord's unit vector, ``M = DP(x*)`` the monodromy): the generator ``g`` is an
+eigenvector with multiplier exactly +1, forced by the symmetry, as the trivial multiplier of an
+autonomous system is by time shifts. On an orbit that is moved by the rotation (``g != 0``: an orbit
+that leaves the chord line, such as the period-2 branches born at a stay's parametric resonance)
+this multiplier is neutral for every parameter value. A bifurcation test watching multipliers
+through +1 would take its round-off wobble about 1 for branch points (a pitchfork test on a
+planar branch, whose out-of-plane block holds it, the branch-point test on a nonplanar one). The
+tests therefore run on the monodromy deflated by it (:func:`deflate`: the multiplier +1 moved
+to :data:`NEUTRAL_SHIFT`, every other multiplier kept); the orbit still reports every
+multiplier, with the excluded one and the residual ``|M g - g| / |g|`` recorded
+(:class:`Neutral`). On an orbit along the chord (``g = 0``, the axial response) nothing is
+excluded.
+
+:func:`cable_rotation` decides from the model whether a cable has the symmetry.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..modal import PLANE_TOL
+from .stability import sort_multipliers
+
+#: Largest scaled size of the generator ``g`` of an orbit that the rotation leaves in place (an
+#: orbit along the chord): below it no multiplier is excluded.
+MOVED_TOL = 1e-9
+#: Largest ``|K0 W - W K0| / |K0|`` (and for ``C``) of a cable that counts as axisymmetric
+#: (``W`` the infinitesimal rotation of every node's displacement).
+COMMUTE_TOL = 1e-10
+
+
+@dataclass(frozen=True)
+class Rotation:
+    """Rotations about a cable's chord (module docstring).
+
+    Attributes
+    ----------
+    axis : ndarray (3,)
+        ``e``: unit vector along the chord, from A to B.
+    origin : ndarray (3,)
+        A point of the axis (support A at rest), m.
+    rest : ndarray (n, 3)
+        The nodes' equilibrium positions ``y0``, m (the state's ``z`` is measured from them).
+    """
+
+    axis: np.ndarray
+    origin: np.ndarray
+    rest: np.ndarray
+
+    def generator(self, x: np.ndarray) -> np.ndarray:
+        """``g = (e x (y0 + z - A), e x v)`` of the state ``x = (z, v)`` (6 n)."""
+        n = self.rest.shape[0]
+        x = np.asarray(x, dtype=float)
+        z, v = x[: 3 * n].reshape(n, 3), x[3 * n : 6 * n].reshape(n, 3)
+        return np.concatenate([np.cross(self.axis, self.rest + z - self.origin).ravel(),
+                               np.cross(self.axis, v).ravel()])
+
+    def moved(self, x: np.ndarray, scale: np.ndarray) -> np.ndarray | None:
+        """The generator at ``x`` if the rotation moves the orbit (its scaled size, with the
+        state's typical sizes ``scale``, above :data:`MOVED_TOL`), else None."""
+        g = self.generator(x)
+        return g if float(np.abs(g / np.asarray(scale, dtype=float)).max()) > MOVED_TOL else None
+
+
+@dataclass(frozen=True)
+class Neutral:
+    """The multiplier forced to +1 by the rotation symmetry and excluded from the tests.
+
+    Attributes
+    ----------
+    multiplier : complex
+        The Rayleigh quotient ``g^T M g / g^T g`` (+1 to the monodromy's accuracy).
+    residual : float
+        ``|M g - g| / |g|``.
+    multipliers : ndarray complex
+        The multipliers the tests see: those of the deflated matrix, the excluded one moved to
+        :data:`NEUTRAL_SHIFT` (of the out-of-plane block on a planar orbit, of the monodromy
+        otherwise).
+    matrix : ndarray
+        The deflated matrix (:func:`deflate`).
+    """
+
+    multiplier: complex
+    residual: float
+    multipliers: np.ndarray
+    matrix: np.ndarray
+
+
+#: Where :func:`deflate` moves the neutral multiplier: inside the unit circle, away from +1 and
+#: -1, and of order one, so that the determinant of the deflated matrix (the step rule's model
+#: check, :func:`~cablesim.orbits.stability.interpolated_step_ratio`) stays that of the rest
+#: times a constant.
+NEUTRAL_SHIFT = 0.5
+
+
+def deflate(P: np.ndarray, g: np.ndarray, shift: float = NEUTRAL_SHIFT) -> np.ndarray:
+    """``P - (1 - c) P g g^T / g^T g`` (Wielandt's deflation, ``c`` = ``shift``): with
+    ``P g = g``, the same multipliers as ``P`` except the +1 of ``g``, which becomes ``c`` (every
+    left eigenvector ``y`` of another multiplier has ``y . g = 0``, so ``y^T`` is still one).
+    Smooth in ``P`` and ``g``, so the step rule may interpolate it between the points of a
+    branch."""
+    g = np.asarray(g, dtype=float)
+    return P - (1.0 - shift) * np.outer(P @ g, g) / float(g @ g)
+
+
+def neutral(P: np.ndarray, g: np.ndarray) -> Neutral:
+    """The :class:`Neutral` multiplier of ``P`` along ``g`` and the deflated multipliers."""
+    Pg = P @ g
+    gg = float(g @ g)
+    D = deflate(P, g)
+    return Neutral(multiplier=complex(float(g @ Pg) / gg), residual=float(np.linalg.norm(Pg - g) / np.sqrt(gg)),
+                   multipliers=sort_multipliers(np.linalg.eigvals(D)), matrix=D)
+
+
+def _parallel(vectors: np.ndarray, axis: np.ndarray) -> bool:
+    """Whether every row of ``vectors`` lies along ``axis``, to :data:`PLANE_TOL` of the largest."""
+    v = np.reshape(np.asarray(vectors, dtype=float), (-1, 3))
+    if not v.size:
+        return True
+    across = v - np.outer(v @ axis, axis)
+    return bool(np.abs(across).max() <= PLANE_TOL * max(float(np.abs(v).max()), 1e-300))
+
+
+def _commutes(A: np.ndarray | None, W: np.ndarray) -> bool:
+    if A is None:
+        return True
+    A = np.asarray(A, dtype=float)
+    big = max(float(np.abs(A).max()), 1e-300)
+    return bool(np.abs(A @ W - W @ A).max() <= COMMUTE_TOL * big)
+
+
+def cable_rotation(eom) -> Rotation | None:
+    """The :class:`Rotation` about the chord of a spatial cable's equations of motion, or None.
+
+    The cable has the symmetry when its equilibrium nodes lie on the chord line, every sustained
+    and harmonic nodal load and both supports' motions lie along the chord, its nodal masses are
+    the same in the three directions and its stiffness ``K0`` and damping ``C`` at the
+    equilibrium commute with the infinitesimal rotation of the nodes (the internal forces of the
+    segments depend on their lengths only, so the nonlinear field is then equivariant too)."""
+    cable = eom.cable
+    if cable.dim != 3:
+        return None
+    A = np.asarray(cable.support_A, dtype=float)
+    chord = np.asarray(cable.chord, dtype=float)
+    e = chord / np.linalg.norm(chord)
+    rest = np.reshape(np.asarray(eom.y0, dtype=float), (-1, 3))
+    off = rest - A - np.outer((rest - A) @ e, e)
+    if np.abs(off).max(initial=0.0) > PLANE_TOL * float(cable.chord_length):
+        return None
+    vectors = [eom.F0, eom.FL] + [u for u in (eom.uA, eom.uB) if u is not None]
+    if not all(_parallel(v, e) for v in vectors):
+        return None
+    mass = np.reshape(np.asarray(eom.mass, dtype=float), (-1, 3))
+    if np.abs(mass - mass[:, :1]).max() > PLANE_TOL * float(mass.max()):
+        return None
+    cross = np.array([[0.0, -e[2], e[1]], [e[2], 0.0, -e[0]], [-e[1], e[0], 0.0]])  # e x
+    W = np.kron(np.eye(rest.shape[0]), cross)
+    if not (_commutes(eom.K0, W) and _commutes(eom.C, W)):
+        return None
+    return Rotation(axis=e, origin=A, rest=rest.copy())

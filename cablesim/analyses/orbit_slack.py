@@ -151,7 +151,7 @@ def tension_minima(sh: Shooting, eom, u: np.ndarray, lam: float) -> list:
             for lo in ((i - 1) % col.size, i):  # the steps either side of the discrete minimum
                 best = min(best, _step_minimum(t, rec, lo, nd, cable, y0, j, EA))
             found.append(best)
-        values.append(np.sort(np.array(found, dtype=float)))
+        values.append(np.sort(np.array(found or [float(col.min())], dtype=float)))
     return values
 
 
@@ -195,7 +195,7 @@ def branch_slack(eom, branch, parameter: str, gamma: float, support: float) -> B
 def _orbit_row(sh: Shooting, eom, u: np.ndarray, lam: float):
     """The slack pattern of one orbit and its segments' least elastic tensions, N."""
     pat = slack_pattern(sh, u, lam)
-    least = np.array([m[0] if m.size else np.inf for m in tension_minima(sh, eom, u, lam)])
+    least = np.array([m[0] for m in tension_minima(sh, eom, u, lam)])
     return pat, least
 
 

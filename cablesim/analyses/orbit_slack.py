@@ -91,6 +91,8 @@ class Grazing:
         the non-smooth monodromy's, whose change across grazing is not that of a smooth branch.
     least_tension : float
         ``T_min`` of the located orbit, N (zero up to the root finding's tolerance).
+    state : ndarray
+        The grazing orbit's state at forcing phase 0 (``(z, y')``, m and m/s).
     trusted : bool
         The grazing orbit's Newton residual and Liouville check passed.
     """
@@ -108,6 +110,7 @@ class Grazing:
     before: np.ndarray
     after: np.ndarray
     least_tension: float
+    state: np.ndarray
     trusted: bool
 
     @property
@@ -243,6 +246,7 @@ def locate_grazing(sh: Shooting, eom, branch, slack: BranchSlack, i: int, j: int
         parameter=float(root), omega=float(sh.omega_of(root)), located=bool(located and ev is not None),
         amplitude=amp, multiplier=complex(mu[0]), multipliers=np.asarray(mu).copy(), before=np.asarray(a.multipliers),
         after=np.asarray(b.multipliers), least_tension=measure(sol.u, root) if ev is not None else np.nan,
+        state=np.asarray(sol.u[: sh.n]).copy(),
         trusted=bool(ev is not None and sol.residual <= 1e-8 and ev.liouville <= 1e-3))
 
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import brentq, minimize_scalar
+from scipy.optimize import brentq
 
 from ..orbits.shooting import Shooting, solve_orbit
 from ..orbits.slackpattern import PEAK_REFINEMENT, slack_pattern
@@ -148,30 +148,39 @@ def tension_minima(sh: Shooting, eom, u: np.ndarray, lam: float) -> list:
     for j in range(e.shape[1]):
         col = e[:-1, j]
         idx = np.flatnonzero((col <= np.roll(col, -1)) & (col < np.roll(col, 1)))
-        found = []
-        for i in idx:
-            best = float(col[i])
-            for lo in ((i - 1) % col.size, i):  # the steps either side of the discrete minimum
-                best = min(best, _step_minimum(t, rec, lo, nd, cable, y0, j, EA))
-            found.append(best)
+        found = [_refined_minimum(t, rec, i, nd, cable, y0, j, EA) for i in idx]
         values.append(np.sort(np.array(found or [float(col.min())], dtype=float)))
     return values
 
 
-def _step_minimum(t, rec, i, nd, cable, y0, j, EA) -> float:
-    """Least elastic tension of segment ``j`` on step ``i`` (``t[i]`` to ``t[i + 1]``) of the
-    orbit's cubic Hermite interpolant of ``z``, N."""
-    h = t[i + 1] - t[i]
-    z0, z1, v0, v1 = rec[i, :nd], rec[i + 1, :nd], rec[i, nd:2 * nd], rec[i + 1, nd:2 * nd]
+#: Samples per step of the interpolant around a discrete minimum (then a parabola through the
+#: least three): the vertex's error, of the order of the third derivative times
+#: ``(h / MINIMUM_SAMPLES)^3``, is far below the interpolant's own.
+MINIMUM_SAMPLES = 64
 
-    def tension(th):
-        th2, th3 = th * th, th * th * th
+
+def _refined_minimum(t, rec, i, nd, cable, y0, j, EA) -> float:
+    """Least elastic tension of segment ``j`` on the two steps either side of sample ``i`` of the
+    orbit's cubic Hermite interpolant of ``z`` (``t``, ``rec``: the period's samples, the last
+    the first's repetition), N."""
+    n = t.size - 1
+    th = np.linspace(0.0, 1.0, MINIMUM_SAMPLES + 1)[:, None]
+    th2, th3 = th * th, th * th * th
+    out = np.inf
+    for lo in ((i - 1) % n, i):
+        h = t[lo + 1] - t[lo]
+        z0, z1, v0, v1 = rec[lo, :nd], rec[lo + 1, :nd], rec[lo, nd:2 * nd], rec[lo + 1, nd:2 * nd]
         z = ((2 * th3 - 3 * th2 + 1) * z0 + (th3 - 2 * th2 + th) * h * v0 + (-2 * th3 + 3 * th2) * z1
              + (th3 - th2) * h * v1)
-        return EA * float(segment_strains(cable, y0 + z)[0, j])
-
-    r = minimize_scalar(tension, bounds=(0.0, 1.0), method="bounded", options={"xatol": 1e-10})
-    return min(float(r.fun), tension(0.0), tension(1.0))
+        T = EA * segment_strains(cable, y0 + z)[:, j]
+        k = int(np.argmin(T))
+        out = min(out, float(T[k]))
+        if 0 < k < T.size - 1:  # the vertex of the parabola through the least three samples
+            a, b, c = T[k - 1], T[k], T[k + 1]
+            den = a - 2.0 * b + c
+            if den > 0.0:
+                out = min(out, float(b - 0.125 * (c - a) ** 2 / den))
+    return out
 
 
 def branch_slack(eom, branch, parameter: str, gamma: float, support: float) -> BranchSlack:

@@ -42,16 +42,24 @@ class Reference:
         dv = np.diff(np.vstack([[0.0, 0.0], x[nd:].reshape(-1, 2), [0.0, 0.0]]), axis=0)
         return np.einsum("ij,ij->i", d, dv) / l
 
-    def flow(self, x0, rtol=1e-12, peaks=None, least=None):
+    def flow(self, x0, rtol=1e-12, peaks=None, least=None, minima=None):
         """``(x(T), events)`` from ``x0`` at phase 0; events ``(t, segment 0-based, new mode)``.
         ``peaks`` (an array, one per segment): raised to the largest tension found at the gap
         rates' zeros (non-terminal events) and the period's ends, N; ``least``: lowered to the
-        least elastic tension ``EA (l - S) / S`` there (negative inside a slack episode), N."""
+        least elastic tension ``EA (l - S) / S`` there (negative inside a slack episode), N;
+        ``minima`` (a list of lists, one per segment): extended by the elastic tension at every
+        local minimum of the gap (the gap rate's upward zeros), N."""
         nd = self.nd
         x, t = np.asarray(x0, float), 0.0
         taut = (self.gaps(x) > 0).astype(float)
         events = []
         turns = [lambda t, s, k=k: self.gap_rates(s)[k] for k in range(self.S.size)]
+        dips = []
+        for k in range(self.S.size):
+            dips.append(lambda t, s, k=k: self.gap_rates(s)[k])
+            dips[-1].direction = 1.0
+        if minima is None:
+            dips = []
 
         def rhs(t, s):
             acc = self.F0 + self.FL * np.sin(self.w * t) - self.C @ s[nd:] - self.force(self.y0 + s[:nd], taut)
@@ -66,8 +74,13 @@ class Reference:
         while True:
             nk = self.S.size
             sol = solve_ivp(rhs, (t, self.T), x, method="DOP853", rtol=rtol, atol=1e-14 * self.L,
-                            events=[gap(k) for k in range(nk)] + (turns if peaks is not None or least is not None else []))
+                            events=[gap(k) for k in range(nk)] + (turns if peaks is not None or least is not None else [])
+                            + dips)
             assert sol.status >= 0, sol.message
+            if minima is not None:
+                first = nk + (nk if peaks is not None or least is not None else 0)
+                for k in range(nk):
+                    minima[k] += [self.gaps(s)[k] * self.EA / self.S[k] for s in sol.y_events[first + k]]
             if least is not None:
                 for k in range(nk):
                     for s in [*sol.y_events[nk + k], sol.y[:, 0], sol.y[:, -1]]:

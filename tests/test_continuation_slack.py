@@ -149,6 +149,42 @@ def test_grazing_parameter_agrees_with_brent_on_the_reference_orbits(through, pa
     assert abs(graz.parameter - root) < 1e-6
 
 
+def _kth_minimum(ref, x, periods: int, k: int) -> float:
+    """The ``(k + 1)``-th smallest local minimum of segment 3's elastic tension over ``periods``
+    forcing periods of the reference flow from ``x`` (phase 0), N, and the end state."""
+    minima = [[], [], []]
+    for _ in range(periods):
+        x, _ = ref.flow(x, minima=minima)
+    return float(np.sort(minima[SEG])[k]), x
+
+
+@pytest.mark.slow(reason="the period-doubled branch of the paper example at 2.45 rad/s: about 15 s")
+def test_grazing_points_where_a_second_episode_appears_on_the_period_2_branch(paper, exact_static):
+    """Above gamma = 13.73 the harmonic branch has doubled its period; on the period-2 branch
+    segment 3 is slack twice per orbit (two forcing periods), once only in a window between two
+    grazing points. There the root is that of the second smallest local minimum of the elastic
+    tension: for the reference flow from each located grazing orbit it is zero to 1e-6 in gamma
+    (the reference's slope to the neighbouring orbit of the branch), and the orbit is periodic."""
+    case = cablesim.load_case(CONFIG, overrides=[SECTION.replace("start: 13.2, stop: 13.6", "start: 13.6, stop: 14.0")
+                                                 .replace("switch_branches: false", "switch_branches: true")])
+    result = cablesim.continuation(case).result
+    doubled = [b for b in result.branches if b.period == 2]
+    assert len(doubled) == 1
+    graz = [f for f in result.bifurcations if f.kind == "grazing" and f.period == 2]
+    assert sorted(f.grazing.episodes for f in graz) == [(1, 2), (2, 1)]
+    b = doubled[0]
+    for f in graz:
+        g = f.grazing
+        assert f.located and g.segment == 3
+        k = min(g.episodes)
+        m_g, xT = _kth_minimum(_reference(paper, exact_static, f.parameter), g.state, 2, k)
+        assert np.abs(xT - g.state).max() < 1e-6 * np.abs(g.state).max()
+        i = g.point
+        m_i, _ = _kth_minimum(_reference(paper, exact_static, b.parameter[i]), b.state[i], 2, k)
+        slope = (m_i - m_g) / (b.parameter[i] - f.parameter)
+        assert abs(m_g / slope) < 1e-6
+
+
 def test_file_holds_the_slack_patterns_with_units_and_the_figure_their_panel(through):
     _, result, out, fig = through
     b, graz, i, j = _sides(result)

@@ -113,7 +113,7 @@ def _grazing_points(diagram, spec, idx: np.ndarray, dim: int = 2) -> list:
 def _grazing_result(g: Grazing, spec, idx: np.ndarray, plane: str) -> BifurcationResult:
     """The bifurcation record of a located grazing orbit (the branch goes on through it)."""
     return BifurcationResult(
-        kind="grazing", parameter=g.parameter, **parameter_values(spec, g.parameter), branch=g.branch, period=spec.period,
+        kind="grazing", parameter=g.parameter, **parameter_values(spec, g.parameter), branch=g.branch, period=g.period,
         amplitude=np.asarray(g.amplitude)[idx], multiplier=g.multiplier, located=g.located, trusted=g.trusted,
         plane=plane, frequency_ratio=frequency_ratio(g.multiplier), grazing=g)
 

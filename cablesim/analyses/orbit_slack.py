@@ -70,9 +70,9 @@ class BranchSlack:
 
 @dataclass(frozen=True)
 class Grazing:
-    """A located grazing orbit of a branch: between its orbits ``point`` and ``point + 1``,
-    segment ``segment`` (1-based) goes from ``episodes[0]`` to ``episodes[1]`` slack episodes
-    per period.
+    """A located grazing orbit of branch ``branch`` (of orbits of ``period`` forcing periods):
+    between its orbits ``point`` and ``point + 1``, segment ``segment`` (1-based) goes from
+    ``episodes[0]`` to ``episodes[1]`` slack episodes per orbit period.
 
     Attributes
     ----------
@@ -98,6 +98,7 @@ class Grazing:
     """
 
     branch: int
+    period: int
     point: int
     segment: int
     episodes: tuple
@@ -251,7 +252,7 @@ def locate_grazing(sh: Shooting, eom, branch, slack: BranchSlack, i: int, j: int
     amp = np.maximum(np.abs(ev.xmax[d]), np.abs(ev.xmin[d])) if ev is not None else np.maximum(a.amplitude, 0.0)
     mu = ev.multipliers if ev is not None else a.multipliers
     return Grazing(
-        branch=index, point=i, segment=j + 1, episodes=(int(slack.episodes[i, j]), int(slack.episodes[i + 1, j])),
+        branch=index, period=int(branch.period), point=i, segment=j + 1, episodes=(int(slack.episodes[i, j]), int(slack.episodes[i + 1, j])),
         parameter=float(root), omega=float(sh.omega_of(root)), located=bool(located and ev is not None),
         amplitude=amp, multiplier=complex(mu[0]), multipliers=np.asarray(mu).copy(), before=np.asarray(a.multipliers),
         after=np.asarray(b.multipliers), least_tension=measure(sol.u, root) if ev is not None else np.nan,

@@ -158,7 +158,6 @@ def _kth_minimum(ref, x, periods: int, k: int) -> float:
     return float(np.sort(minima[SEG])[k]), x
 
 
-@pytest.mark.slow(reason="the period-doubled branch of the paper example at 2.45 rad/s: about 15 s")
 def test_grazing_points_where_a_second_episode_appears_on_the_period_2_branch(paper, exact_static):
     """Above gamma = 13.73 the harmonic branch has doubled its period; on the period-2 branch
     segment 3 is slack twice per orbit (two forcing periods), once only in a window between two
@@ -241,3 +240,15 @@ def test_without_through_slack_the_branch_still_ends_at_the_first_slack_orbit(th
     assert "slack" in b.end and b.slack is None and located < b.parameter[-1] < located + 1e-3
     graz = [f for f in result.bifurcations if f.kind == "grazing"]
     assert len(graz) == 1 and not graz[0].located and graz[0].grazing is None
+
+
+def test_exported_slack_fields_have_their_own_axes(through):
+    """The flattened episodes are not indexed by orbit: their axis is named apart."""
+    from cablesim.io.results import load_result
+
+    out = through[2]
+    arrays = load_result(out).arrays
+    name = through[1].branches[0].name
+    assert arrays[f"continuation/branches/{name}/slack_onset"].axes == ("slack_episode",)
+    assert arrays[f"continuation/branches/{name}/slack_episodes"].axes == ("point", "segment")
+    assert arrays["continuation/bifurcations/multipliers_before"].axes == ("bifurcation", "multiplier")

@@ -23,7 +23,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..orbits.shooting import Shooting, solve_orbit
-from ..orbits.slackpattern import PEAK_REFINEMENT, slack_pattern
+from ..orbits.slackpattern import fine_shooting, slack_pattern
 from ..orbits.systems import cable_system
 from .orbit_strain import segment_strains
 
@@ -130,18 +130,17 @@ def branch_shooting(eom, branch, parameter: str, gamma: float, support: float) -
     return Shooting(system, period=branch.period, segments=segments, parameter=parameter, through_slack=True)
 
 
-def tension_minima(sh: Shooting, eom, u: np.ndarray, lam: float) -> list:
+def tension_minima(sh: Shooting, eom, u: np.ndarray, lam: float, pieces: list | None = None) -> list:
     """Per segment, the local minima of the elastic tension ``EA (l - S) / S`` over the orbit
     ``u`` at ``lam``, N, in increasing order; located on the orbit's cubic Hermite interpolant at
     :data:`~cablesim.orbits.slackpattern.PEAK_REFINEMENT` times the shooting's steps (the error of
-    a minimum's value is that of the interpolant, its place being first-order irrelevant)."""
-    fine = Shooting(sh.system, sh.period, sh.segments, sh.parameter, sh.scheme,
-                    sh.steps_per_period * PEAK_REFINEMENT, sh.step_rate / PEAK_REFINEMENT, through_slack=True)
+    a minimum's value is that of the interpolant, its place being first-order irrelevant);
+    ``pieces``: those steps (:func:`~cablesim.orbits.slackpattern.fine_shooting`), if at hand."""
     nd, cable, y0 = eom.n_dof, eom.cable, eom.y0
     EA = float(cable.EA)
     dur = sh.period * 2.0 * np.pi / sh.omega_of(lam) / sh.segments
     # the period's samples once each (a piece's last is the next one's first), periodic
-    pieces = fine.steps(u, lam)
+    pieces = fine_shooting(sh).steps(u, lam) if pieces is None else pieces
     t = np.concatenate([ts[:-1] + k * dur for k, (ts, _) in enumerate(pieces)] + [[sh.segments * dur]])
     rec = np.concatenate([r[:-1] for _, r in pieces] + [pieces[0][1][:1]])
     e = EA * segment_strains(cable, y0 + rec[:, :nd])
@@ -190,7 +189,7 @@ def branch_slack(eom, branch, parameter: str, gamma: float, support: float) -> B
     unknowns: the events of one flow, the snap loads and the least tensions on the orbit
     integrated again at four times the steps."""
     sh = branch_shooting(eom, branch, parameter, gamma, support)
-    rows = [_orbit_row(sh, eom, p.u, p.parameter) for p in branch.points]
+    rows = [orbit_pattern(sh, eom, p.u, p.parameter) for p in branch.points]
     if not rows:
         m = np.asarray(eom.cable.S).size
         empty = np.zeros((0, m))
@@ -205,10 +204,13 @@ def branch_slack(eom, branch, parameter: str, gamma: float, support: float) -> B
         least_tension=np.array([r[1] for r in rows]), onset=flat[:, 0].copy(), end=flat[:, 1].copy())
 
 
-def _orbit_row(sh: Shooting, eom, u: np.ndarray, lam: float):
-    """The slack pattern of one orbit and its segments' least elastic tensions, N."""
-    pat = slack_pattern(sh, u, lam)
-    least = np.array([m[0] for m in tension_minima(sh, eom, u, lam)])
+def orbit_pattern(sh: Shooting, eom, u: np.ndarray, lam: float):
+    """The slack pattern (:class:`~cablesim.orbits.slackpattern.SlackPattern`) of the orbit
+    ``u`` at ``lam`` of the shooting through slack ``sh`` and its segments' least elastic
+    tensions, N, from one flow for its events and one at the refined steps for both."""
+    pieces = fine_shooting(sh).steps(u, lam)  # one refined integration for both
+    pat = slack_pattern(sh, u, lam, sh.evaluate(u, lam, jac=False), fine_steps=pieces)
+    least = np.array([m[0] for m in tension_minima(sh, eom, u, lam, pieces)])
     return pat, least
 
 

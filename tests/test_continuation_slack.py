@@ -252,3 +252,19 @@ def test_exported_slack_fields_have_their_own_axes(through):
     assert arrays[f"continuation/branches/{name}/slack_onset"].axes == ("slack_episode",)
     assert arrays[f"continuation/branches/{name}/slack_episodes"].axes == ("point", "segment")
     assert arrays["continuation/bifurcations/multipliers_before"].axes == ("bifurcation", "multiplier")
+
+
+def test_grazing_found_where_the_orbit_past_it_shows_no_episode(through):
+    """Down from gamma = 13.3757, just past the grazing point, whose orbit's episode is shorter
+    than a step of the flow: the flow sees segment 3 taut (no episode), its least tension
+    between the steps is below zero. The grazing point is found by that sign change, and is
+    the one located going up through it, to 1e-6."""
+    located = _sides(through[1])[1].parameter
+    section = SECTION.replace("start: 13.2, stop: 13.6", "start: 13.3757, stop: 13.2")
+    result = cablesim.continuation(cablesim.load_case(CONFIG, overrides=[section])).result
+    b = result.branches[0]
+    # the premise: the first orbit is past grazing, and its flow saw no episode
+    assert located < b.parameter[0] and b.slack.episodes[0, SEG] == 0 and b.slack.least_tension[0, SEG] < 0.0
+    graz = [f for f in result.bifurcations if f.kind == "grazing"]
+    assert len(graz) == 1 and graz[0].located and graz[0].grazing.segment == 3
+    assert abs(graz[0].parameter - located) < 1e-6

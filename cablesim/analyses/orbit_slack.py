@@ -3,8 +3,9 @@
 
 Every orbit of a branch gets its slack pattern (:func:`cablesim.orbits.slackpattern.slack_pattern`):
 per segment the slack episodes within the period, the fraction of the period spent slack and
-the peak tension ``T_max`` (the snap load). Where a segment's number of slack episodes changes
-between consecutive orbits of a branch, the branch has passed a *grazing* orbit: one on which
+the peak tension ``T_max`` (the snap load). Where a segment's least tension (below) changes sign
+between consecutive orbits of a branch, or its number of slack episodes changes, the branch has
+passed a *grazing* orbit: one on which
 that segment's tension just touches zero. It is located by Brent's method in the parameter on
 the segment's least elastic tension over the orbit, ``T_min = EA min_t (l(t) - S) / S`` (N,
 negative where the segment is slack: the tension it would carry if it could push), which is
@@ -262,12 +263,29 @@ def locate_grazing(sh: Shooting, eom, branch, slack: BranchSlack, i: int, j: int
         trusted=bool(ev is not None and sol.residual <= 1e-8 and ev.liouville <= 1e-3))
 
 
+def grazing_changes(slack: BranchSlack) -> list:
+    """``(i, j)``: segment ``j`` grazes between orbits ``i`` and ``i + 1``. Where it goes from
+    no slack episode to some (or back) that is where its least tension ``T_min`` changes sign,
+    the episode counts notwithstanding: just past grazing an episode shorter than a step falls
+    between the flow's steps, so an orbit there may show no episode with ``T_min < 0``
+    (measured between the steps). Elsewhere, where its count of episodes changes."""
+    e, least = slack.episodes, slack.least_tension
+    out = []
+    for i in range(e.shape[0] - 1):
+        for j in range(e.shape[1]):
+            if min(e[i, j], e[i + 1, j]) == 0:
+                if (least[i, j] < 0.0) != (least[i + 1, j] < 0.0):
+                    out.append((i, j))
+            elif e[i, j] != e[i + 1, j]:
+                out.append((i, j))
+    return out
+
+
 def branch_grazings(eom, branch, slack: BranchSlack, parameter: str, gamma: float, support: float,
                     index: int) -> list:
-    """Every grazing orbit of ``branch`` (:func:`locate_grazing` wherever a segment's number of
-    slack episodes changes between consecutive orbits), in the continuation's order."""
-    changes = [(i, j) for i in range(slack.episodes.shape[0] - 1) for j in range(slack.episodes.shape[1])
-               if slack.episodes[i, j] != slack.episodes[i + 1, j]]
+    """Every grazing orbit of ``branch`` (:func:`locate_grazing` between the consecutive orbits
+    :func:`grazing_changes` finds), in the continuation's order."""
+    changes = grazing_changes(slack)
     if not changes:
         return []
     sh = branch_shooting(eom, branch, parameter, gamma, support)

@@ -10,7 +10,7 @@ plain arrays per branch, in the case's channels, ready to be written and drawn.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Callable, Protocol
 
 import numpy as np
@@ -26,188 +26,11 @@ from ..orbits.resume import TraceLog
 from ..orbits.stability import frequency_ratio
 from ..orbits.symmetry import in_plane_whirling, rotation_sense
 from .charts import CurvesRefused, Interrupted, finish_loci, loci_cost
+from .continuation_results import BifurcationResult, BranchResult, ContinuationResult
+from .orbit_slack import BranchSlack, Grazing, branch_grazings, branch_slack
 from .orbit_strain import orbit_strains, strain_measure, strain_warning
 from .setup import build_equations, frequency_of_interest, make_integrator
-from .static import beyond_small_strains, run_static
-
-
-@dataclass(frozen=True)
-class BranchResult:
-    """One branch of periodic responses.
-
-    Attributes
-    ----------
-    name : str
-        ``"b<k>-p<period>"``.
-    period : int
-        Response period in forcing periods.
-    parameter : ndarray (points,)
-        Value of the continuation parameter (omega in rad/s, gamma, or the support multiplier s).
-    omega : ndarray (points,)
-        Forcing frequency, rad/s.
-    gamma : ndarray (points,)
-        Scale of FL (and of the supports' motion).
-    amplitude, halfrange : ndarray (points, channels)
-        Largest ``|z|`` over the orbit and half its peak-to-peak range, m.
-    stable, trusted : ndarray of bool (points,)
-        All Floquet multipliers inside the unit circle; multipliers that passed the accuracy
-        checks (Newton residual and Liouville's formula).
-    multipliers : ndarray complex (points, 2 n_dof)
-        Floquet multipliers, by decreasing modulus.
-    state : ndarray (points, 2 n_dof)
-        ``(z, y')`` at forcing phase 0, m and m/s.
-    parent : int or None
-        Branch it was switched from (period doubling).
-    end : str
-        Why the branch ended.
-    planes : ndarray of str (points, 2 n_dof) or None
-        The block of every multiplier, ``in-plane`` or ``out-of-plane``, on a branch of planar
-        orbits of a spatial cable symmetric about its plane (``coupled`` on a nonplanar branch
-        of a spatial cable, ``in-plane`` for a planar cable).
-    planar : bool
-        Whether its orbits lie in the plane of a mirror-symmetric spatial cable.
-    mirror_image : bool
-        A nonplanar branch born at a pitchfork: its mirror image ``w -> -w`` exists too.
-    whirl_area : ndarray (points, n_nodes) or None
-        Spatial cable: the signed area of each node's path in its cross-section plane ``(w, v)``
-        over the orbit, m^2 (positive counter-clockwise as seen from support A looking towards
-        B; zero on a planar orbit, NaN where not measured).
-    tilt : ndarray (points,) or None
-        Spatial cable: the angle of the orbit's mean plane of motion from the cable's plane, deg.
-    support : ndarray (points,) or None
-        The support motion multiplier s: the supports move by ``gamma s`` times the amplitudes of
-        ``supports:`` (None: 1 throughout).
-    max_w : ndarray (points, n_nodes) or None
-        Spatial cable: each node's largest out-of-plane displacement ``|w|`` over the orbit
-        (along the normal of the equilibrium's plane), m.
-    whirl_sense : ndarray of str (points, n_nodes) or None
-        Spatial cable: the sense in which each node goes round, seen from support A looking
-        towards B: ``counter-clockwise``, ``clockwise`` or ``none``
-        (:func:`~cablesim.orbits.symmetry.rotation_sense`).
-    strain : ndarray (points,) or None
-        The largest strain ``(l - S) / S`` over each orbit (:mod:`cablesim.analyses.orbit_strain`;
-        NaN: not measured), which :attr:`strained` judges.
-    neutral_residual : ndarray (points,) or None
-        A cable symmetric about rotations of its chord (a taut stay without sag): on orbits that
-        the rotation moves, one multiplier is +1 by the symmetry and is excluded from the
-        bifurcation tests and the stability (:mod:`cablesim.orbits.rotation`); here
-        ``|M g - g| / |g|`` of its eigenvector ``g`` (NaN: nothing excluded at that point).
-        None if no point of the branch excluded one.
-    """
-
-    name: str
-    period: int
-    parameter: np.ndarray
-    omega: np.ndarray
-    gamma: np.ndarray
-    amplitude: np.ndarray
-    halfrange: np.ndarray
-    stable: np.ndarray
-    trusted: np.ndarray
-    multipliers: np.ndarray
-    state: np.ndarray
-    parent: int | None
-    end: str
-    planes: np.ndarray | None = None
-    planar: bool = False
-    mirror_image: bool = False
-    whirl_area: np.ndarray | None = None
-    tilt: np.ndarray | None = None
-    support: np.ndarray | None = None
-    max_w: np.ndarray | None = None
-    whirl_sense: np.ndarray | None = None
-    strain: np.ndarray | None = None
-    neutral_residual: np.ndarray | None = None
-
-    @property
-    def strained(self) -> np.ndarray:
-        """Orbits whose largest strain is beyond the model's small strains
-        (:func:`~cablesim.analyses.static.beyond_small_strains`; False where not measured)."""
-        if self.strain is None:
-            return np.zeros(self.parameter.size, dtype=bool)
-        return beyond_small_strains(np.nan_to_num(self.strain, nan=0.0))
-
-    @property
-    def nonplanar(self) -> bool:
-        """A branch of a spatial cable whose orbits leave the plane (whirling)."""
-        return self.tilt is not None and not self.planar
-
-
-@dataclass(frozen=True)
-class BifurcationResult:
-    """A located bifurcation: ``kind`` (``fold``, ``period-doubling``, ``neimark-sacker``,
-    ``branch-point``, or ``grazing``: the last orbit before a segment goes slack), where (``parameter``, ``omega``), on which ``branch`` (index), the orbit's
-    ``period`` and ``amplitude`` per channel (m), the critical ``multiplier``, and whether the
-    location converged (``located``) and its multipliers passed the accuracy checks (``trusted``);
-    ``plane``: the block of the critical multiplier (``in-plane``, ``out-of-plane``; ``coupled``
-    on a nonplanar orbit of a spatial cable), where an out-of-plane multiplier through +1 is a
-    ``pitchfork``; ``frequency_ratio``: ``|arg(mu)| / 2 pi`` of the critical multiplier (0 at a fold or
-    pitchfork, 1/2 at a period doubling, the new frequency over the orbit's at a Neimark-Sacker
-    point); ``gamma`` and ``support`` (the multiplier s of the supports' amplitudes) there."""
-
-    kind: str
-    parameter: float
-    omega: float
-    branch: int
-    period: int
-    amplitude: np.ndarray
-    multiplier: complex
-    located: bool
-    trusted: bool
-    plane: str = IN_PLANE
-    frequency_ratio: float = 0.0
-    gamma: float = 1.0
-    support: float = 1.0
-
-
-@dataclass
-class ContinuationResult:
-    """Every branch and bifurcation found, with what is needed to store and draw them."""
-
-    parameter: str
-    start: float
-    stop: float
-    fixed: float
-    channels: list[str]
-    branches: list[BranchResult]
-    bifurcations: list[BifurcationResult]
-    analysis: str
-    modal_omega: np.ndarray
-    case_name: str
-    case_text: str
-    stats: dict = field(default_factory=dict)
-    #: With ``continuation.loci``: the bifurcation curves in (omega, gamma) or (omega, s), their
-    #: codimension-two points (:mod:`cablesim.analyses.charts`), the curves' second parameter
-    #: (``gamma`` or ``support``) and its range.
-    loci: list = field(default_factory=list)
-    codim2: list = field(default_factory=list)
-    loci_range: tuple | None = None
-    loci_parameter: str = "gamma"
-    #: False when an interruption came while the branches or the curves were traced (what was
-    #: done is kept).
-    complete: bool = True
-    #: Why no orbit could be computed at the start of the range ("" if one was).
-    start_failure: str = ""
-    #: Plausibility warnings (one paragraph each), also stored in the result file.
-    warnings: list = field(default_factory=list)
-    #: The kind of failure of the first orbit: ``SLACK``, ``NONFINITE``, ``INNER_SOLVE``, or
-    #: ``NEWTON`` (no convergence), "" when it was computed.
-    start_cause: str = ""
-    #: gamma when it is not the parameter (with the support parameter, ``fixed`` is omega).
-    fixed_gamma: float = 1.0
-    #: The support multiplier s when it is not the parameter (with loci in s: the response's).
-    fixed_support: float = 1.0
-    #: The amplitude (m, one component per axis) of each moving support at support multiplier
-    #: s = 1 and gamma = 1, as ``supports:`` gives it: ``{"A": array, ...}``.
-    support_amplitudes: dict = field(default_factory=dict)
-    #: Components per node of the cable: 2 (planar) or 3 (spatial), which the DOF of
-    #: ``channels`` count in.
-    components: int = 2
-
-    @property
-    def n_points(self) -> int:
-        """Points over all branches."""
-        return int(sum(b.parameter.size for b in self.branches))
+from .static import run_static
 
 
 def support_amplitudes(case: Case) -> dict:
@@ -287,6 +110,14 @@ def _grazing_points(diagram, spec, idx: np.ndarray, dim: int = 2) -> list:
     return out
 
 
+def _grazing_result(g: Grazing, spec, idx: np.ndarray, plane: str) -> BifurcationResult:
+    """The bifurcation record of a located grazing orbit (the branch goes on through it)."""
+    return BifurcationResult(
+        kind="grazing", parameter=g.parameter, **parameter_values(spec, g.parameter), branch=g.branch, period=g.period,
+        amplitude=np.asarray(g.amplitude)[idx], multiplier=g.multiplier, located=g.located, trusted=g.trusted,
+        plane=plane, frequency_ratio=frequency_ratio(g.multiplier), grazing=g)
+
+
 def _planes(br, dim: int) -> np.ndarray:
     """The block of every multiplier of every point (:attr:`BranchResult.planes`)."""
     other = IN_PLANE if dim == 2 else COUPLED
@@ -294,7 +125,8 @@ def _planes(br, dim: int) -> np.ndarray:
                     dtype=str).reshape(len(br.points), -1)
 
 
-def _branch(k: int, br, spec, idx: np.ndarray, dim: int = 2, strain: np.ndarray | None = None) -> BranchResult:
+def _branch(k: int, br, spec, idx: np.ndarray, dim: int = 2, strain: np.ndarray | None = None,
+            slack: BranchSlack | None = None) -> BranchResult:
     pts = br.points
     values = np.array([p.parameter for p in pts], dtype=float)
     omega = np.array([p.omega for p in pts], dtype=float)
@@ -320,6 +152,7 @@ def _branch(k: int, br, spec, idx: np.ndarray, dim: int = 2, strain: np.ndarray 
         mirror_image=bool(getattr(br, "mirror_image", False)),
         strain=np.full(len(pts), np.nan) if strain is None else strain,
         neutral_residual=_neutral(pts),
+        slack=slack,
         **_whirling(br, dim),
     )
 
@@ -398,6 +231,14 @@ def prepare_continuation(case: Case, analysis: str | None = None) -> Continuatio
     static = run_static(case, analysis, all_models=False)
     at_start = parameter_values(spec, spec.range.start)
     eom = build_equations(case, static, omega=at_start["omega"], load_scale=1.0)
+    if spec.through_slack and (not eom.exact or eom.moving_supports or case.slack != "continue"):
+        why = ("the approximate analysis needs every segment taut" if not eom.exact else
+               "the orbits of moving supports are not followed through slack" if eom.moving_supports else
+               "slack: stop ends every flow where a segment goes slack")
+        raise CablesimError(f"continuation.through_slack is true, but {why}. Orbits through slack are computed in "
+                            "the exact analysis (analysis: exact) with the supports at rest and slack: continue; "
+                            "set continuation.through_slack: false to stop the branches at the first slack "
+                            "segment instead.", field="continuation.through_slack")
     names, idx = continuation_channels(case)
     initial = None
     if spec.start_from == "history":
@@ -417,7 +258,7 @@ def trace(start: ContinuationStart, callback, max_points: int | None = None, swi
         callback=callback, gamma=spec.fixed_gamma, support=spec.fixed_support, initial_state=start.initial,
         segments=spec.segments, max_period=spec.max_period,
         settings=Settings(max_points=spec.max_points if max_points is None else max_points), log=log,
-        measure=strain_measure(start.eom),
+        measure=strain_measure(start.eom), through_slack=spec.through_slack,
     )
 
 
@@ -456,13 +297,16 @@ def _log(start: ContinuationStart, case: Case, recorder) -> TraceLog:
                             "another -o.", field="continuation") from None
 
 
-def assemble(start: ContinuationStart, case: Case, diagram, strains, complete: bool = True) -> ContinuationResult:
+def assemble(start: ContinuationStart, case: Case, diagram, strains, complete: bool = True,
+             slack: tuple | None = None) -> ContinuationResult:
     """The :class:`ContinuationResult` of a traced diagram (``strains``: per branch with orbits,
-    or None where not measured)."""
+    or None where not measured; ``slack``: through slack, the :class:`BranchSlack` per branch
+    with orbits and the located :class:`Grazing` orbits, or None)."""
     spec, static, idx = start.spec, start.static, start.idx
     kept = [(k, br) for k, br in enumerate(diagram.branches) if br.points]
     strains = [None] * len(kept) if strains is None else strains
-    branches = [_branch(k, br, spec, idx, case.dim, st) for (k, br), st in zip(kept, strains)]
+    patterns, grazings = slack if slack is not None else ([None] * len(kept), [])
+    branches = [_branch(k, br, spec, idx, case.dim, st, sl) for (k, br), st, sl in zip(kept, strains, patterns)]
     other = IN_PLANE if case.dim == 2 else COUPLED
     bifs = [
         BifurcationResult(
@@ -473,7 +317,7 @@ def assemble(start: ContinuationStart, case: Case, diagram, strains, complete: b
         )
         for b in diagram.bifurcations
     ]
-    bifs += _grazing_points(diagram, spec, idx, case.dim)
+    bifs += _grazing_points(diagram, spec, idx, case.dim) + [_grazing_result(g, spec, idx, other) for g in grazings]
     result = ContinuationResult(
         parameter=spec.parameter, start=spec.range.start, stop=spec.range.stop, fixed=spec.fixed, channels=start.names,
         branches=branches, bifurcations=bifs, analysis=static.analysis, modal_omega=static.modes.omega.copy(),
@@ -481,7 +325,7 @@ def assemble(start: ContinuationStart, case: Case, diagram, strains, complete: b
         warnings=[*static.warnings, *strain_warning([b.name for b in branches], [b.strain for b in branches],
                                                     spec.parameter, [b.parameter for b in branches])],
         fixed_gamma=spec.fixed_gamma, fixed_support=spec.fixed_support, support_amplitudes=support_amplitudes(case),
-        components=case.dim, complete=complete,
+        components=case.dim, complete=complete, through_slack=spec.through_slack,
     )
     result.start_cause = _start_cause(diagram) if result.start_failure else ""
     return result
@@ -586,8 +430,19 @@ def _branches(start: ContinuationStart, case: Case, callback, log) -> tuple:
     except BranchesInterrupted as exc:  # keep the orbits computed so far
         diagram, interrupted = exc.diagram, True
     kept = [br for br in diagram.branches if br.points]
+    slack = None
     try:
         strains = [orbit_strains(eom, br, spec.parameter, spec.fixed_gamma, spec.fixed_support) for br in kept]
+        if spec.through_slack:
+            slack = _slack(eom, spec, diagram)
     except KeyboardInterrupt:  # the orbits are kept, their strains not measured
         strains, interrupted = None, True
-    return assemble(start, case, diagram, strains, complete=not interrupted), diagram
+    return assemble(start, case, diagram, strains, complete=not interrupted, slack=slack), diagram
+
+
+def _slack(eom, spec, diagram) -> tuple:
+    """Through slack: the slack pattern of every branch with orbits and its grazing orbits."""
+    at = (spec.parameter, spec.fixed_gamma, spec.fixed_support)
+    kept = [(k, br) for k, br in enumerate(diagram.branches) if br.points]
+    patterns = [branch_slack(eom, br, *at) for _, br in kept]
+    return patterns, [g for (k, br), sl in zip(kept, patterns) for g in branch_grazings(eom, br, sl, *at, k)]

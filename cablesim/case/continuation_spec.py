@@ -98,6 +98,10 @@ class ContinuationSpec(StrictModel):
     segments: integer(1, 64) = Field(default=1, description="shooting segments per orbit (multiple shooting)")
     max_period: integer(1, 64) = Field(default=8, description="no branch switching beyond this period")
     max_points: integer(2, 100_000) = Field(default=2000, description="most points per branch")
+    through_slack: bool = Field(default=False, description=(
+        "follow the orbits through slack segments (exact analysis, supports at rest, slack: continue): "
+        "branches go on where a segment goes slack, each orbit records its slack episodes and snap loads, "
+        "and grazing points are located"))
     loci: bool = Field(default=False, description=(
         "continue every fold, period doubling and Neimark-Sacker point found in omega and gamma "
         "(gamma: {start, stop, at}) or, with moving supports, in omega and the support multiplier s "

@@ -29,6 +29,20 @@ Layout (with the root attributes of every cablesim file, see :mod:`cablesim.io.h
   ``none``, that sign in words), ``max_w`` (points x nodes, m: each node's largest out-of-plane
   ``|w|`` over the orbit; zero on a planar orbit) and ``tilt`` (deg: the orbit's mean plane of
   motion from the cable's plane);
+- through slack (``continuation.through_slack``, attribute ``through_slack``): per branch
+  ``peak_tension`` (points x segments, N: each segment's largest tension over the orbit, its
+  snap load), ``peak_time`` (s from forcing phase 0), ``slack_episodes`` (points x segments:
+  slack episodes per orbit period), ``slack_fraction`` (of the period), ``least_tension``
+  (points x segments, N: the least elastic tension ``EA (l - S) / S``, negative where the
+  segment goes slack), ``slack`` (points: some segment slack) and the episodes themselves,
+  flattened orbit by orbit and segment by segment within an orbit (``slack_episodes`` counts
+  them): ``slack_onset``, ``slack_end`` (s from forcing phase 0; an end beyond the period for
+  an episode through its end); in ``/continuation/bifurcations`` also ``segment`` (1-based, 0:
+  not a grazing point located on a branch through slack), ``episodes_before``,
+  ``episodes_after`` (the segment's slack episodes on the orbits either side, in continuation
+  order; -1 elsewhere), ``multipliers_before``, ``multipliers_after`` (those orbits' Floquet
+  multipliers) and ``multiplier_jump`` (the largest distance between them, matched), NaN on
+  the other rows;
 - with ``continuation.loci``: ``/continuation/loci/<name>/...`` and ``/continuation/codim2/...``,
   the bifurcation curves in (omega, gamma) or (omega, s) (:mod:`cablesim.io.charts`);
 - ``/modal/omega``: the linear modal frequencies, rad/s.
@@ -104,6 +118,42 @@ def _put_state(g, res, fingerprint: str | None) -> None:
         g.attrs[f"cost_{k}"] = v
 
 
+def _put_slack(h, sl) -> None:
+    """A branch's slack patterns (module docstring)."""
+    put(h, "peak_tension", sl.peak_tension, "N", "largest tension of each segment over the orbit (snap load)")
+    put(h, "peak_time", sl.peak_time, "s", "when it occurs, from forcing phase 0")
+    put(h, "slack_episodes", np.asarray(sl.episodes, dtype=np.int64), "1", "slack episodes of each segment per orbit period")
+    put(h, "slack_fraction", sl.fraction, "1", "fraction of the orbit's period each segment is slack")
+    put(h, "least_tension", sl.least_tension, "N", "least elastic tension EA (l - S) / S of each segment over the "
+        "orbit (negative: the segment goes slack; zero: grazing)")
+    put(h, "slack", sl.slack, "1", "some segment goes slack on the orbit")
+    put(h, "slack_onset", sl.onset, "s", "onset of every slack episode, from forcing phase 0 (orbit by orbit, segment "
+        "by segment; slack_episodes counts them)")
+    put(h, "slack_end", sl.end, "s", "re-tightening of every slack episode, from forcing phase 0 (beyond the period: "
+        "through its end)")
+
+
+def _put_grazing(fg, bifs) -> None:
+    """The grazing columns of the bifurcations of a continuation through slack (module docstring)."""
+    n = max([b.grazing.before.size for b in bifs if getattr(b, "grazing", None) is not None], default=0)
+
+    def column(b, name):
+        g = getattr(b, "grazing", None)
+        return np.asarray(getattr(g, name), dtype=complex) if g is not None else np.full(n, np.nan + 0j)
+
+    graz = [getattr(b, "grazing", None) for b in bifs]
+    put(fg, "segment", np.array([g.segment if g is not None else 0 for g in graz], dtype=np.int64), "1",
+        "1-based segment that grazes (0: not a grazing point of a branch through slack)")
+    for k, side in enumerate(("before", "after")):
+        put(fg, f"episodes_{side}", np.array([g.episodes[k] if g is not None else -1 for g in graz], dtype=np.int64),
+            "1", f"slack episodes per period of that segment on the orbit {side} it (continuation order; -1: none)")
+        put(fg, f"multipliers_{side}", np.array([column(b, side) for b in bifs], dtype=complex).reshape(len(bifs), n),
+            "1", f"Floquet multipliers of the branch's orbit {side} the grazing point (NaN: not a grazing point)",
+            allow_nan=True)
+    put(fg, "multiplier_jump", np.array([g.jump if g is not None else np.nan for g in graz], dtype=float), "1",
+        "largest distance between the multipliers before and after, matched (NaN: not a grazing point)", allow_nan=True)
+
+
 def write_continuation(path: str | Path, res, fingerprint: str | None = None) -> Path:
     """Write a :class:`~cablesim.analyses.continuation.ContinuationResult` atomically
     (``fingerprint``: of the case and settings, :func:`cablesim.io.journal.fingerprint`, stored
@@ -144,6 +194,8 @@ def write_continuation(path: str | Path, res, fingerprint: str | None = None) ->
                     "measured)", allow_nan=True)
                 put(h, "strained", b.strained, "1", "the orbit's strain is beyond the model's small strains")
             _put_neutral(h, b)
+            if getattr(b, "slack", None) is not None:
+                _put_slack(h, b.slack)
             if b.planes is not None:
                 put(h, "multiplier_plane", np.asarray(b.planes, dtype="S"), "1",
                     "block of each multiplier: in-plane, out-of-plane (a planar orbit of a symmetric "
@@ -180,6 +232,9 @@ def write_continuation(path: str | Path, res, fingerprint: str | None = None) ->
             "block of the critical multiplier: in-plane, out-of-plane or coupled")
         put(fg, "frequency_ratio", np.array([b.frequency_ratio for b in bifs], dtype=float), "1",
             "|arg(mu)| / 2 pi of the critical multiplier (0: fold, pitchfork; 1/2: period doubling)")
+        if getattr(res, "through_slack", False):
+            g.attrs["through_slack"] = True
+            _put_grazing(fg, bifs)
         if getattr(res, "loci_range", None) is not None:
             write_loci(g, res)  # bifurcation curves (cablesim.io.charts)
         m = f.create_group("modal")
@@ -194,7 +249,7 @@ def read_continuation(path: str | Path) -> dict:
     -------
     dict
         ``parameter``, ``start``, ``stop``, ``fixed``, ``gamma`` (the fixed gamma; 1 in gamma), ``channels``,
-        ``case_name``, ``analysis``, ``complete``, ``components``, ``modal`` (rad/s),
+        ``case_name``, ``analysis``, ``complete``, ``components``, ``through_slack``, ``modal`` (rad/s),
         ``support_amplitudes`` (support
         name -> amplitude, m, at support multiplier 1; empty if none moves, or a file written before
         it was stored), ``branches`` (list of dicts with the datasets and ``name``, ``period``,
@@ -243,6 +298,7 @@ def _read(f, path: Path) -> dict:
         names = [attr_text(n) for n in np.asarray(ds.attrs["supports"]).ravel()]
         out["support_amplitudes"] = dict(zip(names, np.asarray(ds[()], dtype=float).reshape(len(names), -1)))
     out["complete"] = bool(g.attrs.get("complete", True))
+    out["through_slack"] = bool(g.attrs.get("through_slack", False))
     out["case_name"] = attr_text(g.attrs.get("case_name", path.stem))
     out["channels"] = [attr_text(c) for c in np.asarray(g.attrs["channels"]).ravel()]
     out["analysis"] = attr_text(f.attrs.get("analysis", "exact"))

@@ -346,6 +346,28 @@ def _whirling_lines(res) -> list:
     return ([""] + out) if out else []
 
 
+def _grazing_note(g) -> str:
+    """The notes of a grazing point located on a branch through slack ("" for other points)."""
+    if g is None:
+        return ""
+    return (f"segment {g.segment}: {g.episodes[0]} -> {g.episodes[1]} slack episodes per period; multipliers "
+            f"either side differ by up to {g.jump:.3g}")
+
+
+def _slack_lines(res) -> list:
+    """Through slack, one line per branch: how many of its orbits have a slack segment and its
+    largest snap load (which segment, where)."""
+    out = []
+    for b in res.branches:
+        sl = getattr(b, "slack", None)
+        if sl is None or not sl.peak_tension.size:
+            continue
+        k, j = np.unravel_index(int(np.argmax(sl.peak_tension)), sl.peak_tension.shape)
+        out.append(f"  {b.name}: a segment slack on {int(sl.slack.sum())} of {sl.slack.size} orbits; largest snap load "
+                   f"{sl.peak_tension[k, j] / 1e3:.5g} kN (segment {j + 1}, at {res.parameter} {b.parameter[k]:.6g})")
+    return ([""] + out) if out else []
+
+
 def continuation_conditions(res) -> str:
     """The fixed parameters of a continuation in words: ``"omega = 12.08 rad/s, gamma = 1"``."""
     if res.parameter == "omega":
@@ -376,7 +398,7 @@ def continuation_summary(case, res, wall: float) -> str:
                      ", ".join(f"{p:.4g}" for p in peak), b.end])
     lines.append(_table(["branch", "period", f"range {unit}".strip(), "orbits", "stable",
                          f"max {', '.join(res.channels)} (m)", "ended"], rows))
-    lines += _whirling_lines(res)
+    lines += _whirling_lines(res) + _slack_lines(res)
     lines += ["", "Bifurcations:" if res.bifurcations else "No bifurcations in the range."]
     spatial = any(b.plane != "in-plane" for b in res.bifurcations) or any(
         b.planes is not None and np.any(b.planes != "in-plane") for b in res.branches)
@@ -384,7 +406,8 @@ def continuation_summary(case, res, wall: float) -> str:
         rows = [[b.kind] + ([b.plane] if spatial else []) + [f"{b.parameter:.6g}", res.branches[b.branch].name if b.branch < len(res.branches) else str(b.branch),
                  str(b.period), ", ".join(f"{a:.4g}" for a in b.amplitude), f"{abs(b.multiplier):.4f}",
                  ("" if b.located else "not located; ") + ("" if b.trusted else "multipliers not trusted")
-                 + (f"frequency ratio {b.frequency_ratio:.4f}" if b.kind == "neimark-sacker" else "")]
+                 + (f"frequency ratio {b.frequency_ratio:.4f}" if b.kind == "neimark-sacker" else "")
+                 + _grazing_note(getattr(b, "grazing", None))]
                 for b in sorted(res.bifurcations, key=lambda b: (b.branch, b.parameter))]
         symbol = "s" if res.parameter == "support" else res.parameter
         lines.append(_table(["kind"] + (["plane"] if spatial else []) + [symbol, "branch", "period", f"{', '.join(res.channels)} (m)", "|mu|",

@@ -36,13 +36,16 @@ TRAILING_AXES = {"z": ("dof",), "v": ("dof",), "zc": ("dof",), "ze": ("dof",), "
                  "amplitude": ("channel",), "halfrange": ("channel",), "response_frequency": ("channel",),
                  "peak_tension": ("segment",), "slack_fraction": ("segment",), "multipliers": ("multiplier",),
                  "multiplier_plane": ("multiplier",), "state": ("component",), "ratios": ("ratio",),
-                 "whirl_area": ("node",), "max_w": ("node",), "whirl_sense": ("node",)}
+                 "whirl_area": ("node",), "max_w": ("node",), "whirl_sense": ("node",), "peak_time": ("segment",),
+                 "slack_episodes": ("segment",), "least_tension": ("segment",),
+                 "multipliers_before": ("multiplier",), "multipliers_after": ("multiplier",)}
 #: Datasets whose axes are not the group's main axis, by dataset name.
 OWN_AXES = {"y0": ("dof",), "T0": ("segment",), "dof": ("dof",), "shapes": ("dof", "mode"),
             "inextensible_omega": ("inextensible_mode",), "P": ("dof",), "x": ("dof",), "u": ("dof",),
             "y": ("dof",), "l": ("segment",), "B": ("segment", "dof"), "D": ("dof", "dof_j"), "f": ("dof", "dof_j"),
             "N": ("dof", "dof_j"), "K": ("dof", "dof_j"), "K_band": ("band", "dof"),
-            "support_amplitude": ("moving_support", "component")}
+            "support_amplitude": ("moving_support", "component"), "slack_onset": ("slack_episode",),
+            "slack_end": ("slack_episode",)}
 #: Where an axis's coordinate values are stored (datasets of the file), and their units.
 COORDINATES = {"time": ("history/t", "s"), "omega": ("sweep/omega", "rad/s"), "gamma": ("sweep/gamma", "1"),
                "dof": ("history/dof", "")}

@@ -393,6 +393,7 @@ def trace_branches(
     matrix_free: bool | None = None,
     log: TraceLog | None = None,
     measure: Callable[[list], float] | None = None,
+    through_slack: bool = False,
 ) -> ResponseDiagram:
     """Continue the period-``period`` branch through ``u0`` from ``start`` to ``stop`` and the
     branches born at its period doublings (module docstring).
@@ -447,6 +448,10 @@ def trace_branches(
         that converged (:meth:`~cablesim.orbits.shooting.Shooting.steps`), in
         :attr:`OrbitPoint.measure` (for the cable: its largest strain, without integrating the
         orbit again).
+    through_slack : bool
+        Follow the flows through slack segments (``Shooting(through_slack=True)``, the dense
+        shooting: the matrix-free one stops at them), so that branches go on where a segment goes
+        slack; the system must have ``slack`` functions.
 
     Returns
     -------
@@ -471,6 +476,10 @@ def trace_branches(
         state_scale = np.full(n, max(amp, 1e-12))
     state_scale = np.asarray(state_scale, dtype=float)
     integration = dict(scheme=scheme, steps_per_period=steps_per_period, step_rate=step_rate)
+    if through_slack:
+        if system.slack is None or matrix_free:
+            raise ValueError("through_slack needs a system with slack functions and the dense shooting")
+        integration["through_slack"], matrix_free = True, False
     mf = uses_matrix_free(system, matrix_free)
     tracer = _Tracer(system, parameter, st, np.sign(stop - start) or 1.0, state_scale, lam_scale, callback,
                      integration, liouville_tol, switch_size, mf, log, measure)
@@ -507,6 +516,7 @@ def continue_branches(
     support: float = 1.0,
     log: TraceLog | None = None,
     measure: Callable[[list], float] | None = None,
+    through_slack: bool = False,
 ) -> ResponseDiagram:
     """Periodic responses of the cable over a range of forcing frequency, load factor or support
     motion multiplier.
@@ -534,7 +544,9 @@ def continue_branches(
         Guess of ``(z, y')`` (or ``(z, y', y'')``) at forcing phase 0 at ``start`` (default:
         the linear response).
     segments, max_period, settings, scheme, steps_per_period, step_rate, liouville_tol, matrix_free, log, measure
-        See :func:`trace_branches`.
+    through_slack
+        See :func:`trace_branches` (the exact analysis with the supports at rest and ``slack:
+        continue`` only).
     support : float
         Multiplier ``s`` of the supports' motion when continuing in ``omega`` or ``gamma``.
 
@@ -558,5 +570,5 @@ def continue_branches(
         system, u0, parameter, start, stop, period=period, segments=segments, state_scale=scale,
         lam_scale=lam_scale, switch_branches=switch_branches, max_period=max_period, callback=callback,
         settings=settings, scheme=scheme, steps_per_period=steps_per_period, step_rate=step_rate,
-        liouville_tol=liouville_tol, matrix_free=matrix_free, log=log, measure=measure,
+        liouville_tol=liouville_tol, matrix_free=matrix_free, log=log, measure=measure, through_slack=through_slack,
     )

@@ -12,6 +12,7 @@ at the shooting's own steps, and divides by 256 on the finer ones.
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,7 +20,7 @@ import numpy as np
 from ..dynamics.peaks import step_peaks
 from .shooting import Shooting
 
-__all__ = ["PEAK_REFINEMENT", "SlackPattern", "slack_intervals", "slack_pattern"]
+__all__ = ["PEAK_REFINEMENT", "SlackPattern", "fine_shooting", "slack_intervals", "slack_pattern"]
 
 #: Steps of the snap-load search per step of the shooting (module docstring).
 PEAK_REFINEMENT = 4
@@ -55,6 +56,21 @@ class SlackPattern:
         return np.array([len(iv) for iv in self.intervals], dtype=int)
 
 
+#: The shootings at PEAK_REFINEMENT times the steps, by the shooting they refine (built once:
+#: a new shooting resolves its kernels' signatures again on its first flows).
+_FINE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def fine_shooting(shooting: Shooting) -> Shooting:
+    """The shooting through slack of ``shooting``'s orbits at :data:`PEAK_REFINEMENT` times its
+    steps (the snap loads' search)."""
+    if shooting not in _FINE:
+        _FINE[shooting] = Shooting(shooting.system, shooting.period, shooting.segments, shooting.parameter,
+                                   shooting.scheme, shooting.steps_per_period * PEAK_REFINEMENT,
+                                   shooting.step_rate / PEAK_REFINEMENT, through_slack=True)
+    return _FINE[shooting]
+
+
 def slack_intervals(events: np.ndarray, T: float, start_taut: np.ndarray) -> list:
     """Per segment, the slack episodes ``(onset, re-tightening)`` of an orbit of period ``T``
     (s) from its events (rows ``(t, segment, new mode)`` in time order) and the segments' modes
@@ -73,7 +89,7 @@ def slack_intervals(events: np.ndarray, T: float, start_taut: np.ndarray) -> lis
     return out
 
 
-def slack_pattern(shooting, u: np.ndarray, lam: float, evaluation=None) -> SlackPattern:
+def slack_pattern(shooting, u: np.ndarray, lam: float, evaluation=None, fine_steps: list | None = None) -> SlackPattern:
     """The slack pattern and snap loads of the orbit ``u`` at parameter ``lam`` of a cable's
     :class:`~cablesim.orbits.shooting.Shooting` (its system has ``slack`` functions).
 
@@ -86,6 +102,9 @@ def slack_pattern(shooting, u: np.ndarray, lam: float, evaluation=None) -> Slack
         Parameter value.
     evaluation : Evaluation, optional
         The orbit's evaluation, if at hand (else the orbit is integrated for its events).
+    fine_steps : list, optional
+        The orbit's :meth:`~cablesim.orbits.shooting.Shooting.steps` at :data:`PEAK_REFINEMENT`
+        times the shooting's steps (:func:`fine_shooting`), if at hand.
     """
     system = shooting.system
     if system.slack is None:
@@ -105,9 +124,8 @@ def slack_pattern(shooting, u: np.ndarray, lam: float, evaluation=None) -> Slack
     peak = np.zeros(model.S.size)
     peak_t = np.zeros(model.S.size)
     dur = T / m
-    fine = Shooting(system, shooting.period, m, shooting.parameter, shooting.scheme,
-                    shooting.steps_per_period * PEAK_REFINEMENT, shooting.step_rate / PEAK_REFINEMENT, through_slack=True)
-    for k, (ts, rec) in enumerate(fine.steps(u, lam)):
+    pieces = fine_shooting(shooting).steps(u, lam) if fine_steps is None else fine_steps
+    for k, (ts, rec) in enumerate(pieces):
         t = ts + k * dur
         for i in range(t.size - 1):
             step_peaks(model, t[i], t[i + 1], t[i + 1], rec[i, :n], rec[i + 1, :n], peak, peak_t)

@@ -6,7 +6,9 @@ multipliers failed the accuracy checks crossed in grey; bifurcations marked and 
 modal frequencies dotted; optionally a brute-force sweep's points on top. A spatial cable's
 nonplanar (whirling) branches are drawn in colours of their own, thicker, their unstable orbits
 dotted, and a last panel shows every branch's out-of-plane amplitude (the largest ``|w|`` over
-the nodes; planar branches on zero).
+the nodes; planar branches on zero). Through slack (``continuation.through_slack``) the orbits
+on which a segment goes slack are shaded along the branches, and a last panel shows the peak
+tension (snap load) of every segment against the parameter.
 """
 
 from __future__ import annotations
@@ -67,8 +69,10 @@ def _nonplanar(b: dict) -> bool:
     return "tilt" in b and not b.get("planar", False)
 
 
-def _draw_branch(ax, b: dict, y: np.ndarray, colour) -> None:
-    """Amplitudes ``y`` (one per orbit) of branch ``b`` against its parameter."""
+def _draw_branch(ax, b: dict, y: np.ndarray, colour, slack: np.ndarray | None = None, grazing=()) -> None:
+    """Amplitudes ``y`` (one per orbit) of branch ``b`` against its parameter; ``slack``: the
+    orbits to shade (default: those on which some segment goes slack, if recorded), the bands
+    drawn from the ``grazing`` parameters between a taut and a slack orbit."""
     x = b["parameter"]
     stable = b["stable"].astype(bool)
     style = _branch_style(b, colour)
@@ -76,9 +80,69 @@ def _draw_branch(ax, b: dict, y: np.ndarray, colour) -> None:
         ax.plot(x[lo:hi], y[lo:hi], zorder=3, **style["stable"])
     for lo, hi in _runs(~stable):
         ax.plot(x[lo:hi], y[lo:hi], zorder=2, **style["unstable"])
+    slack = b["slack"].astype(bool) if slack is None and "slack" in b else slack
+    if slack is not None:  # orbits with a slack segment: a wide pale band under the line
+        _slack_bands(ax, x, y, slack, grazing, colour)
     bad = ~b["trusted"].astype(bool)
     if bad.any():
         ax.plot(x[bad], y[bad], "x", color=COLOURS["failed_point"], ms=4, zorder=4)
+
+
+#: Opacity of the band under the orbits with a slack segment.
+SLACK_ALPHA = 0.28
+
+
+def _slack_bands(ax, x: np.ndarray, y: np.ndarray, slack: np.ndarray, grazing, colour) -> None:
+    """Bands under the runs of slack orbits, each from the grazing point (in ``grazing``) between
+    it and a taut neighbour, the value there interpolated linearly."""
+    for lo, hi in _slack_runs(slack):
+        xs, ys = list(x[lo:hi]), list(y[lo:hi])
+        for k, inner, first in ((lo - 1, lo, True), (hi, hi - 1, False)):
+            g = [p for p in grazing if 0 <= k < x.size and min(x[k], x[inner]) <= p <= max(x[k], x[inner])]
+            if g and x[inner] != x[k]:
+                w = (g[0] - x[k]) / (x[inner] - x[k])
+                at = 0 if first else len(xs)
+                xs.insert(at, g[0])
+                ys.insert(at, y[k] + w * (y[inner] - y[k]))
+        ax.plot(xs, ys, zorder=1, lw=6.0, alpha=SLACK_ALPHA, color=colour, solid_capstyle="butt")
+
+
+def _slack_runs(mask: np.ndarray):
+    """(start, stop) index pairs of the runs where ``mask`` holds (not extended)."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(int), [0]])))
+    return list(zip(edges[::2], edges[1::2]))
+
+
+def _grazing_at(d: dict, k: int) -> list:
+    """The parameters of the grazing points located on branch ``k``."""
+    bif = d["bifurcations"]
+    return [float(bif["parameter"][i]) for i, kind in enumerate(bif["kind"])
+            if kind == "grazing" and int(bif["branch"][i]) == k]
+
+
+def _slack_run(d: dict) -> bool:
+    """A continuation through slack whose branches carry their snap loads."""
+    return bool(d.get("through_slack", False)) and any("peak_tension" in b for b in d["branches"])
+
+
+def _tension_panel(ax, d: dict, modal: list) -> None:
+    """The peak tension (snap load) of every segment of every orbit against the parameter, a
+    colour per segment, stable solid and unstable dashed, slack orbits shaded; MN or kN."""
+    from matplotlib.lines import Line2D
+
+    peak = max((float(np.max(b["peak_tension"], initial=0.0)) for b in d["branches"] if "peak_tension" in b),
+               default=0.0)
+    scale, unit = (1e6, "MN") if peak >= 1e6 else (1e3, "kN")
+    segments = max((np.shape(b["peak_tension"])[1] for b in d["branches"] if "peak_tension" in b), default=0)
+    for k, b in enumerate(d["branches"]):
+        if "peak_tension" not in b:
+            continue
+        for j in range(segments):  # each segment's band where that segment goes slack
+            _draw_branch(ax, b, np.asarray(b["peak_tension"])[:, j] / scale, SERIES[j % len(SERIES)],
+                         np.asarray(b["slack_episodes"])[:, j] > 0, _grazing_at(d, k))
+    handles = [Line2D([], [], color=SERIES[j % len(SERIES)], lw=1.6, label=f"segment {j + 1}") for j in range(segments)]
+    ax.legend(handles=handles, fontsize=7, loc="best", ncol=min(segments, 4))
+    _finish_panel(ax, modal, f"peak tension\n(snap load, {unit})")
 
 
 def _largest_w(b: dict) -> np.ndarray:
@@ -212,6 +276,9 @@ def _other_handles(d: dict, overlaid: set, modal: list) -> list:
         marker, short, text = BIFURCATION_STYLE.get(kind, ("o", kind, kind))
         handles.append(Line2D([], [], ls="none", marker=marker, color=COLOURS["annotation"], mfc="white",
                               label=f"{short}: {text}"))
+    if any(np.any(b.get("slack", False)) for b in d["branches"]):
+        handles.append(Line2D([], [], color="0.3", lw=6.0, alpha=SLACK_ALPHA, solid_capstyle="butt",
+                              label="shaded: orbits on which a segment goes slack"))
     if any((~b["trusted"].astype(bool)).any() for b in d["branches"]):
         handles.append(Line2D([], [], ls="none", marker="x", color=COLOURS["failed_point"],
                               label="multipliers not trusted"))
@@ -284,19 +351,22 @@ def plot_continuation(h5_path, png_path=None, overlay=None, title: str | None = 
     pad = 0.02 * (hi - lo)
     is_omega = d["parameter"] == "omega"
     modal = [(k + 1, w) for k, w in enumerate(d["modal"]) if is_omega and lo - pad <= w <= hi + pad]
-    fig, axes = figure_grid(len(chans) + spatial, 1, 2.1, sharex=True, extra_height=1.7)
+    slack = _slack_run(d)
+    fig, axes = figure_grid(len(chans) + spatial + slack, 1, 2.1, sharex=True, extra_height=1.7)
     bif = d["bifurcations"]
     overlaid = set()
     for c, (ax, name) in enumerate(zip(axes[:, 0], chans)):
         for k, b in enumerate(d["branches"]):
-            _draw_branch(ax, b, b["amplitude"][:, c], colour[k])
+            _draw_branch(ax, b, b["amplitude"][:, c], colour[k], grazing=_grazing_at(d, k))
         if len(bif["kind"]):
             _mark_bifurcations(ax, bif["parameter"], bif["amplitude"][:, c], bif["kind"], hi - lo)
         if sweep is not None and is_omega:
             overlaid |= _draw_overlay(ax, sweep, name)
         _finish_panel(ax, modal, channel_label(name, components=d.get("components", 3 if spatial else 2)))
     if spatial:
-        _out_of_plane_panel(axes[-1, 0], d, colour, modal, hi - lo)
+        _out_of_plane_panel(axes[len(chans), 0], d, colour, modal, hi - lo)
+    if slack:
+        _tension_panel(axes[-1, 0], d, modal)
     axes[-1, 0].set_xlim(lo - pad, hi + pad)
     axes[-1, 0].set_xlabel(parameter_axis(d)[0])
     legend_below(fig, _branch_handles(d, colour) + _other_handles(d, overlaid, modal), ncol=2)

@@ -31,7 +31,7 @@ from cablesim.orbits.accelerate import (
 from cablesim.orbits.shooting import Shooting, solve_orbit
 from cablesim.orbits.systems import cable_system
 from helpers_sweep import do_sweep
-from test_orbits_slack import Reference
+from helpers_slack import Reference
 
 CONFIG = Path(__file__).resolve().parents[1] / "configs" / "paper-example.yaml"
 CHANNELS = np.array([1, 3])

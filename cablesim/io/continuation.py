@@ -154,6 +154,21 @@ def _put_grazing(fg, bifs) -> None:
         "largest distance between the multipliers before and after, matched (NaN: not a grazing point)", allow_nan=True)
 
 
+def _put_whirling(h, b) -> None:
+    """A spatial branch's whirling measures (none on a planar cable's branch)."""
+    if b.whirl_area is not None:
+        put(h, "whirl_area", b.whirl_area, "m^2", "signed area of each node's path in its (w, v) "
+            "cross-section plane over the orbit (positive counter-clockwise as seen from support A "
+            "looking towards B; NaN: not measured)", allow_nan=True)
+        put(h, "tilt", b.tilt, "deg", "angle of the orbit's mean plane of motion from the cable's plane",
+            allow_nan=True)
+    if getattr(b, "max_w", None) is not None:
+        put(h, "max_w", b.max_w, "m", "largest out-of-plane displacement |w| of each node over the orbit "
+            "(NaN: not measured)", allow_nan=True)
+        put(h, "whirl_sense", np.asarray(b.whirl_sense, dtype="S"), "1", "sense in which each node goes "
+            "round, seen from support A looking towards B: counter-clockwise, clockwise or none")
+
+
 def write_continuation(path: str | Path, res, fingerprint: str | None = None) -> Path:
     """Write a :class:`~cablesim.analyses.continuation.ContinuationResult` atomically
     (``fingerprint``: of the case and settings, :func:`cablesim.io.journal.fingerprint`, stored
@@ -202,17 +217,7 @@ def write_continuation(path: str | Path, res, fingerprint: str | None = None) ->
                     "spatial cable) or coupled")
             h.attrs["planar"] = bool(b.planar)
             h.attrs["mirror_image"] = bool(b.mirror_image)
-            if b.whirl_area is not None:
-                put(h, "whirl_area", b.whirl_area, "m^2", "signed area of each node's path in its (w, v) "
-                    "cross-section plane over the orbit (positive counter-clockwise as seen from support A "
-                    "looking towards B; NaN: not measured)", allow_nan=True)
-                put(h, "tilt", b.tilt, "deg", "angle of the orbit's mean plane of motion from the cable's plane",
-                    allow_nan=True)
-            if getattr(b, "max_w", None) is not None:
-                put(h, "max_w", b.max_w, "m", "largest out-of-plane displacement |w| of each node over the orbit "
-                    "(NaN: not measured)", allow_nan=True)
-                put(h, "whirl_sense", np.asarray(b.whirl_sense, dtype="S"), "1", "sense in which each node goes "
-                    "round, seen from support A looking towards B: counter-clockwise, clockwise or none")
+            _put_whirling(h, b)
         fg = g.create_group("bifurcations")
         bifs = res.bifurcations
         put(fg, "kind", np.array([b.kind for b in bifs], dtype="S"), "1", "fold, period-doubling, neimark-sacker")

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from ..orbits.shooting import Shooting, solve_orbit
+from ..orbits.shooting import FlowStatus, Shooting, solve_orbit
 from ..orbits.slackpattern import fine_shooting, slack_pattern
 from ..orbits.systems import cable_system
 from .orbit_strain import segment_strains
@@ -208,10 +208,13 @@ def branch_slack(eom, branch, parameter: str, gamma: float, support: float) -> B
 def orbit_pattern(sh: Shooting, eom, u: np.ndarray, lam: float):
     """The slack pattern (:class:`~cablesim.orbits.slackpattern.SlackPattern`) of the orbit
     ``u`` at ``lam`` of the shooting through slack ``sh`` and its segments' least elastic
-    tensions, N, from one flow for its events and one at the refined steps for both."""
-    pieces = fine_shooting(sh).steps(u, lam)  # one refined integration for both
-    pat = slack_pattern(sh, u, lam, sh.evaluate(u, lam, jac=False), fine_steps=pieces)
-    least = np.array([m[0] for m in tension_minima(sh, eom, u, lam, pieces)])
+    tensions, N, all from one flow at the refined steps (its events, located to 1e-10 s on its
+    interpolant as on the shooting's own, and its steps)."""
+    ev = fine_shooting(sh).evaluate(u, lam, jac=False, record=True)
+    if ev.status != FlowStatus.OK:
+        raise FloatingPointError(f"integration failed (status {ev.status.name})")
+    pat = slack_pattern(sh, u, lam, ev, fine_steps=ev.steps)
+    least = np.array([m[0] for m in tension_minima(sh, eom, u, lam, ev.steps)])
     return pat, least
 
 

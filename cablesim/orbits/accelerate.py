@@ -38,8 +38,10 @@ multiplier near -1 next to a period doubling), which shooting may decide. The am
 measured exactly as for an integrated one (:func:`~cablesim.dynamics.steady.periodic_response`).
 Orbits with slack intervals are shot through them (dense shooting with the saltation matrices of
 the events, :mod:`~cablesim.orbits.slackflow`), under the same acceptance rule; the point's snap
-loads are then its orbit's, as an integrated steady point's are. The matrix-free shooting stops at
-a slack segment: such a heavy-cable point is left to integration.
+loads are then its orbit's, as an integrated steady point's are. The matrix-free shooting of heavy
+cables (below) stops at a slack segment; once one has, the point's orbits are shot through slack
+by :class:`~cablesim.orbits.slackdifference.SlackDifferenceShooting` (the same flow through slack,
+its monodromy's action by extrapolated central differences), under the same rules.
 
 Cost: an orbit found once is remembered (stable or not), so later checks against it need no
 integration at all; Newton stops at the first step that does not halve the residual (the
@@ -79,11 +81,12 @@ from ..dynamics.equations import EquationsOfMotion
 from ..dynamics.integrators import DOPRI5, Integrator
 from ..dynamics.steady import DECIDE_EVERY, PointResult, SteadyCriterion, periodic_response, steady_response
 from .floquet import DEFAULT_BOUND, Deflation
-from .kernels import OK
+from .kernels import OK, SLACK
 from .krylov import gmres
 from .matrixfree import MatrixFreeShooting, MFEvaluation, orbit_leading
 from .mfproblem import uses_matrix_free
 from .shooting import Evaluation, Shooting
+from .slackdifference import SlackDifferenceShooting
 from .systems import cable_system
 
 #: Shooting is tried at a period p once the last strobes repeat at lag p to this fraction (a
@@ -394,7 +397,10 @@ class _Shooter:
         self.transient = transient
         self.system = cable_system(eom, gamma=1.0) if system is None else system
         self.matrix_free, self.scheme = matrix_free, scheme
-        self.mf: dict[int, MatrixFreeShooting] = {}
+        self.mf: dict[int, MatrixFreeShooting | SlackDifferenceShooting] = {}
+        #: Matrix-free orbits are shot through slack (:mod:`~cablesim.orbits.slackdifference`)
+        #: once a matrix-free flow from the trajectory has met a slack segment.
+        self.through_slack = False
         self.basis = None  # the latest matrix-free orbit's leading subspace (warm start)
         self.orbits: list[Orbit] = []  # stable and unstable orbits found so far
         self.next_try = 0  # forcing periods; Newton attempts back off after fruitless ones
@@ -404,11 +410,13 @@ class _Shooter:
         # the integration, and a late acceptance comes at most 25 % late)
         self.max_wait = CHECKS_PER_DECAY * every
 
-    def shooting(self, p: int) -> Shooting | MatrixFreeShooting:
-        """Single shooting over ``p`` forcing periods, dense or matrix-free; an explicit scheme
-        with the step of :data:`STEP_RATE`."""
+    def shooting(self, p: int) -> Shooting | MatrixFreeShooting | SlackDifferenceShooting:
+        """Single shooting over ``p`` forcing periods, dense or matrix-free (through slack once
+        a trajectory has gone slack); an explicit scheme with the step of :data:`STEP_RATE`."""
         if not self.matrix_free:
             return Shooting(self.system, p, 1, "omega", step_rate=STEP_RATE, through_slack=True)
+        if self.through_slack and not isinstance(self.mf.get(p), SlackDifferenceShooting):
+            self.mf[p] = SlackDifferenceShooting(self.system, p, 1, "omega", step_rate=STEP_RATE)
         if p not in self.mf:
             sh = MatrixFreeShooting(self.system, p, 1, "omega", scheme=self.scheme)
             if sh.scheme != "radau":
@@ -417,10 +425,17 @@ class _Shooter:
         return self.mf[p]
 
     def newton(self, p: int, x: np.ndarray) -> Evaluation | None:
-        """The orbit of period ``p`` near ``x`` (:func:`newton` or :func:`newton_mf`)."""
+        """The orbit of period ``p`` near ``x`` (:func:`newton` or :func:`newton_mf`). A
+        matrix-free Newton stopped by a slack segment is taken again through slack, and so are
+        the later ones (the system must be able to follow slack: ``system.slack``)."""
         if not self.matrix_free:
             return newton(self.eom, self.shooting(p), x)
-        ev = newton_mf(self.eom, self.shooting(p), x, start=self.basis)
+        sh = self.shooting(p)
+        ev = newton_mf(self.eom, sh, x, start=self.basis)
+        if (ev is None and not self.through_slack and self.system.slack is not None
+                and getattr(sh, "last_status", OK) == SLACK):
+            self.through_slack = True
+            return self.newton(p, x)
         if ev is not None:
             self.basis = ev.leading.basis
         return ev

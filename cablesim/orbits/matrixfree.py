@@ -152,6 +152,8 @@ class MatrixFreeShooting:
         self.newton_steps = 0
         self.krylov_iterations = 0
         self.stage_iterations = 0
+        #: Status of the latest segment integration (why a flow stopped: ``SLACK``, ...).
+        self.last_status = ok.OK
 
     # ------------------------------------------------------------------------------------------
     def omega_of(self, lam: float) -> float:
@@ -246,6 +248,7 @@ class MatrixFreeShooting:
                                   float(dur), int(ns), self._A, self._b, self._c, self._ipar, pmode, Vq, dp, xend,
                                   xmax, xmin, rec)
             self.products += Vq.shape[0] + (1 if param else 0)
+        self.last_status = int(code)
         return int(code), xend, xmax, xmin, dp, the_tape, rec, ns
 
     def _replay_tape(self, tape, k, lam, V, P, pmode):

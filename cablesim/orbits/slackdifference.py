@@ -1,0 +1,161 @@
+"""Matrix-free shooting through slack: the flow of the dense shooting, its action by differences.
+
+:class:`~cablesim.orbits.matrixfree.MatrixFreeShooting` carries directions along its orbits
+(explicit schemes, or the tape of a Radau IIA orbit) but stops at a slack segment. Through slack
+the orbit is integrated by :class:`~cablesim.orbits.shooting.Shooting` with ``through_slack``
+(:mod:`cablesim.orbits.slackflow`: every slack onset and re-tightening located, no step across
+one) without its variational equations, at ``O(n)`` per step, and the monodromy acts on a vector
+by central differences of that flow map::
+
+    G v ~ (Phi(x + d v) - Phi(x - d v)) / (2 d)
+
+Why differences are sound here: the field is continuous where a segment changes mode, so the
+saltation matrix of every transversal event is the identity and the event times' derivatives
+drop out (docs/theory.md, "Periodic orbits through slack"); the flow map is as smooth as its
+smooth pieces, and the differences' error is ``O(d^2)``. The events are located to
+:data:`~cablesim.orbits.slackflow.EVENT_TOL` of a step; the field being continuous there, a
+misplaced event moves the end state by the square of that, far below the differences' round-off.
+``d`` is chosen per direction so that no component moves by more than :data:`DIFFERENCE_STEP`
+of its half's extent over the orbit (displacements and velocities apart): the truncation error
+is then about ``DIFFERENCE_STEP^2`` and the round-off ``eps / DIFFERENCE_STEP`` of the extent,
+both near 1e-10. Measured on the paper's cable through slack against the saltation-matrix
+monodromy (tests/test_slack_difference.py): 1e-9 relative.
+
+Cost: two orbit integrations per direction, against one banded solve per step for a Radau tape;
+it serves the steady states of heavy cables whose orbits go slack
+(:mod:`cablesim.orbits.accelerate`), where the alternative is integrating the transient out.
+The interface is that of :class:`~cablesim.orbits.matrixfree.MatrixFreeShooting` as
+:func:`~cablesim.orbits.accelerate.newton_mf` and
+:func:`~cablesim.orbits.matrixfree.orbit_leading` use it (``evaluate``, ``segment_apply``,
+``monodromy_apply``, ``jacobian_apply``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .kernels import OK
+from .matrixfree import MFEvaluation
+from .shooting import FlowStatus, Shooting
+from .systems import OdeSystem
+
+#: Largest move of any state component in a difference, as a fraction of the extent of its half
+#: (displacements, velocities) over the orbit: truncation ``~ DIFFERENCE_STEP^2``, round-off
+#: ``~ 1e-16 / DIFFERENCE_STEP``.
+DIFFERENCE_STEP = 1e-5
+#: Largest difference between the central differences at ``d`` and ``d / 2``, relative to the
+#: column, before ``d`` is quartered (at most :data:`DIFFERENCE_REFINEMENTS` times): their
+#: extrapolation's error is then about its square.
+DIFFERENCE_AGREEMENT = 1e-4
+DIFFERENCE_REFINEMENTS = 3
+
+
+class SlackDifferenceShooting:
+    """Flow maps of the ``m`` segments of a ``p``-periodic orbit through slack and their action
+    on vectors by central differences (module docstring).
+
+    Parameters
+    ----------
+    system : OdeSystem
+        A system that can follow slack segments (``system.slack``; the exact analysis).
+    period, segments, parameter, scheme, steps_per_period, step_rate
+        As for :class:`~cablesim.orbits.shooting.Shooting` (explicit schemes only).
+    """
+
+    def __init__(self, system: OdeSystem, period: int = 1, segments: int = 1, parameter: str = "omega",
+                 scheme: str = "rk8", steps_per_period: int | None = None, step_rate: float | None = None):
+        if system.slack is None:
+            raise ValueError("this system cannot follow slack segments (exact analysis, supports at rest)")
+        self.flow = Shooting(system, period, segments, parameter, scheme=scheme, steps_per_period=steps_per_period,
+                             step_rate=step_rate, through_slack=True)
+        self.system = system
+        self.period, self.segments, self.parameter = self.flow.period, self.flow.segments, parameter
+        self.scheme = scheme
+        self.n = system.dim
+        #: Counters: directions applied (two flows each).
+        self.products = 0
+
+    def omega_of(self, lam: float) -> float:
+        return self.flow.omega_of(lam)
+
+    def default_lam(self) -> float:
+        return self.flow.default_lam()
+
+    @property
+    def calls(self) -> int:
+        """Segment integrations so far."""
+        return self.flow.calls
+
+    def evaluate(self, u: np.ndarray, lam: float, jac: bool = True) -> MFEvaluation:
+        """Residual at ``(u, lam)``; with ``jac`` also ``J_lam`` (by a central difference in
+        ``lam``, relative step :data:`DIFFERENCE_STEP`)."""
+        ev = self.flow.evaluate(u, lam, jac=False)
+        m, n = self.segments, self.n
+        starts = np.asarray(u, dtype=float).reshape(m, n).copy()
+        J_lam = None
+        if jac and ev.status == FlowStatus.OK:
+            d = DIFFERENCE_STEP * abs(float(lam))
+            up, down = self.flow.evaluate(u, lam + d, jac=False), self.flow.evaluate(u, lam - d, jac=False)
+            if up.status != FlowStatus.OK or down.status != FlowStatus.OK:
+                ev.status = up.status if up.status != FlowStatus.OK else down.status
+            else:
+                J_lam = (up.r - down.r) / (2.0 * d)
+        return MFEvaluation(ev.u, ev.lam, ev.omega, ev.period, ev.T, ev.r, None, J_lam, ev.ends, None, None, None,
+                            np.nan, np.nan, ev.xmax, ev.xmin, ev.status, events=ev.events, starts=starts)
+
+    def _extent(self, ev: MFEvaluation) -> np.ndarray:
+        """Per component: the extent of its half (displacements, velocities) over the orbit."""
+        ext = np.maximum(np.abs(ev.xmax), np.abs(ev.xmin))
+        h = self.n // 2
+        tiny = np.finfo(float).tiny
+        return np.concatenate([np.full(h, max(float(ext[:h].max()), tiny)),
+                               np.full(self.n - h, max(float(ext[h:].max()), tiny))])
+
+    def segment_apply(self, ev: MFEvaluation, k: int, X: np.ndarray) -> np.ndarray:
+        """``G_k X`` for the columns of ``X`` (n, q): Richardson's extrapolation of central
+        differences of segment ``k``'s flow map from its start at steps ``d`` and ``d / 2``
+        (error ``O(d^4)``), ``d`` quartered while the two differ by more than
+        :data:`DIFFERENCE_AGREEMENT` of the column (the flow map's curvature grows without bound
+        towards a grazing orbit, where an episode's depth sets the scale of its nonlinearity)."""
+        X = np.asarray(X, dtype=float)
+        ext = self._extent(ev)
+        out = np.zeros_like(X)
+        for j in range(X.shape[1]):
+            v = X[:, j]
+            size = float(np.max(np.abs(v) / ext))
+            if size == 0.0:
+                continue
+            d = DIFFERENCE_STEP / size
+            for _ in range(DIFFERENCE_REFINEMENTS + 1):
+                wide, narrow = self._central(ev, k, v, d), self._central(ev, k, v, d / 2.0)
+                out[:, j] = (4.0 * narrow - wide) / 3.0
+                if np.abs(narrow - wide).max() <= DIFFERENCE_AGREEMENT * np.abs(out[:, j]).max():
+                    break
+                d /= 4.0
+            self.products += 1
+        return out
+
+    def _central(self, ev: MFEvaluation, k: int, v: np.ndarray, d: float) -> np.ndarray:
+        ends = []
+        for s in (d, -d):
+            seg = self.flow.segment(k, ev.starts[k] + s * v, ev.lam, jac=False)
+            if seg["status"] != OK:
+                raise FloatingPointError(f"a differenced flow failed (status {FlowStatus(seg['status']).name})")
+            ends.append(seg["x"])
+        return (ends[0] - ends[1]) / (2.0 * d)
+
+    def monodromy_apply(self, ev: MFEvaluation, X: np.ndarray) -> np.ndarray:
+        """``M X = G_(m-1) ... G_0 X``."""
+        Y = np.asarray(X, dtype=float)
+        for k in range(self.segments):
+            Y = self.segment_apply(ev, k, Y)
+        return Y
+
+    def jacobian_apply(self, ev: MFEvaluation, X: np.ndarray) -> np.ndarray:
+        """``J_u X``: block ``k`` is ``G_k X_k - X_(k+1)`` (``J_u = M - I`` for one segment)."""
+        n, m = self.n, self.segments
+        X = np.asarray(X, dtype=float).reshape(m, n, -1)
+        out = np.empty_like(X)
+        for k in range(m):
+            out[k] = self.segment_apply(ev, k, X[k]) - X[(k + 1) % m]
+        return out.reshape(m * n, -1)

@@ -41,6 +41,7 @@ from cablesim.case import case_from_dict  # noqa: E402
 from cablesim.dynamics.integrators import DOPRI5  # noqa: E402
 from cablesim.dynamics.simulate import simulate  # noqa: E402
 from cablesim.orbits import Shooting, cable_system, solve_orbit  # noqa: E402
+from cablesim.plots.continuation import stability_runs  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -132,8 +133,10 @@ def draw_response(ax, result, channel: int, title: str, ylabel: str, mm: bool):
         style = dict(color="0.2") if b.planar or b.period == 1 else dict(color="tab:red")
         label = "planar" if b.period == 1 else ("nonplanar period 2" if not b.planar else "planar period 2")
         a = b.amplitude[:, channel] * k
-        ax.plot(b.omega, np.where(b.stable, a, np.nan), "-", lw=1.6, label=f"{label}, stable", **style)
-        ax.plot(b.omega, np.where(~b.stable, a, np.nan), "--", lw=1.0, label=f"{label}, unstable", **style)
+        # runs joined at the change of stability (no gap where the line changes style)
+        for mask, ls, lw, what in ((b.stable, "-", 1.6, "stable"), (~b.stable, "--", 1.0, "unstable")):
+            for lo, hi in stability_runs(mask):
+                ax.plot(b.omega[lo:hi], a[lo:hi], ls, lw=lw, label=f"{label}, {what}", **style)
     for bif in result.bifurcations:
         if bif.kind == "period-doubling" and bif.plane == "out-of-plane":
             ax.axvline(bif.omega, color="tab:blue", lw=0.6, ls=":")

@@ -39,7 +39,7 @@ BIFURCATION_STYLE = {
 }
 
 
-def _runs(mask: np.ndarray):
+def stability_runs(mask: np.ndarray) -> list[tuple[int, int]]:
     """(start, stop) index pairs of the runs where ``mask`` holds, each extended by one point so
     that consecutive runs of opposite stability join."""
     runs, k, n = [], 0, mask.size
@@ -76,9 +76,9 @@ def _draw_branch(ax, b: dict, y: np.ndarray, colour, slack: np.ndarray | None = 
     x = b["parameter"]
     stable = b["stable"].astype(bool)
     style = _branch_style(b, colour)
-    for lo, hi in _runs(stable):
+    for lo, hi in stability_runs(stable):
         ax.plot(x[lo:hi], y[lo:hi], zorder=3, **style["stable"])
-    for lo, hi in _runs(~stable):
+    for lo, hi in stability_runs(~stable):
         ax.plot(x[lo:hi], y[lo:hi], zorder=2, **style["unstable"])
     slack = b["slack"].astype(bool) if slack is None and "slack" in b else slack
     if slack is not None:  # orbits with a slack segment: a wide pale band under the line

@@ -219,6 +219,10 @@ class Shooting:
         self._flow = ok.EntryPoint(ok.flow_segment)
         self._flow_modes = ok.EntryPoint(sf.flow_segment_modes)
         self.through_slack = bool(through_slack) and system.slack is not None
+        #: Through slack: integrate with the segment modes from the start rather than retake a
+        #: flow that met a slack segment (the same steps bit for bit while no event occurs; for
+        #: flows known to go slack, such as the differences of an orbit through slack).
+        self.modes_from_start = False
         self._whole = (np.arange(system.dim, dtype=np.int64), np.array([0, system.dim], dtype=np.int64))
         self._ipar = -1 if parameter == "omega" else int(system.parameters[parameter])
         self._pmode = ok.PARAM_OMEGA if parameter == "omega" else ok.PARAM_PRM
@@ -287,7 +291,8 @@ class Shooting:
         args = (self.system.model, self._prm(lam), work, flushed(x0), float(theta0), float(omega), float(dur), int(ns),
                 self._A, self._b, self._c, self._ipar, self._pmode, bool(jac), rows, bounds, xend, G, dp, xmax, xmin,
                 rec, info)
-        code = self._flow(self.system.field, *args)
+        tracked = self.through_slack and self.modes_from_start
+        code = ok.SLACK if tracked else self._flow(self.system.field, *args)
         events = _NO_EVENTS
         if code == ok.SLACK and self.through_slack:
             gaps, modes = self.system.slack

@@ -68,6 +68,7 @@ class SlackDifferenceShooting:
             raise ValueError("this system cannot follow slack segments (exact analysis, supports at rest)")
         self.flow = Shooting(system, period, segments, parameter, scheme=scheme, steps_per_period=steps_per_period,
                              step_rate=step_rate, through_slack=True)
+        self.flow.modes_from_start = True  # its orbits go slack: no plain flow tried first
         self.system = system
         self.period, self.segments, self.parameter = self.flow.period, self.flow.segments, parameter
         self.scheme = scheme

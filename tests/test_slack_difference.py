@@ -82,21 +82,30 @@ def test_a_system_that_cannot_go_slack_is_refused(slack_case):
         SlackDifferenceShooting(dataclasses.replace(system, slack=None))
 
 
-def test_sweep_point_decided_matrix_free_through_slack_as_the_dense_one(paper, exact_static):
+@pytest.mark.parametrize("dense_dof", [None, 0])
+def test_sweep_point_decided_matrix_free_through_slack_as_the_dense_one(paper, exact_static, monkeypatch, dense_dof):
     """FL x 13.5 at 2.45 rad/s shot matrix-free (forced: the cable is small enough for the dense
-    shooting, which decides it too): the matrix-free Newton meets the slack segment, the point's
-    orbits are shot through slack by differences, and the point is decided by shooting with the
-    dense decision's period, amplitudes and snap loads (1e-6), much sooner than integration
-    alone. Before, the matrix-free path left it to integration."""
+    shooting, which decides it too): the matrix-free Newton meets the slack segment and the
+    point's orbits are shot through slack, densely (a cable within ``DENSE_DOF``) or, with
+    ``DENSE_DOF`` set to 0 as for a cable above it, by differences. Either way the point is
+    decided by shooting with the dense decision's period, amplitudes and snap loads (1e-6), much
+    sooner than integration alone. Before, the matrix-free path left it to integration (to 228 s
+    of simulated time, against 84.6 s)."""
     from cablesim.analyses.setup import make_integrator
     from cablesim.dynamics.steady import SteadyCriterion, steady_response
-    from cablesim.orbits.accelerate import accelerated_steady_response
+    from cablesim.orbits import accelerate as acc
 
     eom = build_equations(paper, exact_static, omega=OMEGA, load_scale=SCALE)
     integ = make_integrator(paper.integrator, eom, max(OMEGA, float(eom.frequencies[0])))
     channels, crit = np.array([1, 3]), SteadyCriterion(cap=600.0)
-    dense = accelerated_steady_response(eom, integ, channels, crit, matrix_free=False)
-    mf = accelerated_steady_response(eom, integ, channels, crit, matrix_free=True)
+    dense = acc.accelerated_steady_response(eom, integ, channels, crit, matrix_free=False)
+    if dense_dof is not None:
+        monkeypatch.setattr(acc, "DENSE_DOF", dense_dof)
+    made = []
+    original = SlackDifferenceShooting.evaluate
+    monkeypatch.setattr(SlackDifferenceShooting, "evaluate", lambda self, *a, **k: made.append(1) or original(self, *a, **k))
+    mf = acc.accelerated_steady_response(eom, integ, channels, crit, matrix_free=True)
+    assert bool(made) == (dense_dof == 0)  # shot by differences only above DENSE_DOF
     plain = steady_response(eom, integ, channels, crit)
     assert dense.decided == mf.decided == "shooting" and plain.decided == "integrated"
     assert mf.period == dense.period == 1 and mf.steady

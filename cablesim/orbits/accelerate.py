@@ -40,8 +40,11 @@ Orbits with slack intervals are shot through them (dense shooting with the salta
 the events, :mod:`~cablesim.orbits.slackflow`), under the same acceptance rule; the point's snap
 loads are then its orbit's, as an integrated steady point's are. The matrix-free shooting of heavy
 cables (below) stops at a slack segment; once one has, the point's orbits are shot through slack
-by :class:`~cablesim.orbits.slackdifference.SlackDifferenceShooting` (the same flow through slack,
-its monodromy's action by extrapolated central differences), under the same rules.
+under the same rules: densely up to :data:`DENSE_DOF` degrees of freedom (on a 20-node heavy span,
+80 states, a Newton solve with its multipliers costs 1.4 s of CPU so, against 15.8 s by
+differences), above it by :class:`~cablesim.orbits.slackdifference.SlackDifferenceShooting` (the
+same flow through slack, its monodromy's action by extrapolated central differences: four orbit
+integrations per direction, so an attempt costs some hundreds of orbit integrations).
 
 Cost: an orbit found once is remembered (stable or not), so later checks against it need no
 integration at all; Newton stops at the first step that does not halve the residual (the
@@ -411,9 +414,12 @@ class _Shooter:
         self.max_wait = CHECKS_PER_DECAY * every
 
     def shooting(self, p: int) -> Shooting | MatrixFreeShooting | SlackDifferenceShooting:
-        """Single shooting over ``p`` forcing periods, dense or matrix-free (through slack once
-        a trajectory has gone slack); an explicit scheme with the step of :data:`STEP_RATE`."""
-        if not self.matrix_free:
+        """Single shooting over ``p`` forcing periods, dense or matrix-free; once a matrix-free
+        flow from the trajectory has met a slack segment, through slack: densely up to
+        :data:`DENSE_DOF` degrees of freedom, else by differences
+        (:class:`~cablesim.orbits.slackdifference.SlackDifferenceShooting`). An explicit scheme
+        with the step of :data:`STEP_RATE`."""
+        if not self.matrix_free or (self.through_slack and self.eom.n_dof <= DENSE_DOF):
             return Shooting(self.system, p, 1, "omega", step_rate=STEP_RATE, through_slack=True)
         if self.through_slack and not isinstance(self.mf.get(p), SlackDifferenceShooting):
             self.mf[p] = SlackDifferenceShooting(self.system, p, 1, "omega", step_rate=STEP_RATE)
@@ -428,9 +434,9 @@ class _Shooter:
         """The orbit of period ``p`` near ``x`` (:func:`newton` or :func:`newton_mf`). A
         matrix-free Newton stopped by a slack segment is taken again through slack, and so are
         the later ones (the system must be able to follow slack: ``system.slack``)."""
-        if not self.matrix_free:
-            return newton(self.eom, self.shooting(p), x)
         sh = self.shooting(p)
+        if isinstance(sh, Shooting):
+            return newton(self.eom, sh, x)
         ev = newton_mf(self.eom, sh, x, start=self.basis)
         if (ev is None and not self.through_slack and self.system.slack is not None
                 and getattr(sh, "last_status", OK) == SLACK):
@@ -480,7 +486,7 @@ class _Shooter:
                 return False
         self.orbits.append(Orbit(q, ev.u.copy(), ev, scale, k % q,
                                  strobe_noise(self.eom, self.transient, ev.u, q, scale),
-                                 self.shooting(q) if self.matrix_free else None))
+                                 None if ev.monodromy is not None else self.shooting(q)))
         return True
 
 

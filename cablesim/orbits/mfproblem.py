@@ -25,9 +25,11 @@ from a genuine one near +1 (at a branch point or pitchfork of the branch itself,
 it matters), and the iteration would still spend its products converging it; the deflation
 needs no such choice and no extra product. The preconditioner is then built from the deflated
 subspace, regular where the undeflated one holds the multiplier +1 (its ``(S - I)^-1``
-singular to round-off: measured norm 1e13 on a stay's orbit, against 6 deflated). The neutral multiplier itself is recorded from one product with ``g``
+singular to round-off: measured norm 1e13 on a stay's orbit, against 6 deflated). The neutral
+multiplier itself is recorded from one product with ``g``
 (:func:`~cablesim.orbits.rotation.action_neutral`: ``g^T M g / g^T g`` and
-``|M g - g| / |g|``) and reported among the orbit's multipliers.
+``|M g - g| / |g|``) and reported among the orbit's multipliers in place of the deflated one
+(:func:`reported_multipliers`).
 """
 
 from __future__ import annotations
@@ -38,10 +40,11 @@ from . import kernels as ok
 from . import stability
 from .floquet import DEFAULT_BOUND, Deflation, Leading, leading_from, truncated_step_ratio, truncated_tests
 from .matrixfree import Bordered, MatrixFreeShooting, MFEvaluation, orbit_leading
-from .rotation import RotationPhase, action_neutral
+from .rotation import LEADING_SHIFT, Neutral, RotationPhase, action_neutral
 from .stability import sort_multipliers
 
-__all__ = ["MATRIX_FREE_DOF", "MatrixFreeOrbitProblem", "use_matrix_free", "uses_matrix_free"]
+__all__ = ["MATRIX_FREE_DOF", "MatrixFreeOrbitProblem", "reported_multipliers", "use_matrix_free",
+           "uses_matrix_free"]
 
 #: State dimension above which the continuation shoots matrix-free by default. Measured on the
 #: heavy span (``benchmarks/bench_heavy_orbits.py --crossover``: one orbit by Newton's method
@@ -59,6 +62,17 @@ def uses_matrix_free(system, matrix_free: bool | None) -> bool:
     """Whether the orbits of ``system`` are shot matrix-free: as asked, else above
     :data:`MATRIX_FREE_DOF` states for a system in mechanical form."""
     return use_matrix_free(system.dim, matrix_free) and bool(matrix_free or system.mechanical is not None)
+
+
+def reported_multipliers(lead: Leading, neutral: Neutral) -> np.ndarray:
+    """The multipliers of ``lead``, computed on the action deflated along the ``neutral``
+    multiplier's eigenvector, with that multiplier among them (sorted): a complete spectrum holds
+    the deflated one at :data:`~cablesim.orbits.rotation.LEADING_SHIFT`, which it replaces; a
+    truncated one left it out."""
+    mu = np.asarray(lead.multipliers)
+    if lead.complete and mu.size:
+        mu = np.delete(mu, int(np.argmin(np.abs(mu - LEADING_SHIFT))))
+    return sort_multipliers(np.append(mu, neutral.multiplier))
 
 
 class MatrixFreeOrbitProblem(RotationPhase):
@@ -111,18 +125,21 @@ class MatrixFreeOrbitProblem(RotationPhase):
             start = self.latest.basis if self.latest is not None else None
             g = self.generator(ev)
             self.latest = orbit_leading(self.shooting, ev, self.state_scale, bound=self.bound, start=start, neutral=g)
-            self.record_neutral(ev, g, ev.leading.multipliers)
+            self.record_neutral(ev, g, ev.leading)
         return ev.leading
 
-    def record_neutral(self, ev: MFEvaluation, g: np.ndarray | None, tested: np.ndarray) -> None:
+    def record_neutral(self, ev: MFEvaluation, g: np.ndarray | None, lead: Leading,
+                       others: np.ndarray | None = None) -> None:
         """``ev.neutral`` from the monodromy's action along the generator ``g`` (False without
-        one), the multipliers ``tested`` those the tests see; its multiplier joins
-        ``ev.multipliers``."""
+        one), ``lead`` the leading multipliers the tests see (computed on the deflated action);
+        ``ev.multipliers`` then are those of ``lead`` with the neutral one
+        (:func:`reported_multipliers`) and the ``others`` (of another block)."""
         if g is None:
             ev.neutral = False if self.rotation is not None else None
             return
-        ev.neutral = action_neutral(lambda X: self.shooting.monodromy_apply(ev, X), g, tested)
-        ev.multipliers = sort_multipliers(np.append(ev.multipliers, ev.neutral.multiplier))
+        ev.neutral = action_neutral(lambda X: self.shooting.monodromy_apply(ev, X), g, lead.multipliers)
+        mu = reported_multipliers(lead, ev.neutral)
+        ev.multipliers = mu if others is None else sort_multipliers(np.concatenate([others, mu]))
 
     def bordered(self, ev: MFEvaluation, us, ls, rs) -> Bordered:
         lead = ev.leading if ev.leading is not None else self.latest

@@ -44,7 +44,7 @@ from . import stability
 from ..modal import IN_PLANE
 from .floquet import DEFAULT_BOUND, DEFAULT_TOL, Deflation, Leading, leading_from, leading_multipliers, truncated_tests
 from .matrixfree import Bordered, MatrixFreeShooting, MFEvaluation, scaled_monodromy
-from .mfproblem import MatrixFreeOrbitProblem
+from .mfproblem import MatrixFreeOrbitProblem, reported_multipliers
 from .stability import sort_multipliers
 from .symmetry import Mirror
 
@@ -162,11 +162,9 @@ def labelled_leading(mirror: Mirror, split: SplitLeading, neutral=None) -> tuple
     """The kept multipliers of both blocks sorted together
     (:func:`~cablesim.orbits.stability.sort_multipliers`), and the block of each (the form of
     :func:`~cablesim.orbits.problems.labelled_multipliers`); with the out-of-plane ones the
-    ``neutral`` multiplier excluded from them, if any
-    (:class:`~cablesim.orbits.rotation.Neutral`)."""
-    out = leading_from(split.out_of_plane)
-    if neutral:
-        out = sort_multipliers(np.append(out, neutral.multiplier))
+    ``neutral`` multiplier excluded from them, if any (:class:`~cablesim.orbits.rotation.Neutral`,
+    :func:`~cablesim.orbits.mfproblem.reported_multipliers`)."""
+    out = reported_multipliers(split.out_of_plane, neutral) if neutral else leading_from(split.out_of_plane)
     return mirror.labelled(leading_from(split.in_plane), out)
 
 
@@ -195,7 +193,7 @@ class PlanarMatrixFreeProblem(MatrixFreeOrbitProblem):
             self.latest_split = split_leading(self.shooting, ev, self.mirror, self.state_scale, bound=self.bound,
                                               start=self.latest_split, bases=self.bases, neutral=g)
             self.latest = ev.leading
-            self.record_neutral(ev, g, ev.split.out_of_plane.multipliers)
+            self.record_neutral(ev, g, ev.split.out_of_plane, others=ev.split.in_plane.multipliers)
         return ev.split
 
     def leading(self, ev: MFEvaluation) -> Leading:

@@ -348,7 +348,8 @@ class MatrixFreeShooting:
 
 
 # ----------------------------------------------------------------------------------------------
-def scaled_monodromy(shooting: MatrixFreeShooting, ev: MFEvaluation, scale: np.ndarray, neutral: np.ndarray | None = None):
+def scaled_monodromy(shooting: MatrixFreeShooting, ev: MFEvaluation, scale: np.ndarray,
+                     neutral: np.ndarray | None = None):
     """The action ``Y -> D^-1 M D Y`` of the monodromy of ``ev`` in the coordinates ``x / scale``
     (``D = diag(scale)``) on blocks; with ``neutral`` (an eigenvector ``g`` of ``M`` of multiplier
     +1, unscaled) that of Wielandt's deflation of ``M`` along it, similar to the dense path's
@@ -365,7 +366,8 @@ def scaled_monodromy(shooting: MatrixFreeShooting, ev: MFEvaluation, scale: np.n
 
 
 def orbit_leading(shooting: MatrixFreeShooting, ev: MFEvaluation, scale: np.ndarray, bound: float = DEFAULT_BOUND,
-                  tol: float = DEFAULT_TOL, start: np.ndarray | None = None, neutral: np.ndarray | None = None) -> Leading:
+                  tol: float = DEFAULT_TOL, start: np.ndarray | None = None,
+                  neutral: np.ndarray | None = None) -> Leading:
     """The leading Floquet multipliers of the orbit ``ev`` (kept in ``ev.leading``, sorted into
     ``ev.multipliers``), in the coordinates ``x / scale``; ``start`` a basis to start from.
     With ``neutral`` (an eigenvector of multiplier +1 forced by a symmetry) those of the

@@ -95,7 +95,9 @@ class Neutral:
     multipliers : ndarray complex
         The multipliers the tests see: those of the deflated matrix, the excluded one moved to
         :data:`NEUTRAL_SHIFT` (of the out-of-plane block on a planar orbit, of the monodromy
-        otherwise).
+        otherwise); on the matrix-free path the leading ones of the deflated action, the
+        excluded one moved to :data:`LEADING_SHIFT` and so left out unless the block is
+        computed whole.
     matrix : ndarray or None
         The deflated matrix (:func:`deflate`); None on the matrix-free path, which forms none
         (:func:`action_neutral`).

@@ -169,7 +169,7 @@ def test_a_planar_orbit_the_rotation_moves_has_its_out_of_plane_block_deflated(s
 @pytest.mark.parametrize("phase", [True, False])
 def test_newton_converges_with_the_phase_condition(stay, phase):
     """The continuation's corrector from the time-integrated state turned by 0.7 rad (residual
-    4e-3 of the scale): with the phase condition it converges in 3 evaluations to the periodic
+    3e-3 of the scale): with the phase condition it converges in 3 evaluations to the periodic
     orbit turned alike (measured 4e-13 of the scale from it); without it the Newton systems are
     singular along ``g`` and GMRES turns round-off into corrections along it (measured 0.55 of
     the scale at a residual of 3e-13): the start fails."""

@@ -40,6 +40,7 @@ from . import kernels as ok
 from . import radau as rd
 from .floquet import DEFAULT_BOUND, DEFAULT_TOL, Deflation, Leading, leading_multipliers
 from .krylov import gmres
+from .rotation import deflated_action, phased_action
 from .shooting import DEFAULT_STEPS, Evaluation, FlowStatus, OrbitSolution, Shooting, SolveStatus, line_search
 from .stability import sort_multipliers
 from .systems import OdeSystem
@@ -350,16 +351,32 @@ class MatrixFreeShooting:
 
 
 # ----------------------------------------------------------------------------------------------
+def scaled_monodromy(shooting: MatrixFreeShooting, ev: MFEvaluation, scale: np.ndarray,
+                     neutral: np.ndarray | None = None):
+    """The action ``Y -> D^-1 M D Y`` of the monodromy of ``ev`` in the coordinates ``x / scale``
+    (``D = diag(scale)``) on blocks; with ``neutral`` (an eigenvector ``g`` of ``M`` of multiplier
+    +1, unscaled) that of Wielandt's deflation of ``M`` along it, similar to the dense path's
+    (:func:`~cablesim.orbits.rotation.deflated_action` with ``g / d`` and ``d g / g^T g``)."""
+    D = np.asarray(scale, dtype=float)
+
+    def apply(X):
+        return shooting.monodromy_apply(ev, X * D[:, None]) / D[:, None]
+
+    if neutral is None:
+        return apply
+    g = np.asarray(neutral, dtype=float)
+    return deflated_action(apply, g / D, g * D / float(g @ g))
+
+
 def orbit_leading(shooting: MatrixFreeShooting, ev: MFEvaluation, scale: np.ndarray, bound: float = DEFAULT_BOUND,
-                  tol: float = DEFAULT_TOL, start: np.ndarray | None = None) -> Leading:
+                  tol: float = DEFAULT_TOL, start: np.ndarray | None = None,
+                  neutral: np.ndarray | None = None) -> Leading:
     """The leading Floquet multipliers of the orbit ``ev`` (kept in ``ev.leading``, sorted into
-    ``ev.multipliers``), in the coordinates ``x / scale``; ``start`` a basis to start from."""
+    ``ev.multipliers``), in the coordinates ``x / scale``; ``start`` a basis to start from.
+    With ``neutral`` (an eigenvector of multiplier +1 forced by a symmetry) those of the
+    deflated monodromy (:func:`scaled_monodromy`): the neutral multiplier is left out."""
     if ev.leading is None:
-        D = np.asarray(scale, dtype=float)
-
-        def apply(X):
-            return shooting.monodromy_apply(ev, X * D[:, None]) / D[:, None]
-
+        apply = scaled_monodromy(shooting, ev, scale, neutral)
         ev.leading = leading_multipliers(apply, shooting.n, bound=bound, tol=tol, start=start)
         ev.multipliers = sort_multipliers(ev.leading.multipliers)
     return ev.leading
@@ -452,16 +469,21 @@ class Bordered:
         planar orbits of a symmetric system are corrected in the plane: at a pitchfork ``J_u``
         is singular across it, so that without the projection the Krylov iteration would amplify
         round-off into an out-of-plane correction).
+    phase : ndarray, optional
+        Unit vector ``q`` (unscaled) whose equation of the periodicity condition is replaced by
+        a phase condition (:func:`~cablesim.orbits.rotation.phased_action`; the evaluation's
+        residual and ``J_lam`` carry it already, :func:`~cablesim.orbits.rotation.with_phase`).
     """
 
     def __init__(self, shooting, ev, us, ls, rs, precondition=None, tol: float = 1e-6, tangent_tol: float = 1e-8,
-                 max_iter: int = 200, refresh=None, project=None):
+                 max_iter: int = 200, refresh=None, project=None, phase=None):
         self.sh, self.ev = shooting, ev
         self.us, self.ls, self.rs = us, ls, rs
         self.pre = precondition
         self.tol, self.tangent_tol, self.max_iter = tol, tangent_tol, max_iter
         self.refresh = refresh
         self.project = project
+        self.phase = phase
 
     def _projected(self, v: np.ndarray) -> np.ndarray:
         if self.project is None:
@@ -473,7 +495,11 @@ class Bordered:
 
         def apply(v):
             v = self._projected(v)
-            Ju = sh.jacobian_apply(ev, (v[:-1] * us)[:, None])[:, 0]
+            w = (v[:-1] * us)[:, None]
+            Ju = sh.jacobian_apply(ev, w)
+            if self.phase is not None:
+                Ju = phased_action(Ju, w, self.phase)
+            Ju = Ju[:, 0]
             top = (Ju + ev.J_lam * (v[-1] * ls)) / rs
             return np.concatenate([top, [normal @ v]])
         return apply

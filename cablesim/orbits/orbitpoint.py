@@ -41,7 +41,7 @@ def orbit_point(system: OdeSystem, shooting: Shooting, cp, branch: int, index: i
         value = float(measure(steps)) if measure is not None else None
     if mirror is not None:  # the blocks of the dense monodromy, or the leading multipliers of each
         mu, planes = labelled_multipliers(mirror, ev) if ev.monodromy is not None \
-            else labelled_leading(mirror, ev.split)
+            else labelled_leading(mirror, ev.split, ev.neutral)
     elif getattr(system, "frame", None) is not None and hasattr(shooting, "trajectory"):
         # a nonplanar orbit of a spatial cable (of a symmetric one, or one forced out of its plane)
         whirl = orbit_whirling(system.frame, shooting, cp.u, cp.lam, WHIRL_SAMPLES, steps=steps)
@@ -53,7 +53,7 @@ def orbit_point(system: OdeSystem, shooting: Shooting, cp, branch: int, index: i
     # a multiplier forced to +1 by a rotation symmetry is reported but judged neutral: the
     # orbit's stability is that of the others (as an autonomous orbit's, orbital stability)
     nt = ev.neutral or None
-    seen = mu if nt is None else np.concatenate([nt.multipliers, ev.blocks_mu[0]] if mirror is not None else
+    seen = mu if nt is None else np.concatenate([nt.multipliers, _in_plane(ev)] if mirror is not None else
                                                 [nt.multipliers])
     return OrbitPoint(
         branch=branch, index=index, parameter=float(cp.lam), omega=ev.omega, period=shooting.period,
@@ -62,6 +62,12 @@ def orbit_point(system: OdeSystem, shooting: Shooting, cp, branch: int, index: i
         residual=float(cp.residual), liouville=float(ev.liouville), special=cp.special, located=cp.located,
         planes=planes, whirl=whirl, measure=value, neutral=nt,
     )
+
+
+def _in_plane(ev: Evaluation) -> np.ndarray:
+    """The in-plane multipliers of a planar orbit: of the dense monodromy's block, or the leading
+    ones of the matrix-free block."""
+    return ev.blocks_mu[0] if ev.monodromy is not None else ev.split.in_plane.multipliers
 
 
 def bifurcation_at(p: OrbitPoint, branch: int) -> Bifurcation:

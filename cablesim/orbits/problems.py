@@ -11,27 +11,15 @@ import numpy as np
 
 from . import kernels as ok
 from . import stability
-from .rotation import Neutral, Rotation, neutral
+from .rotation import Neutral, Rotation, RotationPhase, neutral
 from .shooting import Evaluation, FlowStatus, Shooting
 from .symmetry import Mirror
 
 
-#: The phase of a problem with a rotation symmetry before its first evaluation.
-UNSET = object()
-
-
-def _with_phase(ev: Evaluation, u_ref: np.ndarray, q: np.ndarray) -> None:
-    """The periodicity condition of ``ev`` with its equation along ``q`` replaced by the phase
-    condition ``q . (u - u_ref) = 0`` (:meth:`OrbitProblem.anchor`), in place."""
-    ev.r = ev.r - q * float(q @ ev.r) + q * float(q @ (ev.u - u_ref))
-    if ev.J_u is not None:
-        ev.J_u = ev.J_u - np.outer(q, q @ ev.J_u) + np.outer(q, q)
-    if ev.J_lam is not None:
-        ev.J_lam = ev.J_lam - q * float(q @ ev.J_lam)
-
-
-class OrbitProblem:
-    """The periodicity condition of a :class:`Shooting` as a continuation problem."""
+class OrbitProblem(RotationPhase):
+    """The periodicity condition of a :class:`Shooting` as a continuation problem (with the phase
+    condition of :class:`~cablesim.orbits.rotation.RotationPhase` on a system with a rotation
+    symmetry)."""
 
     test_names = stability.TEST_NAMES
     fold_tests = stability.FOLD_TESTS
@@ -48,46 +36,14 @@ class OrbitProblem:
         #: Keep every evaluation's orbit at its steps (:attr:`Evaluation.steps`), for the measures
         #: of the converged orbits (strain, whirling) without integrating them once more.
         self.record = False
-        #: The system's rotation symmetry, if any (its neutral multiplier is excluded).
-        self.rotation: Rotation | None = getattr(shooting.system, "rotation", None)
-        #: ``(u_ref, q)`` of the phase condition that picks one orbit of a family of rotated
-        #: orbits (:meth:`anchor`); None: none; UNSET: anchored at the first evaluation.
-        self.phase = UNSET if self.rotation is not None else None
-
-    def anchor(self, u: np.ndarray) -> None:
-        """Fix the rotation's phase at the orbit through ``u`` (called at every accepted point).
-
-        The rotations of an orbit they move are orbits too, so ``J_u`` of the periodicity
-        condition ``r(u) = 0`` has the generator ``g`` (tiled over the segments) in its null
-        space besides the branch's tangent, and Newton's bordered systems are singular. The
-        equation along ``q = g / |g|`` is replaced by the phase condition
-        ``q . (u - u_ref) = 0``: ``r' = (I - q q^T) r + q q^T (u - u_ref)``. Near the branch
-        ``(I - q q^T) r = 0`` with the phase condition is ``r = 0`` with it (both define one
-        curve through the solutions, ``[(I - q q^T) J_u, (I - q q^T) J_lam; q^T, 0]`` being of
-        full rank where ``q`` is not orthogonal to the left null vector of ``J_u``), so the
-        orbits found are the periodic ones; the phase is moved to every accepted point so that
-        ``q`` follows the branch's shape."""
-        if self.rotation is None:
-            return
-        n, m = self.shooting.n, self.shooting.segments
-        u = np.asarray(u, dtype=float)
-        g = [self.rotation.moved(u[k * n : (k + 1) * n], self.u_scale[k * n : (k + 1) * n]) for k in range(m)]
-        if any(x is None for x in g):
-            self.phase = None
-            return
-        q = np.concatenate(g)
-        self.phase = (u[: m * n].copy(), q / np.linalg.norm(q))
+        self.init_phase()
 
     def evaluate(self, u, lam):
         ev = self.shooting.evaluate(u, lam, blocks=self.blocks, record=self.record)
         if ev.status != ok.OK:
             self.last_failure = ev.status
             return None
-        if self.phase is UNSET:
-            self.anchor(u)
-        if self.phase is not None:
-            _with_phase(ev, *self.phase)
-        return ev
+        return self.phased(ev, u)
 
     def neutral(self, ev: Evaluation) -> Neutral | None:
         """The multiplier the rotation symmetry forces to +1 on this orbit, with the deflated

@@ -22,6 +22,13 @@ multiplier, with the excluded one and the residual ``|M g - g| / |g|`` recorded
 (:class:`Neutral`). On an orbit along the chord (``g = 0``, the axial response) nothing is
 excluded.
 
+The rotations of an orbit they move are orbits too, so the periodicity condition of a shooting
+is singular along the generator; :class:`RotationPhase` replaces its equation along ``g`` by a
+phase condition (on the dense path in the formed Jacobian, :func:`with_phase`; on the
+matrix-free one in the Jacobian's action, :func:`phased_action`). The matrix-free path deflates
+the monodromy's action (:func:`deflated_action`) before its leading multipliers are computed and
+records the neutral one from the action (:func:`action_neutral`).
+
 :func:`cable_rotation` decides from the model whether a cable has the symmetry.
 """
 
@@ -88,15 +95,18 @@ class Neutral:
     multipliers : ndarray complex
         The multipliers the tests see: those of the deflated matrix, the excluded one moved to
         :data:`NEUTRAL_SHIFT` (of the out-of-plane block on a planar orbit, of the monodromy
-        otherwise).
-    matrix : ndarray
-        The deflated matrix (:func:`deflate`).
+        otherwise); on the matrix-free path the leading ones of the deflated action, the
+        excluded one moved to :data:`LEADING_SHIFT` and so left out unless the block is
+        computed whole.
+    matrix : ndarray or None
+        The deflated matrix (:func:`deflate`); None on the matrix-free path, which forms none
+        (:func:`action_neutral`).
     """
 
     multiplier: complex
     residual: float
     multipliers: np.ndarray
-    matrix: np.ndarray
+    matrix: np.ndarray | None
 
 
 #: Where :func:`deflate` moves the neutral multiplier: inside the unit circle, away from +1 and
@@ -116,13 +126,133 @@ def deflate(P: np.ndarray, g: np.ndarray, shift: float = NEUTRAL_SHIFT) -> np.nd
     return P - (1.0 - shift) * np.outer(P @ g, g) / float(g @ g)
 
 
+def _quotient(Pg: np.ndarray, g: np.ndarray) -> tuple[complex, float]:
+    """The Rayleigh quotient ``g^T P g / g^T g`` and the residual ``|P g - g| / |g|``."""
+    gg = float(g @ g)
+    return complex(float(g @ Pg) / gg), float(np.linalg.norm(Pg - g) / np.sqrt(gg))
+
+
 def neutral(P: np.ndarray, g: np.ndarray) -> Neutral:
     """The :class:`Neutral` multiplier of ``P`` along ``g`` and the deflated multipliers."""
-    Pg = P @ g
-    gg = float(g @ g)
+    multiplier, residual = _quotient(P @ g, g)
     D = deflate(P, g)
-    return Neutral(multiplier=complex(float(g @ Pg) / gg), residual=float(np.linalg.norm(Pg - g) / np.sqrt(gg)),
-                   multipliers=sort_multipliers(np.linalg.eigvals(D)), matrix=D)
+    return Neutral(multiplier=multiplier, residual=residual, multipliers=sort_multipliers(np.linalg.eigvals(D)),
+                   matrix=D)
+
+
+#: Where the matrix-free path moves the neutral multiplier (:func:`deflated_action`): to zero,
+#: below every bound of the leading multipliers (:mod:`cablesim.orbits.floquet`), so that it is
+#: never among those kept and the kept ones are the others (at :data:`NEUTRAL_SHIFT`, the default
+#: bound's value, the iteration could not tell it from the largest discarded modulus). The
+#: truncated tests and step rule see only the kept multipliers, so no determinant needs it.
+LEADING_SHIFT = 0.0
+
+
+def deflated_action(apply, g: np.ndarray, w: np.ndarray, shift: float = LEADING_SHIFT):
+    """The action ``X -> P (X - (1 - c) g w^T X)`` of Wielandt's deflation of ``P`` from its
+    action ``apply(X) = P X`` on blocks (``c`` = ``shift``, ``P g = g``, ``w . g = 1``): the
+    multipliers of ``P`` except the +1 of ``g``, which becomes ``c`` (every left eigenvector ``y``
+    of another multiplier has ``y . g = 0``). :func:`deflate` is the case ``w = g / g^T g``;
+    in the coordinates ``x / d`` of the matrix-free shooting ``g / d`` and ``w = d g / g^T g``
+    give a matrix similar to it. No product more than the action's: the deflation acts on the
+    input."""
+    g = np.asarray(g, dtype=float)
+    w = np.asarray(w, dtype=float)
+
+    def deflated(X: np.ndarray) -> np.ndarray:
+        X = np.asarray(X, dtype=float)
+        return apply(X - (1.0 - shift) * np.outer(g, w @ X))
+    return deflated
+
+
+def action_neutral(apply, g: np.ndarray, multipliers: np.ndarray) -> Neutral:
+    """The :class:`Neutral` multiplier along ``g`` of an operator known by its action
+    ``apply(X) = P X`` (one product), with ``multipliers`` those the tests see (of the deflated
+    action, :func:`deflated_action`); no matrix."""
+    g = np.asarray(g, dtype=float)
+    multiplier, residual = _quotient(apply(g[:, None])[:, 0], g)
+    return Neutral(multiplier=multiplier, residual=residual, multipliers=sort_multipliers(multipliers), matrix=None)
+
+
+#: The phase of a problem with a rotation symmetry before its first evaluation.
+UNSET = object()
+
+
+def with_phase(ev, u_ref: np.ndarray, q: np.ndarray) -> None:
+    """The periodicity condition of the evaluation ``ev`` with its equation along ``q`` replaced
+    by the phase condition ``q . (u - u_ref) = 0`` (:meth:`RotationPhase.anchor`), in place: its
+    residual, its parameter derivative and its Jacobian if formed."""
+    ev.r = ev.r - q * float(q @ ev.r) + q * float(q @ (ev.u - u_ref))
+    if ev.J_u is not None:
+        ev.J_u = ev.J_u - np.outer(q, q @ ev.J_u) + np.outer(q, q)
+    if ev.J_lam is not None:
+        ev.J_lam = ev.J_lam - q * float(q @ ev.J_lam)
+
+
+def phased_action(JX: np.ndarray, X: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """``J' X = (I - q q^T) J X + q q^T X`` from ``J X``: the action of the Jacobian of the
+    periodicity condition with its equation along ``q`` replaced by the phase condition
+    (:func:`with_phase`'s ``J_u``)."""
+    return JX - np.outer(q, q @ JX) + np.outer(q, q @ X)
+
+
+class RotationPhase:
+    """The phase condition of a shooting problem whose system may be invariant under rotations
+    (a mixin of the dense and the matrix-free orbit problems, which set :attr:`rotation` and
+    :attr:`phase` with :meth:`init_phase` and have ``shooting`` and ``u_scale``)."""
+
+    rotation: Rotation | None = None
+    phase: object = None
+
+    def init_phase(self) -> None:
+        """The system's rotation symmetry, if any, and the phase anchored at the first
+        evaluation."""
+        #: The system's rotation symmetry, if any (its neutral multiplier is excluded).
+        self.rotation = getattr(self.shooting.system, "rotation", None)
+        #: ``(u_ref, q)`` of the phase condition that picks one orbit of a family of rotated
+        #: orbits (:meth:`anchor`); None: none; UNSET: anchored at the first evaluation.
+        self.phase = UNSET if self.rotation is not None else None
+
+    def anchor(self, u: np.ndarray) -> None:
+        """Fix the rotation's phase at the orbit through ``u`` (called at every accepted point).
+
+        The rotations of an orbit they move are orbits too, so ``J_u`` of the periodicity
+        condition ``r(u) = 0`` has the generator ``g`` (tiled over the segments) in its null
+        space besides the branch's tangent, and Newton's bordered systems are singular. The
+        equation along ``q = g / |g|`` is replaced by the phase condition
+        ``q . (u - u_ref) = 0``: ``r' = (I - q q^T) r + q q^T (u - u_ref)``. Near the branch
+        ``(I - q q^T) r = 0`` with the phase condition is ``r = 0`` with it (both define one
+        curve through the solutions, ``[(I - q q^T) J_u, (I - q q^T) J_lam; q^T, 0]`` being of
+        full rank where ``q`` is not orthogonal to the left null vector of ``J_u``), so the
+        orbits found are the periodic ones; the phase is moved to every accepted point so that
+        ``q`` follows the branch's shape."""
+        if self.rotation is None:
+            return
+        n, m = self.shooting.n, self.shooting.segments
+        u = np.asarray(u, dtype=float)
+        g = [self.rotation.moved(u[k * n : (k + 1) * n], self.u_scale[k * n : (k + 1) * n]) for k in range(m)]
+        if any(x is None for x in g):
+            self.phase = None
+            return
+        q = np.concatenate(g)
+        self.phase = (u[: m * n].copy(), q / np.linalg.norm(q))
+
+    def phased(self, ev, u: np.ndarray):
+        """``ev`` (the evaluation at ``u``) with the phase condition, anchored at ``u`` if not
+        yet (in place)."""
+        if self.phase is UNSET:
+            self.anchor(u)
+        if self.phase is not None:
+            with_phase(ev, *self.phase)
+        return ev
+
+    def generator(self, ev) -> np.ndarray | None:
+        """The rotation's generator at the orbit of ``ev`` (its first segment's start) if the
+        rotation moves it, else None."""
+        if self.rotation is None:
+            return None
+        n = self.shooting.n
+        return self.rotation.moved(ev.u[:n], self.u_scale[:n])
 
 
 def _parallel(vectors: np.ndarray, axis: np.ndarray) -> bool:

@@ -27,6 +27,11 @@ the dense path's (to round-off), and its Krylov iteration is preconditioned by t
 block alone. Across the plane the Jacobian is singular at a pitchfork, and a Krylov iteration
 over the whole state, preconditioned by a subspace whose out-of-plane multiplier is 1 there,
 turned round-off into out-of-plane corrections (the correction failed at the located point).
+
+A planar orbit of a cable symmetric about its chord that the rotation moves has its generator
+``g`` across the plane (odd): the out-of-plane block is computed on the deflated action
+(:func:`~cablesim.orbits.matrixfree.scaled_monodromy`), without the multiplier +1 the symmetry
+forces, as the dense path deflates its out-of-plane block (:mod:`cablesim.orbits.rotation`).
 """
 
 from __future__ import annotations
@@ -38,8 +43,8 @@ import numpy as np
 from . import stability
 from ..modal import IN_PLANE
 from .floquet import DEFAULT_BOUND, DEFAULT_TOL, Deflation, Leading, leading_from, leading_multipliers, truncated_tests
-from .matrixfree import Bordered, MatrixFreeShooting, MFEvaluation
-from .mfproblem import MatrixFreeOrbitProblem
+from .matrixfree import Bordered, MatrixFreeShooting, MFEvaluation, scaled_monodromy
+from .mfproblem import MatrixFreeOrbitProblem, reported_multipliers
 from .stability import sort_multipliers
 from .symmetry import Mirror
 
@@ -113,7 +118,7 @@ def joined(split: SplitLeading) -> Leading:
 
 def split_leading(shooting: MatrixFreeShooting, ev: MFEvaluation, mirror: Mirror, scale: np.ndarray,
                   bound: float = DEFAULT_BOUND, tol: float = DEFAULT_TOL, start: SplitLeading | None = None,
-                  bases: tuple | None = None) -> SplitLeading:
+                  bases: tuple | None = None, neutral: np.ndarray | None = None) -> SplitLeading:
     """The leading multipliers of both blocks of the planar orbit ``ev`` (kept in ``ev.split``;
     ``ev.leading`` their :func:`joined` form, ``ev.multipliers`` all of them sorted), in the
     coordinates ``x / scale``.
@@ -133,14 +138,17 @@ def split_leading(shooting: MatrixFreeShooting, ev: MFEvaluation, mirror: Mirror
         A nearby orbit's, whose block bases start the iterations.
     bases : tuple, optional
         :func:`block_bases` of ``mirror`` and ``scale``, if already formed.
+    neutral : ndarray, optional
+        The odd eigenvector ``g`` (unscaled) of a multiplier +1 forced by a symmetry: the
+        out-of-plane block's multipliers are then those of the deflated action, without it.
     """
     if ev.split is None:
-        d = np.asarray(scale, dtype=float)[:, None]
         bases = block_bases(mirror, scale) if bases is None else bases
+        actions = (scaled_monodromy(shooting, ev, scale), scaled_monodromy(shooting, ev, scale, neutral))
         blocks = []
         for j, U in enumerate(bases):
-            def apply(Y, U=U):
-                return U.T @ (shooting.monodromy_apply(ev, (U @ Y) * d) / d)
+            def apply(Y, U=U, act=actions[j]):
+                return U.T @ act(U @ Y)
 
             begin = None if start is None else (start.in_plane, start.out_of_plane)[j].basis
             blocks.append(leading_multipliers(apply, U.shape[1], bound=bound, tol=tol, start=begin))
@@ -150,11 +158,14 @@ def split_leading(shooting: MatrixFreeShooting, ev: MFEvaluation, mirror: Mirror
     return ev.split
 
 
-def labelled_leading(mirror: Mirror, split: SplitLeading) -> tuple[np.ndarray, tuple]:
+def labelled_leading(mirror: Mirror, split: SplitLeading, neutral=None) -> tuple[np.ndarray, tuple]:
     """The kept multipliers of both blocks sorted together
     (:func:`~cablesim.orbits.stability.sort_multipliers`), and the block of each (the form of
-    :func:`~cablesim.orbits.problems.labelled_multipliers`)."""
-    return mirror.labelled(leading_from(split.in_plane), leading_from(split.out_of_plane))
+    :func:`~cablesim.orbits.problems.labelled_multipliers`); with the out-of-plane ones the
+    ``neutral`` multiplier excluded from them, if any (:class:`~cablesim.orbits.rotation.Neutral`,
+    :func:`~cablesim.orbits.mfproblem.reported_multipliers`)."""
+    out = reported_multipliers(split.out_of_plane, neutral) if neutral else leading_from(split.out_of_plane)
+    return mirror.labelled(leading_from(split.in_plane), out)
 
 
 class PlanarMatrixFreeProblem(MatrixFreeOrbitProblem):
@@ -178,9 +189,11 @@ class PlanarMatrixFreeProblem(MatrixFreeOrbitProblem):
     def split(self, ev: MFEvaluation) -> SplitLeading:
         """The split leading multipliers of ``ev`` (computed once, from the latest blocks)."""
         if ev.split is None:
+            g = self.generator(ev)
             self.latest_split = split_leading(self.shooting, ev, self.mirror, self.state_scale, bound=self.bound,
-                                              start=self.latest_split, bases=self.bases)
+                                              start=self.latest_split, bases=self.bases, neutral=g)
             self.latest = ev.leading
+            self.record_neutral(ev, g, ev.split.out_of_plane, others=ev.split.in_plane.multipliers)
         return ev.split
 
     def leading(self, ev: MFEvaluation) -> Leading:
@@ -201,7 +214,8 @@ class PlanarMatrixFreeProblem(MatrixFreeOrbitProblem):
         pre = None
         if split is not None and self.shooting.segments == 1:
             pre = Deflation(self.bases[0] @ split.in_plane.basis, split.in_plane.schur)
-        return Bordered(self.shooting, ev, us, ls, rs, precondition=pre, project=self.in_plane)
+        return Bordered(self.shooting, ev, us, ls, rs, precondition=pre, project=self.in_plane,
+                        phase=self.phase_vector)
 
     def test_functions(self, ev: MFEvaluation) -> np.ndarray:
         s = self.split(ev)

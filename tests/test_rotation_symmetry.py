@@ -128,3 +128,33 @@ def test_the_excluded_multiplier_is_recorded_in_the_results_file(stay_branches, 
             stored = groups[b.name]["neutral_residual"][()]
             assert np.isnan(stored[0]) and np.all(stored[1:] < 1e-9)
             assert "excluded" in groups[b.name]["neutral_residual"].attrs["description"]
+
+
+@pytest.mark.parametrize("matrix_free", [False, True])
+def test_newton_from_a_start_off_the_family_of_rotated_orbits_converges(stay_branches, matrix_free):
+    """The first orbit of a branch solved from a start near, not on, a nonplanar orbit (turned by
+    0.3 rad about the chord and enlarged by 2 %): the family of rotated orbits makes the
+    periodicity condition's Jacobian singular along the generator, and Newton's method without
+    the phase condition ended at its iteration limit, dense and matrix-free (it could not meet
+    its correction test along the family). With it both converge in a few steps, to an orbit the
+    independent reference flow closes after two forcing periods."""
+    from cablesim.orbits.matrixfree import MatrixFreeShooting, solve_orbit_mf
+    from cablesim.orbits.shooting import Shooting, SolveStatus, solve_orbit
+    from cablesim.orbits.systems import cable_system
+
+    case, omega, res = stay_branches
+    (branch,) = [b for b in res.branches if b.period == 2 and not b.planar]
+    k = branch.parameter.size // 2
+    gamma, x = float(branch.parameter[k]), branch.state[k]
+    system = cable_system(build_equations(case, run_static(case), omega=omega, load_scale=gamma), gamma=1.0)
+    e = system.rotation.axis
+    start = rotated(x, e, 0.3) * 1.02
+    scale = np.full(x.size, np.abs(x).max())
+    if matrix_free:
+        sol = solve_orbit_mf(MatrixFreeShooting(system, period=2, scheme="rk8"), start, scale=scale)
+    else:
+        sol = solve_orbit(Shooting(system, period=2), start, scale=scale)
+    assert sol.status == SolveStatus.CONVERGED and sol.iterations <= 10
+    motion = Motion(cable_from_case(case), omega, gamma)
+    x0 = np.concatenate([motion.y0 + sol.u[:3], sol.u[3:]])
+    assert np.abs(flow(motion, x0, periods=2.0)[0] - x0).max() < 1e-7 * np.abs(x0[3:]).max()

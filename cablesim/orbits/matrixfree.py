@@ -40,7 +40,7 @@ from . import kernels as ok
 from . import radau as rd
 from .floquet import DEFAULT_BOUND, DEFAULT_TOL, Deflation, Leading, leading_multipliers
 from .krylov import gmres
-from .rotation import deflated_action, phased_action
+from .rotation import deflated_action, phase_direction, phased_action
 from .shooting import DEFAULT_STEPS, Evaluation, FlowStatus, OrbitSolution, Shooting, SolveStatus, line_search
 from .stability import sort_multipliers
 from .systems import OdeSystem
@@ -423,11 +423,18 @@ def solve_orbit_mf(shooting: MatrixFreeShooting, u0: np.ndarray, lam: float | No
     res = float(np.abs(ev.r / sc).max())
     hist = [res]
     spent = 0
+    rotation = getattr(shooting.system, "rotation", None)
     for it in range(1, max_iter + 1):
-        def apply(v, ev=ev):
-            return shooting.jacobian_apply(ev, (v * sc)[:, None])[:, 0] / sc
+        # on an orbit a rotation symmetry moves, the phase condition along its scaled generator
+        q = phase_direction(rotation, u, sc, n, m)
+        qs = None if q is None else (q / sc) / np.linalg.norm(q / sc)
+        rhs = -ev.r / sc if qs is None else -(ev.r / sc - qs * float(qs @ (ev.r / sc)))
 
-        sol = gmres(apply, -ev.r / sc, tol=krylov_tol, max_iter=max_krylov, precondition=pre)
+        def apply(v, ev=ev, qs=qs):
+            Jv = shooting.jacobian_apply(ev, (v * sc)[:, None])[:, 0] / sc
+            return Jv if qs is None else phased_action(Jv[:, None], v[:, None], qs)[:, 0]
+
+        sol = gmres(apply, rhs, tol=krylov_tol, max_iter=max_krylov, precondition=pre)
         shooting.newton_steps += 1
         shooting.krylov_iterations += sol.iterations
         spent += sol.iterations

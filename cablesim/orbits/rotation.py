@@ -178,6 +178,30 @@ def action_neutral(apply, g: np.ndarray, multipliers: np.ndarray) -> Neutral:
 UNSET = object()
 
 
+def phase_direction(rotation: Rotation | None, u: np.ndarray, scale: np.ndarray, n: int, m: int) -> np.ndarray | None:
+    """``q = g / |g|``: the generator of the orbit through the stacked segment states ``u``
+    (``m`` of ``n`` values, typical sizes ``scale``) over its segments, normalised; None without
+    a rotation symmetry or for an orbit the rotation leaves in place."""
+    if rotation is None:
+        return None
+    g = [rotation.moved(u[k * n : (k + 1) * n], scale[k * n : (k + 1) * n]) for k in range(m)]
+    if any(x is None for x in g):
+        return None
+    q = np.concatenate(g)
+    return q / np.linalg.norm(q)
+
+
+def phased_step(J: np.ndarray, r: np.ndarray, q: np.ndarray | None) -> np.ndarray:
+    """Newton's correction ``du`` of the periodicity condition ``r = 0`` with Jacobian ``J``:
+    ``J du = -r``, or, on an orbit a rotation moves (``q`` from :func:`phase_direction`), that
+    system with its equation along ``q`` replaced by ``q . du = 0`` (``J`` holds the generator in
+    its null space, so the plain system is singular and its solution runs along the family of
+    rotated orbits)."""
+    if q is None:
+        return np.linalg.solve(J, -r)
+    return np.linalg.solve(J - np.outer(q, q @ J) + np.outer(q, q), -(r - q * float(q @ r)))
+
+
 def with_phase(ev, u_ref: np.ndarray, q: np.ndarray) -> None:
     """The periodicity condition of the evaluation ``ev`` with its equation along ``q`` replaced
     by the phase condition ``q . (u - u_ref) = 0`` (:meth:`RotationPhase.anchor`), in place: its
@@ -230,12 +254,8 @@ class RotationPhase:
             return
         n, m = self.shooting.n, self.shooting.segments
         u = np.asarray(u, dtype=float)
-        g = [self.rotation.moved(u[k * n : (k + 1) * n], self.u_scale[k * n : (k + 1) * n]) for k in range(m)]
-        if any(x is None for x in g):
-            self.phase = None
-            return
-        q = np.concatenate(g)
-        self.phase = (u[: m * n].copy(), q / np.linalg.norm(q))
+        q = phase_direction(self.rotation, u, self.u_scale, n, m)
+        self.phase = None if q is None else (u[: m * n].copy(), q)
 
     def phased(self, ev, u: np.ndarray):
         """``ev`` (the evaluation at ``u``) with the phase condition, anchored at ``u`` if not

@@ -37,6 +37,7 @@ import numpy as np
 
 from . import kernels as ok
 from . import slackflow as sf
+from .rotation import phase_direction, phased_step
 from .stability import sort_multipliers
 from .systems import OdeSystem
 from .tableaux import TABLEAUX
@@ -526,9 +527,10 @@ def solve_orbit(
         return OrbitSolution(u, None, SolveStatus.INTEGRATION_FAILED, 0, np.inf, flow_status=ev.status)
     res = float(np.abs(ev.r / sc).max())
     hist = [res]
+    rotation = getattr(shooting.system, "rotation", None)
     for it in range(1, max_iter + 1):
-        try:
-            du = np.linalg.solve(ev.J_u, -ev.r)
+        try:  # the phase condition on an orbit a rotation symmetry moves (a family of orbits)
+            du = phased_step(ev.J_u, ev.r, phase_direction(rotation, u, sc, n, m))
         except np.linalg.LinAlgError:
             return OrbitSolution(u, ev, SolveStatus.SINGULAR, it, res, hist)
         if np.all(np.abs(du) <= bound) and np.all(np.abs(ev.r) <= bound):

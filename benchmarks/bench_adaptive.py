@@ -69,7 +69,7 @@ SCENES = {  # name: (case text, omega, load scale, duration)
     "heavy-200": (HEAVY_CASE.format(n=200, k=66), 2.0, 1.0, 1.0),
 }
 #: The examples of part 2: the paper's at 2.4 rad/s, and the shipped ones at their history section.
-EXAMPLES = ("paper", "heavy-span", "spatial-span", "stay-anchorage")
+EXAMPLES = ("paper", "heavy-span", "spatial-span", "stay-anchorage", "stay-parametric")
 #: The scenes run by default (``make bench``); ``--scene`` picks others.
 DEFAULT_SCENES = ("paper", "slack-10", "heavy-200")
 

@@ -439,7 +439,7 @@ class _Shooter:
             return newton(self.eom, sh, x)
         ev = newton_mf(self.eom, sh, x, start=self.basis)
         if (ev is None and not self.through_slack and self.system.slack is not None
-                and getattr(sh, "last_status", OK) == SLACK):
+                and sh.last_status == SLACK):
             self.through_slack = True
             return self.newton(p, x)
         if ev is not None:

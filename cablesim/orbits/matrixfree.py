@@ -40,7 +40,7 @@ from . import kernels as ok
 from . import radau as rd
 from .floquet import DEFAULT_BOUND, DEFAULT_TOL, Deflation, Leading, leading_multipliers
 from .krylov import gmres
-from .rotation import deflated_action, phase_direction, phased_action
+from .rotation import deflated_action, phase_direction, phased_action, without
 from .shooting import DEFAULT_STEPS, Evaluation, FlowStatus, OrbitSolution, Shooting, SolveStatus, line_search
 from .stability import sort_multipliers
 from .systems import OdeSystem
@@ -95,7 +95,34 @@ class MFEvaluation(Evaluation):
         return np.nan
 
 
-class MatrixFreeShooting:
+class SegmentActions:
+    """The monodromy's and the periodicity condition's actions of a matrix-free shooting from its
+    segments' (``segment_apply(ev, k, X)``: ``G_k X``), over its ``segments`` of ``n`` states."""
+
+    n: int
+    segments: int
+
+    def segment_apply(self, ev: MFEvaluation, k: int, X: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def monodromy_apply(self, ev: MFEvaluation, X: np.ndarray) -> np.ndarray:
+        """``M X = G_(m-1) ... G_0 X``."""
+        Y = np.asarray(X, dtype=float)
+        for k in range(self.segments):
+            Y = self.segment_apply(ev, k, Y)
+        return Y
+
+    def jacobian_apply(self, ev: MFEvaluation, X: np.ndarray) -> np.ndarray:
+        """``J_u X``: block ``k`` is ``G_k X_k - X_(k+1)`` (``J_u = M - I`` for one segment)."""
+        n, m = self.n, self.segments
+        X = np.asarray(X, dtype=float).reshape(m, n, -1)
+        out = np.empty_like(X)
+        for k in range(m):
+            out[k] = self.segment_apply(ev, k, X[k]) - X[(k + 1) % m]
+        return out.reshape(m * n, -1)
+
+
+class MatrixFreeShooting(SegmentActions):
     """Flow maps of the ``m`` segments of a ``p``-periodic orbit and their action on vectors
     (module docstring); the interface of :class:`~cablesim.orbits.shooting.Shooting`.
 
@@ -333,21 +360,6 @@ class MatrixFreeShooting:
             raise FloatingPointError(f"the variational equations could not be integrated (status {code})")
         return V.T.copy()
 
-    def monodromy_apply(self, ev: MFEvaluation, X: np.ndarray) -> np.ndarray:
-        """``M X = G_(m-1) ... G_0 X``."""
-        Y = np.asarray(X, dtype=float)
-        for k in range(self.segments):
-            Y = self.segment_apply(ev, k, Y)
-        return Y
-
-    def jacobian_apply(self, ev: MFEvaluation, X: np.ndarray) -> np.ndarray:
-        """``J_u X``: block ``k`` is ``G_k X_k - X_(k+1)`` (``J_u = M - I`` for one segment)."""
-        n, m = self.n, self.segments
-        X = np.asarray(X, dtype=float).reshape(m, n, -1)
-        out = np.empty_like(X)
-        for k in range(m):
-            out[k] = self.segment_apply(ev, k, X[k]) - X[(k + 1) % m]
-        return out.reshape(m * n, -1)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -428,7 +440,7 @@ def solve_orbit_mf(shooting: MatrixFreeShooting, u0: np.ndarray, lam: float | No
         # on an orbit a rotation symmetry moves, the phase condition along its scaled generator
         q = phase_direction(rotation, u, sc, n, m)
         qs = None if q is None else (q / sc) / np.linalg.norm(q / sc)
-        rhs = -ev.r / sc if qs is None else -(ev.r / sc - qs * float(qs @ (ev.r / sc)))
+        rhs = -ev.r / sc if qs is None else -without(ev.r / sc, qs)
 
         def apply(v, ev=ev, qs=qs):
             Jv = shooting.jacobian_apply(ev, (v * sc)[:, None])[:, 0] / sc

@@ -191,6 +191,17 @@ def phase_direction(rotation: Rotation | None, u: np.ndarray, scale: np.ndarray,
     return q / np.linalg.norm(q)
 
 
+def without(v: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """``(I - q q^T) v``: ``v`` without its component along the unit vector ``q``."""
+    return v - q * float(q @ v)
+
+
+def phased_jacobian(J: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """``(I - q q^T) J + q q^T``: the Jacobian ``J`` of the periodicity condition with its
+    equation along ``q`` replaced by the phase condition (:func:`phased_action` as a matrix)."""
+    return J - np.outer(q, q @ J) + np.outer(q, q)
+
+
 def phased_step(J: np.ndarray, r: np.ndarray, q: np.ndarray | None) -> np.ndarray:
     """Newton's correction ``du`` of the periodicity condition ``r = 0`` with Jacobian ``J``:
     ``J du = -r``, or, on an orbit a rotation moves (``q`` from :func:`phase_direction`), that
@@ -199,18 +210,18 @@ def phased_step(J: np.ndarray, r: np.ndarray, q: np.ndarray | None) -> np.ndarra
     rotated orbits)."""
     if q is None:
         return np.linalg.solve(J, -r)
-    return np.linalg.solve(J - np.outer(q, q @ J) + np.outer(q, q), -(r - q * float(q @ r)))
+    return np.linalg.solve(phased_jacobian(J, q), -without(r, q))
 
 
 def with_phase(ev, u_ref: np.ndarray, q: np.ndarray) -> None:
     """The periodicity condition of the evaluation ``ev`` with its equation along ``q`` replaced
     by the phase condition ``q . (u - u_ref) = 0`` (:meth:`RotationPhase.anchor`), in place: its
     residual, its parameter derivative and its Jacobian if formed."""
-    ev.r = ev.r - q * float(q @ ev.r) + q * float(q @ (ev.u - u_ref))
+    ev.r = without(ev.r, q) + q * float(q @ (ev.u - u_ref))
     if ev.J_u is not None:
-        ev.J_u = ev.J_u - np.outer(q, q @ ev.J_u) + np.outer(q, q)
+        ev.J_u = phased_jacobian(ev.J_u, q)
     if ev.J_lam is not None:
-        ev.J_lam = ev.J_lam - q * float(q @ ev.J_lam)
+        ev.J_lam = without(ev.J_lam, q)
 
 
 def phased_action(JX: np.ndarray, X: np.ndarray, q: np.ndarray) -> np.ndarray:

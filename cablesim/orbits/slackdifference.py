@@ -33,8 +33,8 @@ through slack, which :mod:`cablesim.orbits.accelerate` therefore uses up to its
 :data:`~cablesim.orbits.accelerate.DENSE_DOF` degrees of freedom; this serves the cables above.
 The interface is that of :class:`~cablesim.orbits.matrixfree.MatrixFreeShooting` as
 :func:`~cablesim.orbits.accelerate.newton_mf` and
-:func:`~cablesim.orbits.matrixfree.orbit_leading` use it (``evaluate``, ``segment_apply``,
-``monodromy_apply``, ``jacobian_apply``).
+:func:`~cablesim.orbits.matrixfree.orbit_leading` use it (``evaluate`` at a fixed parameter,
+``segment_apply``, and the actions of :class:`~cablesim.orbits.matrixfree.SegmentActions`).
 """
 
 from __future__ import annotations
@@ -42,7 +42,7 @@ from __future__ import annotations
 import numpy as np
 
 from .kernels import OK
-from .matrixfree import MFEvaluation
+from .matrixfree import MFEvaluation, SegmentActions
 from .shooting import FlowStatus, Shooting
 from .systems import OdeSystem
 
@@ -57,7 +57,7 @@ DIFFERENCE_AGREEMENT = 1e-4
 DIFFERENCE_REFINEMENTS = 3
 
 
-class SlackDifferenceShooting:
+class SlackDifferenceShooting(SegmentActions):
     """Flow maps of the ``m`` segments of a ``p``-periodic orbit through slack and their action
     on vectors by central differences (module docstring).
 
@@ -94,21 +94,14 @@ class SlackDifferenceShooting:
         """Segment integrations so far."""
         return self.flow.calls
 
-    def evaluate(self, u: np.ndarray, lam: float, jac: bool = True) -> MFEvaluation:
-        """Residual at ``(u, lam)``; with ``jac`` also ``J_lam`` (by a central difference in
-        ``lam``, relative step :data:`DIFFERENCE_STEP`)."""
+    def evaluate(self, u: np.ndarray, lam: float, jac: bool = False) -> MFEvaluation:
+        """Residual at ``(u, lam)`` (its actions by :meth:`segment_apply`; no ``J_lam``: the
+        steady states it serves are at a fixed parameter)."""
+        if jac:
+            raise ValueError("the shooting through slack by differences forms no parameter derivative")
         ev = self.flow.evaluate(u, lam, jac=False)
-        m, n = self.segments, self.n
-        starts = np.asarray(u, dtype=float).reshape(m, n).copy()
-        J_lam = None
-        if jac and ev.status == FlowStatus.OK:
-            d = DIFFERENCE_STEP * abs(float(lam))
-            up, down = self.flow.evaluate(u, lam + d, jac=False), self.flow.evaluate(u, lam - d, jac=False)
-            if up.status != FlowStatus.OK or down.status != FlowStatus.OK:
-                ev.status = up.status if up.status != FlowStatus.OK else down.status
-            else:
-                J_lam = (up.r - down.r) / (2.0 * d)
-        return MFEvaluation(ev.u, ev.lam, ev.omega, ev.period, ev.T, ev.r, None, J_lam, ev.ends, None, None, None,
+        starts = np.asarray(u, dtype=float).reshape(self.segments, self.n).copy()
+        return MFEvaluation(ev.u, ev.lam, ev.omega, ev.period, ev.T, ev.r, None, None, ev.ends, None, None, None,
                             np.nan, np.nan, ev.xmax, ev.xmin, ev.status, events=ev.events, starts=starts)
 
     def _extent(self, ev: MFEvaluation) -> np.ndarray:
@@ -151,19 +144,3 @@ class SlackDifferenceShooting:
                 raise FloatingPointError(f"a differenced flow failed (status {FlowStatus(seg['status']).name})")
             ends.append(seg["x"])
         return (ends[0] - ends[1]) / (2.0 * d)
-
-    def monodromy_apply(self, ev: MFEvaluation, X: np.ndarray) -> np.ndarray:
-        """``M X = G_(m-1) ... G_0 X``."""
-        Y = np.asarray(X, dtype=float)
-        for k in range(self.segments):
-            Y = self.segment_apply(ev, k, Y)
-        return Y
-
-    def jacobian_apply(self, ev: MFEvaluation, X: np.ndarray) -> np.ndarray:
-        """``J_u X``: block ``k`` is ``G_k X_k - X_(k+1)`` (``J_u = M - I`` for one segment)."""
-        n, m = self.n, self.segments
-        X = np.asarray(X, dtype=float).reshape(m, n, -1)
-        out = np.empty_like(X)
-        for k in range(m):
-            out[k] = self.segment_apply(ev, k, X[k]) - X[(k + 1) % m]
-        return out.reshape(m * n, -1)

@@ -31,6 +31,7 @@ import numpy as np
 
 from ..case import Case
 from ..channels import channel_index
+from ..dynamics import interrupts
 from ..dynamics.steady import SteadyCriterion, steady_response
 from ..errors import CablesimError
 from ..orbits.accelerate import accelerated_steady_response
@@ -539,9 +540,14 @@ def run_sweep(
     recorder.begin()
 
     def done(p: SweepPoint, new: bool = True):
-        res.add(p)
-        if new:
-            recorder.point(p, res)
+        # the point enters the result and the journal together: a signal between the two left a
+        # final snapshot holding a point its journal did not, which a resume then computed again
+        with interrupts.Deferred() as held:
+            res.add(p)
+            if new:
+                recorder.point(p, res)
+        if held.hit:
+            raise KeyboardInterrupt
         if progress is not None:
             progress(res.n_done, res.n_total)
 

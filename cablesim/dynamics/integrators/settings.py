@@ -17,7 +17,8 @@ Defaults (``docs/theory.md`` and the README's "Integrators" say why):
   fixes the step instead (``dt`` and ``rtol``/``atol`` exclude each other); ``generalized-alpha``'s
   ``rho_inf`` :data:`DEFAULT_RHO_INF`;
 - ``rk4``: :data:`STEPS_PER_PERIOD` steps per period of the frequency of interest, rounded to
-  divide the forcing period, kept inside its stability limit (:data:`RK4_SAFE_STEP` over the
+  divide the forcing period, shorter where a linear modal estimate of its error on the modes the
+  start excites asks (:mod:`.modal_error`), kept inside its stability limit (:data:`RK4_SAFE_STEP` over the
   fastest damped rate);
 - no scheme named: ``dopri5``, unless the cable is stiff (its fastest damped root more than
   :data:`STIFF_RATIO` times the frequency of interest), then ``generalized-alpha``.
@@ -37,6 +38,7 @@ from ...modal import fastest_rate
 from ...names import INTEGRATOR_SETTINGS
 from .base import Integrator
 from .implicit import GeneralizedAlpha, Newmark
+from .modal_error import accurate_step
 from .rk import DOPRI5, RK4
 
 #: Default tolerances of dopri5: relative, and absolute per metre of chord at that rtol. An atol
@@ -50,6 +52,9 @@ DEFAULT_ATOL_PER_CHORD = 1e-10
 #: 7.2e-7, tensions 3.4e-6; at 100, 1.2e-5 and 5.1e-5: tests/test_integrator_defaults.py; the
 #: error falls as dt^4 and grows with the duration).
 STEPS_PER_PERIOD = 200
+#: rk4's order and the constant of its relative root error ``(|lambda| h)^4 / 120`` (the leading
+#: term of its phase error), for the estimate of its error on the fast modes.
+RK4_ORDER, RK4_ROOT_ERROR = 4, 1.0 / 120.0
 #: newmark's and generalized-alpha's default relative tolerance on the local displacement error
 #: (the measured z errors sit 10 to 20 times below it: paper example, slack case, heavy cables,
 #: benchmarks/README.md) ...
@@ -155,8 +160,14 @@ def amplification(eom, omega: float) -> float:
 
 def rk4_default_step(eom, omega_interest: float) -> float:
     """rk4's default step: :data:`STEPS_PER_PERIOD` per period of interest dividing the forcing
-    period, shortened (still dividing it) to stay inside the stability limit."""
+    period, shortened (still dividing it) where the linear modal estimate of its error
+    (:func:`~cablesim.dynamics.integrators.modal_error.accurate_step`: the fast modes the start
+    excites) is above :data:`~cablesim.dynamics.integrators.modal_error.TARGET`, and to stay inside
+    the stability limit."""
     dt = _period_step(eom, omega_interest, STEPS_PER_PERIOD)
+    accurate = accurate_step(eom, dt, RK4_ORDER, RK4_ROOT_ERROR)
+    if accurate < dt:
+        dt = dividing_step(accurate, eom.omega)
     if dt > rk4_stable_step(eom):
         dt = rk4_stable_step(eom)
         if eom.omega > 0:  # the stable step, shortened to divide the forcing period
@@ -169,7 +180,8 @@ _CLASSES = {"rk4": RK4, "dopri5": DOPRI5, "newmark": Newmark, "generalized-alpha
 _IMPLICIT_DEFAULT = (f"error-controlled steps, rtol {IMPLICIT_RTOL:g}, atol {IMPLICIT_ATOL_PER_CHORD:g} x chord (m), "
                      f"at least {MIN_STEPS_PER_PERIOD} steps per period of interest (dt: a fixed step)")
 _DEFAULTS = {
-    "rk4": f"dt: {STEPS_PER_PERIOD} steps per period of interest, inside the stability limit",
+    "rk4": f"dt: {STEPS_PER_PERIOD} steps per period of interest, shorter where the fast modes need it, "
+           "inside the stability limit",
     "dopri5": f"rtol {DEFAULT_RTOL:g}, atol {DEFAULT_ATOL_PER_CHORD:g} x chord x rtol / {DEFAULT_RTOL:g} (m)",
     "newmark": _IMPLICIT_DEFAULT,
     "generalized-alpha": f"{_IMPLICIT_DEFAULT}, rho_inf {DEFAULT_RHO_INF:g}",

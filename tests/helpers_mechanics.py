@@ -157,3 +157,22 @@ class SecondOrder:
         A, B, _, _ = self.supports(t)
         d = np.diff(np.vstack([A, np.reshape(y, (-1, self.dim)), B]), axis=0)
         return self.EA * (np.sqrt((d * d).sum(axis=1)) - self.S) / self.S
+
+
+def moving_support_reference(eom, t_out, z0=None, rtol=1e-11):
+    """``(z, T)`` at ``t_out`` of :class:`SecondOrder` built from an ``EquationsOfMotion``'s numbers
+    (cable, loads, damping, supports' motion), started at rest from the displacement ``z0``
+    (default none), by scipy's DOP853: the displacements from the equilibrium and the segment
+    tensions, for comparison with cablesim's history of the same case."""
+    from scipy.integrate import solve_ivp
+
+    c = eom.cable
+    ref = SecondOrder(c.S, c.EA, np.asarray(c.support_B, dtype=float), c.dim, eom.mass, eom.F0, eom.FL, eom.omega,
+                      eom.y0, eom.a0, eom.a1, eom.uA, eom.uB, eom.phA, eom.phB)
+    nd = eom.n_dof
+    z0 = np.zeros(nd) if z0 is None else np.asarray(z0, dtype=float)
+    sol = solve_ivp(ref.rhs, (0.0, float(t_out[-1])), np.concatenate([eom.y0 + z0, np.zeros(nd)]), method="DOP853",
+                    rtol=rtol, atol=1e-13 * c.chord_length, t_eval=t_out)
+    assert sol.success, sol.message
+    y = sol.y[:nd].T
+    return y - eom.y0, np.array([ref.tensions(t, yi) for t, yi in zip(t_out, y)])

@@ -73,7 +73,7 @@ def test_local_error_estimate_is_the_true_local_error(forced, integ):
         nd = eom.n_dof
         z1, v1, a1, P1 = (np.empty(nd) for _ in range(4))
         P_n = own_force(eom.cable, eom.y0 + zn)
-        code = galpha_step(eom.model(), zn, vn, a, P_n, st.warm, wk, awk, tn + h, h, coef, 1e-12 * 300.0, 25,
+        code = galpha_step(eom.model(), zn, vn, a, P_n, st.warm, wk, awk, tn + h, h, coef, 1e-12 * 300.0, 0.0, 25,
                            z1, v1, a1, P1, step_scratch(eom.model()))
         assert code == OK
         true = z1 - z[at[tn + h]]

@@ -58,6 +58,9 @@ def test_the_factory_fills_in_the_defaults_of_the_table():
         integ = make(name, eom, 2.4)
         assert not integ.fixed_step and integ.rtol == IMPLICIT_RTOL
         assert integ.atol == pytest.approx(IMPLICIT_ATOL_PER_CHORD * eom.cable.chord_length)
+        # an atol not given follows rtol: a fixed one held a taut stay's steps whatever rtol asked
+        loose = make(name, eom, 2.4, {"rtol": 100 * IMPLICIT_RTOL})
+        assert loose.atol == pytest.approx(100 * IMPLICIT_ATOL_PER_CHORD * eom.cable.chord_length)
         assert integ.omega_ref == 2.4 and period / integ.dt_max == pytest.approx(round(period / integ.dt_max), rel=1e-9)
         fixed = make(name, eom, 2.4, {"dt": period / 300})
         assert fixed.fixed_step and fixed.dt == period / 300 and "rtol" not in fixed.settings()

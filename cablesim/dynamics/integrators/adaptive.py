@@ -27,7 +27,11 @@ cable steps near the rounding level of its coordinates), ``w_ref`` the frequency
 ``2 / xi(w_ref)`` (the Rayleigh damping ratio there,
 :func:`~cablesim.dynamics.integrators.settings.amplification`). The error per unit step makes the
 global error proportional to ``rtol`` (halving rtol halves it), and the amplification makes it
-at most about ``rtol`` of the peak for a response that is not far from linear. Steps follow
+at most about ``rtol`` of the peak for a response that is damped and not far from linear (one
+that grows, as in a parametric resonance, is not bounded so: the default rtol is set for them,
+:data:`~cablesim.dynamics.integrators.settings.IMPLICIT_RTOL`). Each step's Newton iteration is
+held to :data:`NEWTON_SHARE` of the error the step is allowed, since its leftover enters every
+step whatever the truncation error. Steps follow
 ``h_new = h (0.9 / err)^(1/2)`` (the scaled estimate is of order h^2), grow at most
 :data:`GROW_MAX` times a step and are never above ``h_max``, so that every period of interest
 gets a few steps whatever the estimate says (an estimate from two accelerations cannot see a
@@ -55,11 +59,19 @@ GROW_MAX = 2.0
 SHRINK_MIN = 0.2
 #: The step after a failed Newton iteration, relative to the failed one.
 SHRINK_NEWTON = 0.25
-#: Estimates below this fraction of the Newton tolerance (1e-12 of the chord: some five rounding
-#: units of the coordinates) are rounding noise, which the accelerations carry divided by h^2:
-#: without the floor a tight tolerance could fail however short the step, and the step would
-#: shrink to nothing.
-NOISE_FLOOR = 1e-3
+#: Newton's increments are held below this share of the local error a step is allowed (at most
+#: the loose tolerance, 1e-12 of the chord; at least the noise floor below) ...
+NEWTON_SHARE = 0.1
+#: ... and where they stop decreasing within this many noise floors (1e-14 of the chord: some
+#: 50 rounding units of the coordinates), that is taken as converged.
+ROUNDING_STALL = 100.0
+#: Estimates below this fraction of the loose Newton tolerance (1e-12 of the chord), 1e-16 of
+#: the chord, are rounding noise (the accelerations carry that of the coordinates, about 2e-16
+#: of the chord, divided by h^2; the estimate multiplies it by h^2 / 12): without the floor a
+#: tight tolerance could fail however short the step, and the step would shrink to nothing. At
+#: 1e-15 of the chord the floor was above the error allowed to a cable whose response is small
+#: beside its chord (a taut stay: 3 mm on 100 m), whose steps then grew blind to rtol.
+NOISE_FLOOR = 1e-5
 
 
 @njit
@@ -102,12 +114,19 @@ def adaptive_advance(model, s, P_n, warm, wk, awk, evw, track, t, h, t_end, coef
     warm_try = np.empty(warm.size)
     c_err = error_constant(coef)
     floor = NOISE_FLOOR * ztol
+    zround = ROUNDING_STALL * floor
     h_min = 1e-12 * (1.0 + abs(t))
     j = 0
     while t < t_end:
         h = min(h, h_max)
+        allowed = (atol + rtol * peaks[0]) * per_step * h
+        # Newton's error enters every step whatever the truncation: held to a share of the error
+        # allowed (down to the rounding floor), or a slowly growing response seeded by it is off
+        # by its accumulation, which no tolerance reduces.
+        ztight = min(ztol, max(floor, NEWTON_SHARE * allowed))
         warm_try[:] = warm
-        st = galpha_step(model, z, v, a, P_n, warm_try, wk, awk, t + h, h, coef, ztol, maxit, z1, v1, a1, P1, scratch)
+        st = galpha_step(model, z, v, a, P_n, warm_try, wk, awk, t + h, h, coef, ztight, zround, maxit, z1, v1,
+                         a1, P1, scratch)
         if st == SLACK:  # slack: stop, and the converged state has a slack segment
             store_state(s, z, v, a)
             return t, h, j, st, -1
@@ -118,7 +137,7 @@ def adaptive_advance(model, s, P_n, warm, wk, awk, evw, track, t, h, t_end, coef
                 store_state(s, z, v, a)
                 return t, h, j, st, -1
             continue
-        err = local_error(z1, a, a1, h, c_err, (atol + rtol * peaks[0]) * per_step * h, floor)
+        err = local_error(z1, a, a1, h, c_err, allowed, floor)
         if not err <= 1.0:
             counts[1] += 1
             h *= max(SHRINK_MIN, SAFETY * err ** -0.5) if np.isfinite(err) else SHRINK_MIN
@@ -137,8 +156,8 @@ def adaptive_advance(model, s, P_n, warm, wk, awk, evw, track, t, h, t_end, coef
                 return t, h, j, OK, k
             if k >= 0:  # redo the step up to the event, in the modes valid there
                 warm_try[:] = warm
-                st = galpha_step(model, z, v, a, P_n, warm_try, wk, awk, te, te - t, coef, ztol, maxit, z1, v1, a1,
-                                 P1, scratch)
+                st = galpha_step(model, z, v, a, P_n, warm_try, wk, awk, te, te - t, coef, ztight, zround, maxit, z1,
+                                 v1, a1, P1, scratch)
                 if st != OK:
                     store_state(s, z, v, a)
                     return t, h, j, st, -1

@@ -276,8 +276,11 @@ def _newmark_update(z, v, a, z1, v1, a1, h, beta, gamma):
 
 
 @njit
-def galpha_step(model, z, v, a, P_n, warm, wk, awk, tb, h, coef, ztol, maxit, z1, v1, a1, P1, scratch):
+def galpha_step(model, z, v, a, P_n, warm, wk, awk, tb, h, coef, ztol, zround, maxit, z1, v1, a1, P1, scratch):
     """One step of size h ending at ``tb`` from ``(z, v, a, P_n)`` into ``(z1, v1, a1, P1)``.
+
+    Newton stops at an increment below ``ztol`` (m), or below ``zround`` (m: near the rounding of
+    the coordinates; 0 for none) once the increments no longer decrease.
 
     With banded damping every Newton iteration assembles and solves a banded system, O(n) (in
     the approximate analysis plus a rank-4 correction); otherwise a dense one.
@@ -295,6 +298,7 @@ def galpha_step(model, z, v, a, P_n, warm, wk, awk, tb, h, coef, ztol, maxit, z1
         z1[q] = z[q] + h * v[q] + 0.5 * h * h * a[q]  # predictor: constant acceleration
         P1[q] = P_n[q]
     converged = False
+    previous = np.inf
     for it in range(maxit):
         _newmark_update(z, v, a, z1, v1, a1, h, beta, gamma)
         if banded:
@@ -321,9 +325,10 @@ def galpha_step(model, z, v, a, P_n, warm, wk, awk, tb, h, coef, ztol, maxit, z1
             step = max(step, abs(z1[q] - z[q]))
         if not np.isfinite(big):
             break
-        if big <= ztol + 1e-10 * step:
+        if big <= ztol + 1e-10 * step or (big <= zround and big >= previous):
             converged = True
             break
+        previous = big
     if not converged:
         for q in range(nd):
             if not np.isfinite(z1[q]):
@@ -366,7 +371,7 @@ def fixed_step_advance(model, s, P_n, warm, wk, awk, evw, track, t0, h, i, i_end
                 j += 1
             t, i = tb, i + 1
             continue
-        st = galpha_step(model, z, v, a, P_n, warm, wk, awk, tb, tb - t, coef, ztol, maxit, z1, v1, a1, P1, scratch)
+        st = galpha_step(model, z, v, a, P_n, warm, wk, awk, tb, tb - t, coef, ztol, 0.0, maxit, z1, v1, a1, P1, scratch)
         if st != OK:
             store_state(s, z, v, a)
             return i, t, j, st, -1
@@ -379,7 +384,8 @@ def fixed_step_advance(model, s, P_n, warm, wk, awk, evw, track, t0, h, i, i_end
                 store_state(s, z, v, a)
                 return i, t, j, OK, k
             if k >= 0:  # redo the step up to the event, in the modes valid there
-                st = galpha_step(model, z, v, a, P_n, warm, wk, awk, te, te - t, coef, ztol, maxit, z1, v1, a1, P1, scratch)
+                st = galpha_step(model, z, v, a, P_n, warm, wk, awk, te, te - t, coef, ztol, 0.0, maxit, z1, v1, a1,
+                                  P1, scratch)
                 if st != OK:
                     store_state(s, z, v, a)
                     return i, t, j, st, -1

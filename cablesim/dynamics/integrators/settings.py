@@ -12,7 +12,8 @@ Defaults (``docs/theory.md`` and the README's "Integrators" say why):
 - ``dopri5``: ``rtol`` :data:`DEFAULT_RTOL`, ``atol`` :data:`DEFAULT_ATOL_PER_CHORD` times the
   chord (m) at that ``rtol``, following ``rtol`` when it is given (:func:`default_atol`);
 - ``newmark``, ``generalized-alpha``: error-controlled steps (:mod:`.adaptive`) at ``rtol``
-  :data:`IMPLICIT_RTOL` and ``atol`` :data:`IMPLICIT_ATOL_PER_CHORD` times the chord (m), with
+  :data:`IMPLICIT_RTOL` and ``atol`` :data:`IMPLICIT_ATOL_PER_CHORD` times the chord (m) at that
+  ``rtol``, following ``rtol`` when it is given (:func:`implicit_atol`), with
   at least :data:`MIN_STEPS_PER_PERIOD` steps per period of the frequency of interest; a ``dt``
   fixes the step instead (``dt`` and ``rtol``/``atol`` exclude each other); ``generalized-alpha``'s
   ``rho_inf`` :data:`DEFAULT_RHO_INF`;
@@ -55,12 +56,15 @@ STEPS_PER_PERIOD = 200
 #: rk4's order and the constant of its relative root error ``(|lambda| h)^4 / 120`` (the leading
 #: term of its phase error), for the estimate of its error on the fast modes.
 RK4_ORDER, RK4_ROOT_ERROR = 4, 1.0 / 120.0
-#: newmark's and generalized-alpha's default relative tolerance on the local displacement error
-#: (the measured z errors sit 10 to 20 times below it: paper example, slack case, heavy cables,
-#: benchmarks/README.md) ...
-IMPLICIT_RTOL = 1e-5
-#: ... and absolute tolerance, m per m of chord.
-IMPLICIT_ATOL_PER_CHORD = 1e-9
+#: newmark's and generalized-alpha's default relative tolerance on the local displacement error.
+#: At 1e-5 the parametric stays' histories (stay-anchorage, stay-parametric: responses that grow
+#: from a 1 mm disturbance, and a lightly damped nonlinear resonance) were 1e-4 off in z; at 1e-6
+#: every shipped example is within 1e-5 (benchmarks/README.md, part 2) ...
+IMPLICIT_RTOL = 1e-6
+#: ... and absolute tolerance, m per m of chord at that rtol; an atol not given follows rtol
+#: (:func:`implicit_atol`). At 1e-9 per chord (fixed) it set the steps of every cable whose
+#: response is small beside its chord (a taut stay: 3 mm on 100 m), whatever rtol was asked.
+IMPLICIT_ATOL_PER_CHORD = 1e-12
 #: The amplification assumed of an undamped or very lightly damped cable (that of xi = 0.001).
 AMPLIFICATION_MAX = 2000.0
 #: Error-controlled implicit steps are at most a period of interest over this (a step estimate
@@ -91,6 +95,13 @@ def default_atol(chord: float, rtol: float) -> float:
     """dopri5's absolute tolerance on displacements (m) when the case gives none: it scales with
     ``rtol``, ``1e-10`` of the chord at the default rtol 1e-8."""
     return DEFAULT_ATOL_PER_CHORD * chord * (rtol / DEFAULT_RTOL)
+
+
+def implicit_atol(chord: float, rtol: float) -> float:
+    """newmark's and generalized-alpha's absolute tolerance on displacements (m) when the case
+    gives none: :data:`IMPLICIT_ATOL_PER_CHORD` of the chord at the default rtol, scaled with
+    ``rtol``."""
+    return IMPLICIT_ATOL_PER_CHORD * chord * (rtol / IMPLICIT_RTOL)
 
 
 def _period_step(eom, omega_interest: float, steps: int) -> float:
@@ -138,7 +149,8 @@ class Scheme:
             kw["rho_inf"] = DEFAULT_RHO_INF if s.get("rho_inf") is None else s["rho_inf"]
         if dt is not None:
             return self.cls(dt=dt, **kw)
-        return self.cls(rtol=s.get("rtol") or IMPLICIT_RTOL, atol=s.get("atol") or IMPLICIT_ATOL_PER_CHORD * chord,
+        rtol = s.get("rtol") or IMPLICIT_RTOL
+        return self.cls(rtol=rtol, atol=s.get("atol") or implicit_atol(chord, rtol),
                         dt_max=_period_step(eom, omega_interest, MIN_STEPS_PER_PERIOD), omega_ref=float(omega_interest),
                         amplification=amplification(eom, omega_interest), **kw)
 
@@ -177,7 +189,8 @@ def rk4_default_step(eom, omega_interest: float) -> float:
 
 
 _CLASSES = {"rk4": RK4, "dopri5": DOPRI5, "newmark": Newmark, "generalized-alpha": GeneralizedAlpha}
-_IMPLICIT_DEFAULT = (f"error-controlled steps, rtol {IMPLICIT_RTOL:g}, atol {IMPLICIT_ATOL_PER_CHORD:g} x chord (m), "
+_IMPLICIT_DEFAULT = (f"error-controlled steps, rtol {IMPLICIT_RTOL:g}, atol {IMPLICIT_ATOL_PER_CHORD:g} x chord x rtol / "
+                     f"{IMPLICIT_RTOL:g} (m), "
                      f"at least {MIN_STEPS_PER_PERIOD} steps per period of interest (dt: a fixed step)")
 _DEFAULTS = {
     "rk4": f"dt: {STEPS_PER_PERIOD} steps per period of interest, shorter where the fast modes need it, "

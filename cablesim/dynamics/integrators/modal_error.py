@@ -31,6 +31,7 @@ import numpy as np
 
 from ...errors import CablesimError
 from ...modal import modal_analysis, modal_damping_ratios
+from ...statics import segment_geometry
 
 #: The relative error (of the peaks in z and in the tensions) the estimate is held to: a tenth of
 #: the 1e-5 every default aims at, for the nonlinearity it does not see.
@@ -49,8 +50,8 @@ class ModalResponse:
 
     Attributes
     ----------
-    omega : ndarray
-        Forcing frequency, rad/s (0: no forcing, and nothing is estimated).
+    omega : float
+        Forcing frequency, rad/s (positive: without forcing no estimate is made).
     roots : ndarray, complex
         Each mode's root ``lambda_k`` (the fast one of an overdamped mode), 1/s.
     steady, sensitivity : ndarray
@@ -78,7 +79,7 @@ class ModalResponse:
     def relative_errors(self, h: float, order: int, constant: float) -> tuple[float, float]:
         """The estimated errors in z and in the tensions relative to their peaks of a scheme of
         ``order`` whose relative root error is ``constant (|lambda| h)^order``, at step ``h`` (s)."""
-        if self.omega <= 0.0 or self.z_peak <= 0.0:
+        if self.z_peak <= 0.0:
             return 0.0, 0.0
         e_steady = constant * (self.omega * h) ** order * self.steady * self.sensitivity
         e_free = constant * (np.abs(self.roots) * h) ** order * self.transient * self.life / np.e
@@ -91,14 +92,10 @@ def _tension_shapes(eom, shapes: np.ndarray) -> np.ndarray:
     """``EA / S_j`` times each segment's elongation per unit modal amplitude, largest over the
     segments, for every mode (N)."""
     c = eom.cable
-    dim = c.dim
-    pts = np.vstack([np.asarray(c.support_A, dtype=float), np.asarray(eom.y0, dtype=float).reshape(-1, dim),
-                     np.asarray(c.support_B, dtype=float)])
-    d = np.diff(pts, axis=0)
-    unit = d / np.linalg.norm(d, axis=1)[:, None]
+    unit = segment_geometry(c, eom.y0)[1]  # (n + 1, dim): along each segment at the equilibrium
     m = shapes.shape[1]
-    disp = np.zeros((c.n_nodes + 2, dim, m))
-    disp[1:-1] = shapes.reshape(c.n_nodes, dim, m)
+    disp = np.zeros((c.n_nodes + 2, c.dim, m))  # the supports held
+    disp[1:-1] = shapes.reshape(c.n_nodes, c.dim, m)
     elong = np.einsum("jd,jdm->jm", unit, np.diff(disp, axis=0))
     return np.abs(c.EA / np.asarray(c.S, dtype=float)[:, None] * elong).max(axis=0)
 

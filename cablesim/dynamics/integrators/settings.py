@@ -53,9 +53,9 @@ DEFAULT_ATOL_PER_CHORD = 1e-10
 #: 7.2e-7, tensions 3.4e-6; at 100, 1.2e-5 and 5.1e-5: tests/test_integrator_defaults.py; the
 #: error falls as dt^4 and grows with the duration).
 STEPS_PER_PERIOD = 200
-#: rk4's order and the constant of its relative root error ``(|lambda| h)^4 / 120`` (the leading
-#: term of its phase error), for the estimate of its error on the fast modes.
-RK4_ORDER, RK4_ROOT_ERROR = 4, 1.0 / 120.0
+#: The constant of rk4's relative root error ``(|lambda| h)^4 / 120`` (the leading term of its
+#: phase error), for the estimate of its error on the fast modes.
+RK4_ROOT_ERROR = 1.0 / 120.0
 #: newmark's and generalized-alpha's default relative tolerance on the local displacement error.
 #: At 1e-5 the parametric stays' histories (stay-anchorage, stay-parametric: responses that grow
 #: from a 1 mm disturbance, and a lightly damped nonlinear resonance) were 1e-4 off in z; at 1e-6
@@ -177,7 +177,7 @@ def rk4_default_step(eom, omega_interest: float) -> float:
     excites) is above :data:`~cablesim.dynamics.integrators.modal_error.TARGET`, and to stay inside
     the stability limit."""
     dt = _period_step(eom, omega_interest, STEPS_PER_PERIOD)
-    accurate = accurate_step(eom, dt, RK4_ORDER, RK4_ROOT_ERROR)
+    accurate = accurate_step(eom, dt, RK4.order, RK4_ROOT_ERROR)
     if accurate < dt:
         dt = dividing_step(accurate, eom.omega)
     if dt > rk4_stable_step(eom):

@@ -292,10 +292,14 @@ class Shooting:
         args = (self.system.model, self._prm(lam), work, flushed(x0), float(theta0), float(omega), float(dur), int(ns),
                 self._A, self._b, self._c, self._ipar, self._pmode, bool(jac), rows, bounds, xend, G, dp, xmax, xmin,
                 rec, info)
-        tracked = self.through_slack and self.modes_from_start
-        code = ok.SLACK if tracked else self._flow(self.system.field, *args)
+        if self.through_slack and self.modes_from_start:
+            with_modes = True
+        else:
+            code = self._flow(self.system.field, *args)
+            # a flow that met a slack segment is taken again, tracking the segments' modes
+            with_modes = code == ok.SLACK and self.through_slack
         events = _NO_EVENTS
-        if code == ok.SLACK and self.through_slack:
+        if with_modes:
             gaps, modes = self.system.slack
             nseg = modes(work)[0].size
             ev, nev = np.zeros((sf.EVENTS_PER_SEGMENT * nseg, 3)), np.zeros(1, dtype=np.int64)

@@ -49,7 +49,8 @@ import numpy as np
 from ...jit import njit
 from ..status import OK, SLACK, STEP_UNDERFLOW
 from .events import locate_event
-from .newmark import galpha_step, step_scratch, store_state, write_step_outputs
+from .newmark import (carried_acceleration, galpha_step, scheme_acceleration, step_scratch, store_state,
+                      write_step_outputs)
 
 #: Safety factor of the step-size rule.
 SAFETY = 0.9
@@ -95,12 +96,14 @@ def local_error(z1, a, a1, h, c_err, allowed, floor) -> float:
 
 @njit
 def adaptive_advance(model, s, P_n, warm, wk, awk, evw, track, t, h, t_end, coef, rtol, atol, h_max, per_step,
-                     t_out, out, ztol, maxit, counts, peaks):
+                     t_out, out, ztol, maxit, counts, peaks, jerk):
     """Error-controlled steps from ``t`` until ``t >= t_end`` (the last step may pass it).
 
     ``per_step = w_ref / amplification`` (1/s) turns the tolerance into an error per unit step;
     ``counts`` (accepted, rejected by the error test, retried after Newton failed) is
-    incremented and ``peaks[0]`` (the largest ``|z_i|`` so far, m) updated.
+    incremented, ``peaks[0]`` (the largest ``|z_i|`` so far, m) and ``jerk`` (the last step's
+    ``dy''/dt``, for the scheme's acceleration at a new step size: see
+    :func:`~cablesim.dynamics.integrators.newmark.scheme_acceleration`) updated.
 
     Returns ``(t, h, written, status, segment)``: the time reached, the next step proposed, the
     rows of ``out`` filled, a status code and the segment that changes mode at ``t`` (-1: none),
@@ -108,11 +111,12 @@ def adaptive_advance(model, s, P_n, warm, wk, awk, evw, track, t, h, t_end, coef
     """
     nd = model.mass.size
     z, v, a = s[:nd].copy(), s[nd : 2 * nd].copy(), s[2 * nd :].copy()
-    z1, v1, a1, P1 = np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd)
+    z1, v1, a1, P1, a_used = np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd)
+    delta = coef[0] - coef[1]
     scratch = step_scratch(model)
     sa, sb, da, db = np.empty(3 * nd), np.empty(3 * nd), np.empty(3 * nd), np.empty(3 * nd)
     ae, ae1 = np.empty(nd), np.empty(nd)
-    warm_try = np.empty(warm.size)
+    warm_try, jerk_try = np.empty(warm.size), np.empty(nd)
     c_err = error_constant(coef)
     floor = NOISE_FLOOR * ztol
     zround = ROUNDING_STALL * floor
@@ -126,7 +130,8 @@ def adaptive_advance(model, s, P_n, warm, wk, awk, evw, track, t, h, t_end, coef
         # by its accumulation, which no tolerance reduces.
         ztight = min(ztol, max(floor, NEWTON_SHARE * allowed))
         warm_try[:] = warm
-        st = galpha_step(model, z, v, a, P_n, warm_try, wk, awk, t + h, h, coef, ztight, zround, maxit, z1, v1,
+        scheme_acceleration(a, jerk, delta * h, a_used)
+        st = galpha_step(model, z, v, a_used, P_n, warm_try, wk, awk, t + h, h, coef, ztight, zround, maxit, z1, v1,
                          a1, P1, scratch)
         if st == SLACK:  # slack: stop, and the converged state has a slack segment
             store_state(s, z, v, a)
@@ -138,7 +143,7 @@ def adaptive_advance(model, s, P_n, warm, wk, awk, evw, track, t, h, t_end, coef
                 store_state(s, z, v, a)
                 return t, h, j, st, -1
             continue
-        err = local_error(z1, a, a1, h, c_err, allowed, floor)
+        err = local_error(z1, a_used, a1, h, c_err, allowed, floor)
         if not err <= 1.0:
             counts[1] += 1
             h *= max(SHRINK_MIN, SAFETY * err ** -0.5) if np.isfinite(err) else SHRINK_MIN
@@ -146,6 +151,8 @@ def adaptive_advance(model, s, P_n, warm, wk, awk, evw, track, t, h, t_end, coef
                 store_state(s, z, v, a)
                 return t, h, j, STEP_UNDERFLOW, -1
             continue
+        jerk_try[:] = jerk
+        carried_acceleration(a_used, a1, h, delta * h, jerk_try)
         tb = t + h
         k = -1
         if track:
@@ -157,11 +164,14 @@ def adaptive_advance(model, s, P_n, warm, wk, awk, evw, track, t, h, t_end, coef
                 return t, h, j, OK, k
             if k >= 0:  # redo the step up to the event, in the modes valid there
                 warm_try[:] = warm
-                st = galpha_step(model, z, v, a, P_n, warm_try, wk, awk, te, te - t, coef, ztight, zround, maxit, z1,
-                                 v1, a1, P1, scratch)
+                scheme_acceleration(a, jerk, delta * (te - t), a_used)
+                st = galpha_step(model, z, v, a_used, P_n, warm_try, wk, awk, te, te - t, coef, ztight, zround, maxit,
+                                 z1, v1, a1, P1, scratch)
                 if st != OK:
                     store_state(s, z, v, a)
                     return t, h, j, st, -1
+                jerk_try[:] = jerk
+                carried_acceleration(a_used, a1, te - t, delta * (te - t), jerk_try)
                 tb = te
         if j < t_out.size and t_out[j] <= tb:
             j = write_step_outputs(model, awk, t, tb, z, v, a, z1, v1, a1, P_n, P1, ae, ae1, scratch, sa, sb, da, db,
@@ -171,6 +181,7 @@ def adaptive_advance(model, s, P_n, warm, wk, awk, evw, track, t, h, t_end, coef
             peaks[0] = max(peaks[0], abs(z1[q]))
         z[:], v[:], a[:], P_n[:] = z1, v1, a1, P1
         warm[:] = warm_try
+        jerk[:] = jerk_try
         t = tb
         if k >= 0:
             store_state(s, z, v, a)

@@ -122,7 +122,8 @@ class GeneralizedAlpha(Integrator):
         z0 = st.s[: eom.n_dof]
         peaks = np.array([np.abs(z0).max()])  # m
         st.extra.update(P=self._force(eom, st), t0=t0, i=0, h=h0, steps=np.zeros(3, dtype=np.int64), peaks=peaks,
-                        per_step=w_ref / self.amplification, ztol=1e-12 * max(c.chord_length, 1.0), eom=eom)
+                        per_step=w_ref / self.amplification, ztol=1e-12 * max(c.chord_length, 1.0), eom=eom,
+                        jerk=np.zeros(eom.n_dof))
         return st
 
     @staticmethod
@@ -145,14 +146,14 @@ class GeneralizedAlpha(Integrator):
                 i_end = max(int(np.ceil((t_end - ex["t0"]) / self.dt - 1e-9)), ex["i"])
                 i, t, j, code, k = fixed_step_advance(
                     model, state.s, ex["P"], state.warm, *state.wk, ex["evw"], ex["track"], ex["t0"], self.dt, ex["i"],
-                    i_end, state.t, coef, t_out[written:], out[written:], ex["ztol"], MAX_NEWTON,
+                    i_end, state.t, coef, t_out[written:], out[written:], ex["ztol"], MAX_NEWTON, ex["jerk"],
                 )
                 ex["i"] = i
             else:
                 t, h, j, code, k = adaptive_advance(
                     model, state.s, ex["P"], state.warm, *state.wk, ex["evw"], ex["track"], state.t, ex["h"], t_end,
                     coef, self.rtol, self.atol, self.dt_max, ex["per_step"], t_out[written:], out[written:], ex["ztol"],
-                    MAX_NEWTON, ex["steps"], ex["peaks"],
+                    MAX_NEWTON, ex["steps"], ex["peaks"], ex["jerk"],
                 )
                 ex["h"] = h
             written += j

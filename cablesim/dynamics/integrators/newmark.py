@@ -276,6 +276,34 @@ def _newmark_update(z, v, a, z1, v1, a1, h, beta, gamma):
 
 
 @njit
+def scheme_acceleration(a, jerk, shift, out):
+    """Generalized-alpha's acceleration variable for the step about to be taken, into ``out``.
+
+    The scheme's acceleration approximates ``y''`` at ``t_n + (alpha_m - alpha_f) h``, not at
+    ``t_n`` (Erlicher, Bonaventura and Bursi, 2002). The loops carry ``a = y''(t_n)`` and shift it
+    by ``shift = (alpha_m - alpha_f) h`` with the last step's jerk ``dy''/dt``: carrying the
+    scheme's own variable from one step size into the next would leave it at the wrong instant,
+    an error of ``(alpha_m - alpha_f) (h_n - h_(n-1))`` times the jerk at every change of step,
+    first order in the velocity wherever the steps vary (as an error-controlled run's do).
+    Newmark: ``shift = 0``.
+    """
+    for q in range(a.size):
+        out[q] = a[q] + shift * jerk[q]
+
+
+@njit
+def carried_acceleration(a_used, a1, h, shift, jerk):
+    """After a step of size ``h`` that started from the scheme's ``a_used``: the jerk of the step
+    into ``jerk`` and ``a1`` turned from the scheme's variable into ``y''`` at the step's end
+    (the inverse of :func:`scheme_acceleration`)."""
+    if shift == 0.0:
+        return
+    for q in range(a1.size):
+        jerk[q] = (a1[q] - a_used[q]) / h
+        a1[q] -= shift * jerk[q]
+
+
+@njit
 def galpha_step(model, z, v, a, P_n, warm, wk, awk, tb, h, coef, ztol, zround, maxit, z1, v1, a1, P1, scratch):
     """One step of size h ending at ``tb`` from ``(z, v, a, P_n)`` into ``(z1, v1, a1, P1)``.
 
@@ -353,12 +381,15 @@ def step_scratch(model):
 
 
 @njit
-def fixed_step_advance(model, s, P_n, warm, wk, awk, evw, track, t0, h, i, i_end, t, coef, t_out, out, ztol, maxit):
+def fixed_step_advance(model, s, P_n, warm, wk, awk, evw, track, t0, h, i, i_end, t, coef, t_out, out, ztol, maxit,
+                       jerk):
     """Steps on the grid ``t0 + i h`` up to step ``i_end`` from ``t``, split where a segment
-    changes mode; returns ``(i, t, written, status, segment)`` as the explicit schemes do."""
+    changes mode; returns ``(i, t, written, status, segment)`` as the explicit schemes do.
+    ``jerk`` is the last step's ``dy''/dt`` (updated; see :func:`scheme_acceleration`)."""
     nd = model.mass.size
     z, v, a = s[:nd].copy(), s[nd : 2 * nd].copy(), s[2 * nd :].copy()
-    z1, v1, a1, P1 = np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd)
+    z1, v1, a1, P1, a_used = np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd)
+    delta = coef[0] - coef[1]
     scratch = step_scratch(model)
     sa, sb, da, db = np.empty(3 * nd), np.empty(3 * nd), np.empty(3 * nd), np.empty(3 * nd)
     ae, ae1 = np.empty(nd), np.empty(nd)
@@ -371,10 +402,13 @@ def fixed_step_advance(model, s, P_n, warm, wk, awk, evw, track, t0, h, i, i_end
                 j += 1
             t, i = tb, i + 1
             continue
-        st = galpha_step(model, z, v, a, P_n, warm, wk, awk, tb, tb - t, coef, ztol, 0.0, maxit, z1, v1, a1, P1, scratch)
+        scheme_acceleration(a, jerk, delta * (tb - t), a_used)
+        st = galpha_step(model, z, v, a_used, P_n, warm, wk, awk, tb, tb - t, coef, ztol, 0.0, maxit, z1, v1, a1, P1,
+                         scratch)
         if st != OK:
             store_state(s, z, v, a)
             return i, t, j, st, -1
+        carried_acceleration(a_used, a1, tb - t, delta * (tb - t), jerk)
         k = -1
         if track:
             store_state(sa, z, v, a)
@@ -384,11 +418,13 @@ def fixed_step_advance(model, s, P_n, warm, wk, awk, evw, track, t0, h, i, i_end
                 store_state(s, z, v, a)
                 return i, t, j, OK, k
             if k >= 0:  # redo the step up to the event, in the modes valid there
-                st = galpha_step(model, z, v, a, P_n, warm, wk, awk, te, te - t, coef, ztol, 0.0, maxit, z1, v1, a1,
-                                  P1, scratch)
+                scheme_acceleration(a, jerk, delta * (te - t), a_used)
+                st = galpha_step(model, z, v, a_used, P_n, warm, wk, awk, te, te - t, coef, ztol, 0.0, maxit, z1, v1,
+                                 a1, P1, scratch)
                 if st != OK:
                     store_state(s, z, v, a)
                     return i, t, j, st, -1
+                carried_acceleration(a_used, a1, te - t, delta * (te - t), jerk)
             tb = te
         if j < t_out.size and t_out[j] <= tb + (1e-9 * h if k < 0 else 0.0):
             j = write_step_outputs(model, awk, t, tb, z, v, a, z1, v1, a1, P_n, P1, ae, ae1, scratch, sa, sb, da, db,

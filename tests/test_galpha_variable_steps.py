@@ -46,3 +46,20 @@ def test_generalized_alpha_error_follows_a_tight_tolerance(paper):
     assert hist.completed and hist.z.shape == zref.shape
     err = np.abs(hist.z - zref).max() / np.abs(zref).max()
     assert err <= rtol, err
+
+
+@pytest.mark.parametrize("name", ["generalized-alpha", "newmark"])
+def test_steps_near_the_noise_floor_are_not_rejected_in_turn(paper, name):
+    """Where the error a step is allowed nears the estimate's rounding floor (here at rtol 1e-8),
+    the floor used to be subtracted from the estimate: the error ratio then grew much faster than
+    ``h^2`` and the step rule overshot, rejecting a step for nearly every one accepted (measured:
+    785 015 rejected for 935 775 accepted over these 10 s). Counted, not timed."""
+    plan, _ = paper
+    rtol = 1e-8
+    integ = make(name, plan.eom, plan.omega_interest, {"rtol": rtol, "atol": 1e-6 * rtol * plan.eom.cable.chord_length})
+    state = integ.start(plan.eom, plan.eom.initial_state())
+    out = np.empty((1, 3 * plan.eom.n_dof))
+    written, code = integ.advance(plan.eom.model(), state, DURATION, np.array([DURATION]), out)
+    accepted, rejected, newton_retries = (int(n) for n in state.extra["steps"])
+    assert written == 1 and accepted > 0
+    assert rejected <= 0.01 * accepted, (accepted, rejected, newton_retries)

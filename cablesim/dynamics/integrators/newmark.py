@@ -390,6 +390,7 @@ def fixed_step_advance(model, s, P_n, warm, wk, awk, evw, track, t0, h, i, i_end
     z, v, a = s[:nd].copy(), s[nd : 2 * nd].copy(), s[2 * nd :].copy()
     z1, v1, a1, P1, a_used = np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd)
     delta = coef[0] - coef[1]
+    jerk_try = jerk.copy()
     scratch = step_scratch(model)
     sa, sb, da, db = np.empty(3 * nd), np.empty(3 * nd), np.empty(3 * nd), np.empty(3 * nd)
     ae, ae1 = np.empty(nd), np.empty(nd)
@@ -408,7 +409,8 @@ def fixed_step_advance(model, s, P_n, warm, wk, awk, evw, track, t0, h, i, i_end
         if st != OK:
             store_state(s, z, v, a)
             return i, t, j, st, -1
-        carried_acceleration(a_used, a1, tb - t, delta * (tb - t), jerk)
+        jerk_try[:] = jerk
+        carried_acceleration(a_used, a1, tb - t, delta * (tb - t), jerk_try)
         k = -1
         if track:
             store_state(sa, z, v, a)
@@ -424,12 +426,14 @@ def fixed_step_advance(model, s, P_n, warm, wk, awk, evw, track, t0, h, i, i_end
                 if st != OK:
                     store_state(s, z, v, a)
                     return i, t, j, st, -1
-                carried_acceleration(a_used, a1, te - t, delta * (te - t), jerk)
+                jerk_try[:] = jerk
+                carried_acceleration(a_used, a1, te - t, delta * (te - t), jerk_try)
             tb = te
         if j < t_out.size and t_out[j] <= tb + (1e-9 * h if k < 0 else 0.0):
             j = write_step_outputs(model, awk, t, tb, z, v, a, z1, v1, a1, P_n, P1, ae, ae1, scratch, sa, sb, da, db,
                                    t_out, out, j)
         z[:], v[:], a[:], P_n[:] = z1, v1, a1, P1
+        jerk[:] = jerk_try
         t = tb
         if k >= 0:
             store_state(s, z, v, a)

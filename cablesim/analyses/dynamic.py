@@ -71,7 +71,8 @@ class HistoryPlan:
         """Integrate: ``(static, history, integrator)``."""
         hist = simulate(self.eom, self.integrator, self.duration, self.output_step, s0=self.s0, progress=progress,
                         split=self.split)
-        return self.static, replace(hist, warnings=history_warnings(self.eom.cable, hist)), self.integrator
+        return (self.static, replace(hist, warnings=(*hist.warnings, *history_warnings(self.eom.cable, hist))),
+                self.integrator)
 
 
 #: Largest drift of eq. 15 (relative to |F0|) before a history is flagged: a scheme that holds

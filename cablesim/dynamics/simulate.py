@@ -281,6 +281,7 @@ def simulate(
             status=status,
             message=message,
             t_stop=t_stop,
+            warnings=integrator.run_notes(state),
             modal_omega=eom.frequencies,
             settings={
                 **{f"integrator_{k}": v for k, v in integrator.settings().items()},

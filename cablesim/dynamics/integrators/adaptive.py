@@ -74,6 +74,9 @@ ROUNDING_STALL = 100.0
 #: beside its chord (a taut stay: 3 mm on 100 m), whose steps then grew blind to rtol; at 1e-16
 #: generalized-alpha at rtol 1e-6 on that stay was still 9e-6 off, at 1e-17 6.8e-7.
 NOISE_FLOOR = 1e-5
+#: A step counts as set by the floor, not by rtol, where the error it is allowed is below this
+#: share of the floor (rtol then asks ten times what rounding resolves).
+FLOOR_SET = 0.1
 
 
 @njit
@@ -103,8 +106,9 @@ def adaptive_advance(model, s, P_n, warm, wk, awk, evw, track, t, h, t_end, coef
     """Error-controlled steps from ``t`` until ``t >= t_end`` (the last step may pass it).
 
     ``per_step = w_ref / amplification`` (1/s) turns the tolerance into an error per unit step;
-    ``counts`` (accepted, rejected by the error test, retried after Newton failed) is
-    incremented, ``peaks[0]`` (the largest ``|z_i|`` so far, m) and ``jerk`` (the last step's
+    ``counts`` (accepted, rejected by the error test, retried after Newton failed, and accepted
+    with an allowed error below :data:`FLOOR_SET` of the rounding floor: set by the floor, not
+    by rtol) is incremented, ``peaks[0]`` (the largest ``|z_i|`` so far, m) and ``jerk`` (the last step's
     ``dy''/dt``, for the scheme's acceleration at a new step size: see
     :func:`~cablesim.dynamics.integrators.newmark.scheme_acceleration`) updated.
 
@@ -115,12 +119,11 @@ def adaptive_advance(model, s, P_n, warm, wk, awk, evw, track, t, h, t_end, coef
     nd = model.mass.size
     z, v, a = s[:nd].copy(), s[nd : 2 * nd].copy(), s[2 * nd :].copy()
     z1, v1, a1, P1, a_used = np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd), np.empty(nd)
-    delta = coef[0] - coef[1]
+    delta, c_err = coef[0] - coef[1], error_constant(coef)
     scratch = step_scratch(model)
     sa, sb, da, db = np.empty(3 * nd), np.empty(3 * nd), np.empty(3 * nd), np.empty(3 * nd)
     ae, ae1 = np.empty(nd), np.empty(nd)
     warm_try, jerk_try = np.empty(warm.size), np.empty(nd)
-    c_err = error_constant(coef)
     floor = NOISE_FLOOR * ztol
     zround = ROUNDING_STALL * floor
     h_min = 1e-12 * (1.0 + abs(t))
@@ -180,6 +183,7 @@ def adaptive_advance(model, s, P_n, warm, wk, awk, evw, track, t, h, t_end, coef
             j = write_step_outputs(model, awk, t, tb, z, v, a, z1, v1, a1, P_n, P1, ae, ae1, scratch, sa, sb, da, db,
                                    t_out, out, j)
         counts[0] += 1
+        counts[3] += 1 if allowed < FLOOR_SET * floor else 0
         for q in range(nd):
             peaks[0] = max(peaks[0], abs(z1[q]))
         z[:], v[:], a[:], P_n[:] = z1, v1, a1, P1

@@ -92,6 +92,11 @@ class Integrator(ABC):
         """The settings, for result files."""
         return {k: v for k, v in self.__dict__.items() if not k.startswith("_")}
 
+    def run_notes(self, state) -> tuple[str, ...]:
+        """What the user should know about how a finished run's steps were set, one paragraph
+        each (the history's warnings): none unless a scheme says otherwise."""
+        return ()
+
     def for_finite_differences(self) -> "Integrator":
         """A version whose flow map is smooth in the initial state (finite-difference monodromy):
         a fixed-step scheme as it is; an adaptive one tightened so that its step-size controller

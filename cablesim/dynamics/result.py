@@ -124,8 +124,10 @@ class HistoryResult:
         Slack events and per-segment peak tension, time slack and episodes (None when not
         recorded).
     warnings : tuple of str
-        Plausibility warnings, one paragraph each (strains beyond the model's range, a drift of
-        eq. 15 beyond its bound); stored in the file (``/history`` attribute ``warnings``).
+        Warnings, one paragraph each: the integrator's notes on how its steps were set
+        (:meth:`~cablesim.dynamics.integrators.base.Integrator.run_notes`) and plausibility
+        warnings (strains beyond the model's range, a drift of eq. 15 beyond its bound); stored
+        in the file (``/history`` attribute ``warnings``).
     """
 
     t: np.ndarray

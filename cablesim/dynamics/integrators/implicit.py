@@ -124,7 +124,7 @@ class GeneralizedAlpha(Integrator):
         h0 = 0.1 * (self.dt_max if np.isfinite(self.dt_max) else 2.0 * np.pi / float(eom.frequencies[0]) / 20.0)
         w_ref = self.omega_ref or float(eom.frequencies[0])
         # steps: accepted, rejected by the error test, retried after a failed Newton iteration,
-        # accepted with their allowed error below the rounding floor
+        # accepted with their allowed error below a tenth of the rounding floor (set by it)
         z0 = st.s[: eom.n_dof]
         peaks = np.array([np.abs(z0).max()])  # m
         st.extra.update(P=self._force(eom, st), t0=t0, i=0, h=h0, steps=np.zeros(4, dtype=np.int64), peaks=peaks,

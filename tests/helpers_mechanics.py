@@ -176,3 +176,30 @@ def moving_support_reference(eom, t_out, z0=None, rtol=1e-11):
     assert sol.success, sol.message
     y = sol.y[:nd].T
     return y - eom.y0, np.array([ref.tensions(t, yi) for t, yi in zip(t_out, y)])
+
+
+def planned_history_reference(case_path, duration):
+    """A case's history plan over ``duration`` (s), as ``cablesim history`` makes it (the case's
+    start included), and :func:`moving_support_reference`'s displacements at its saved instants
+    from the same start: ``(plan, z_ref)``."""
+    from cablesim.analyses.dynamic import plan_history
+    from cablesim.case import load_case
+
+    plan = plan_history(load_case(case_path)[0], duration=duration)
+    t = np.arange(0, int(round(duration / plan.output_step)) + 1) * plan.output_step
+    z0 = None if plan.s0 is None else plan.s0[: plan.eom.n_dof]
+    return plan, moving_support_reference(plan.eom, t, z0)[0]
+
+
+def controlled_history_error(plan, z_ref, name, rtol):
+    """The largest ``|z - z_ref|`` over the peak of ``|z_ref|`` of the plan's history by the
+    implicit scheme ``name`` at ``rtol``, its atol a millionth of rtol times the chord (the
+    default's ratio: the step is rtol's to set)."""
+    from cablesim.dynamics.integrators.settings import make
+    from cablesim.dynamics.simulate import simulate
+
+    eom = plan.eom
+    integ = make(name, eom, plan.omega_interest, {"rtol": rtol, "atol": 1e-6 * rtol * eom.cable.chord_length})
+    hist = simulate(eom, integ, plan.duration, plan.output_step, s0=plan.s0, split=False)
+    assert hist.completed and hist.z.shape == z_ref.shape
+    return np.abs(hist.z - z_ref).max() / np.abs(z_ref).max()

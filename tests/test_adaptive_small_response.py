@@ -15,14 +15,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 import pytest
-from helpers_mechanics import moving_support_reference
-
-from cablesim.analyses.dynamic import plan_history
-from cablesim.case import load_case
-from cablesim.dynamics.integrators.settings import make
-from cablesim.dynamics.simulate import simulate
+from helpers_mechanics import controlled_history_error, planned_history_reference
 
 CASE = Path(__file__).resolve().parents[1] / "configs" / "stay-parametric.yaml"
 DURATION = 20.0
@@ -30,20 +24,12 @@ DURATION = 20.0
 
 @pytest.fixture(scope="module")
 def stay():
-    plan = plan_history(load_case(CASE)[0], duration=DURATION)
-    t = np.arange(0, int(round(DURATION / plan.output_step)) + 1) * plan.output_step
-    zref, _ = moving_support_reference(plan.eom, t, plan.s0[: plan.eom.n_dof])
-    return plan, zref
+    return planned_history_reference(CASE, DURATION)
 
 
 @pytest.mark.parametrize("name", ["generalized-alpha",
                                   pytest.param("newmark", marks=pytest.mark.slow(reason="the same rule, a second scheme"))])
 def test_error_control_holds_its_tolerance_on_a_small_response(stay, name):
-    plan, zref = stay
     rtol = 1e-5
-    # atol at a millionth of rtol times the chord, the default's ratio: the step is rtol's to set
-    integ = make(name, plan.eom, plan.omega_interest, {"rtol": rtol, "atol": 1e-6 * rtol * plan.eom.cable.chord_length})
-    hist = simulate(plan.eom, integ, DURATION, plan.output_step, s0=plan.s0, split=False)
-    assert hist.completed and hist.z.shape == zref.shape
-    err = np.abs(hist.z - zref).max() / np.abs(zref).max()
+    err = controlled_history_error(*stay, name, rtol)
     assert err <= rtol, (name, err)

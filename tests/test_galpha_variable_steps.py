@@ -13,48 +13,37 @@ here, 2.3e-8 and 2.6e-8 on the stay.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers_mechanics import moving_support_reference
+from helpers_mechanics import controlled_history_error, planned_history_reference
 
-from cablesim.analyses.dynamic import plan_history
-from cablesim.case import load_case
 from cablesim.dynamics.integrators.settings import make
-from cablesim.dynamics.simulate import simulate
 
 CASE = Path(__file__).resolve().parents[1] / "configs" / "paper-example.yaml"
 DURATION = 10.0
 
 
 @pytest.fixture(scope="module")
-def paper():
-    plan = plan_history(load_case(CASE)[0], duration=DURATION)
-    t = np.arange(0, int(round(DURATION / plan.output_step)) + 1) * plan.output_step
-    z0 = None if plan.s0 is None else plan.s0[: plan.eom.n_dof]
-    zref, _ = moving_support_reference(plan.eom, t, z0)
-    return plan, zref
+def paper_10s():
+    return planned_history_reference(CASE, DURATION)
 
 
-def test_generalized_alpha_error_follows_a_tight_tolerance(paper):
-    plan, zref = paper
+def test_generalized_alpha_error_follows_a_tight_tolerance(paper_10s):
     rtol = 1e-8
-    integ = make("generalized-alpha", plan.eom, plan.omega_interest,
-                 {"rtol": rtol, "atol": 1e-6 * rtol * plan.eom.cable.chord_length})
-    hist = simulate(plan.eom, integ, DURATION, plan.output_step, s0=plan.s0, split=False)
-    assert hist.completed and hist.z.shape == zref.shape
-    err = np.abs(hist.z - zref).max() / np.abs(zref).max()
+    err = controlled_history_error(*paper_10s, "generalized-alpha", rtol)
     assert err <= rtol, err
 
 
 @pytest.mark.parametrize("name", ["generalized-alpha", "newmark"])
-def test_steps_near_the_noise_floor_are_not_rejected_in_turn(paper, name):
+def test_steps_near_the_noise_floor_are_not_rejected_in_turn(paper_10s, name):
     """Where the error a step is allowed nears the estimate's rounding floor (here at rtol 1e-8),
     the floor used to be subtracted from the estimate: the error ratio then grew much faster than
     ``h^2`` and the step rule overshot, rejecting a step for nearly every one accepted (measured:
     785 015 rejected for 935 775 accepted over these 10 s). Counted, not timed."""
-    plan, _ = paper
+    plan, _ = paper_10s
     rtol = 1e-8
     integ = make(name, plan.eom, plan.omega_interest, {"rtol": rtol, "atol": 1e-6 * rtol * plan.eom.cable.chord_length})
     state = integ.start(plan.eom, plan.eom.initial_state())
@@ -65,14 +54,12 @@ def test_steps_near_the_noise_floor_are_not_rejected_in_turn(paper, name):
     assert rejected <= 0.01 * accepted, (accepted, rejected, newton_retries)
 
 
-def test_a_run_whose_steps_the_rounding_floor_set_says_so(paper):
+def test_a_run_whose_steps_the_rounding_floor_set_says_so(paper_10s):
     """rtol 1e-10 asks the paper example's steps for less than a tenth of the estimate's rounding
     floor (1e-17 of the chord): it takes about the steps of rtol 1e-8 (newmark: 758 046 against
     754 114 over these 10 s), and the history's warnings say that the floor, not rtol, set them.
     At the default rtol nothing is said."""
-    from dataclasses import replace
-
-    plan, _ = paper
+    plan, _ = paper_10s
     tight = replace(plan, integrator=make("newmark", plan.eom, plan.omega_interest, {"rtol": 1e-10}))
     _, hist, _ = tight.run()
     assert hist.completed

@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from cablesim import api
-from cablesim.orbits import problems
+from cablesim.orbits import problems, stability
 from cablesim.orbits.shooting import solve_orbit
 from cablesim.orbits.stability import sort_multipliers
 
@@ -78,22 +78,32 @@ def profile(case, top: int) -> str:
     return out.getvalue()
 
 
+def rule_midpoint(P_a: np.ndarray, P_b: np.ndarray, geodesic: bool) -> np.ndarray:
+    """The out-of-plane block the step rule assumes at mid-step: on the geodesic
+    ``P_a (P_a^-1 P_b)^(1/2)`` where the rule follows it, else on the straight line."""
+    if geodesic:
+        step = stability.StepLog(P_a, P_b)
+        if step.usable():
+            return P_a @ step.power(np.array([0.5]))[0]
+    return 0.5 * (P_a + P_b)
+
+
 def check_steps(case) -> str:
-    """The largest error of the out-of-plane multipliers of the interpolated block at mid-step,
-    over the accepted steps of the planar branches, relative to the true multipliers' distance
-    from the unit circle there (the orbit re-solved at the chord's middle parameter)."""
+    """The largest error of the out-of-plane multipliers of the step rule's interpolant at
+    mid-step, over the accepted steps of the planar branches, relative to the true multipliers'
+    distance from the unit circle there (the orbit re-solved at the chord's middle parameter)."""
     rule = problems.PlanarOrbitProblem.step_ratio
     worst = []
 
-    def checked(self, ev_a, ev_b):
-        ratio = rule(self, ev_a, ev_b)
+    def checked(self, ev_a, ev_b, ev_before=None):
+        ratio = rule(self, ev_a, ev_b, ev_before)
         if ratio <= 1.0:
             sol = solve_orbit(self.shooting, 0.5 * (ev_a.u + ev_b.u), 0.5 * (ev_a.lam + ev_b.lam),
                               scale=self.u_scale[: self.shooting.n])
             if sol.converged:
                 true = sort_multipliers(np.linalg.eigvals(self.mirror.blocks(sol.evaluation.monodromy)[1]))
-                mid = np.linalg.eigvals(0.5 * (problems.monodromy_blocks(self.mirror, ev_a)[1]
-                                               + problems.monodromy_blocks(self.mirror, ev_b)[1]))
+                P_a, P_b = (problems.monodromy_blocks(self.mirror, ev)[1] for ev in (ev_a, ev_b))
+                mid = np.linalg.eigvals(rule_midpoint(P_a, P_b, ev_before is not None))
                 err = max(float(np.abs(mid - mu).min()) for mu in true)
                 worst.append(err / float(np.abs(np.abs(true) - 1.0).min()))
         return ratio

@@ -322,7 +322,7 @@ class BackboneProblem:
         ratio = f"{k2 // 2}:1" if k2 % 2 == 0 else f"{k2}:2"
         return f"{ratio} internal resonance with mode {self.others_modes[j] + 1}"
 
-    def step_ratio(self, a: BackboneEvaluation, b: BackboneEvaluation) -> float:
+    def step_ratio(self, a: BackboneEvaluation, b: BackboneEvaluation, before=None) -> float:
         watched = (a.ratios <= self.max_ratio + 1.0) | (b.ratios <= self.max_ratio + 1.0)
         if not watched.any():
             return 0.0

@@ -28,10 +28,12 @@ Optional: ``bordered(ev, u_scale, lam_scale, r_scale)``
     (or None) and whose ``tangent(ref)`` returns the unit null vector of ``[J_u J_lam]`` with a
     positive projection on ``ref`` (or None), for instance by a Krylov method on the Jacobian's
     action on vectors.
-Optional: ``step_ratio(ev_a, ev_b) -> float``
+Optional: ``step_ratio(ev_a, ev_b, ev_before) -> float``
     A problem-specific measure of the change between consecutive points (for instance of the
     quantities the test functions depend on); a step with a ratio above 1 is rejected and
-    halved, one below 1/4 lets the step grow.
+    halved, one below 1/4 lets the step grow. ``ev_before``: the evaluation of the branch's
+    point before ``ev_a`` (None at its first step), for a rule that models the change along
+    the branch beyond two points.
 Optional: ``confirm(name, ev) -> str or None``
     Final label of a located special point (None discards it, for instance a neutral saddle
     that a Neimark-Sacker test cannot tell from a genuine crossing).
@@ -487,7 +489,8 @@ def _march(sp: _Scaled, branch: Branch, st: Settings, callback, checkpoint=None,
             b = _point(sp, v, ev, its, res, Jf, a.tangent, arclength=a.arclength + float(np.linalg.norm(v - va)))
         ratio = 0.0
         if b is not None and hasattr(sp.p, "step_ratio"):
-            ratio = float(sp.p.step_ratio(a.evaluation, b.evaluation))
+            previous = branch.points[-2].evaluation if len(branch.points) > 1 else None
+            ratio = float(sp.p.step_ratio(a.evaluation, b.evaluation, previous))
         if b is None or ((b.tangent @ a.tangent < cos_min or ratio > 1.0) and ds > st.ds_min):
             branch.steps_rejected += 1
             ds *= 0.5

@@ -405,7 +405,7 @@ class LocusProblem:
             return name if stability.confirm("neimark-sacker", ev.others) else None
         return name
 
-    def step_ratio(self, a: LocusEvaluation, b: LocusEvaluation) -> float:
+    def step_ratio(self, a: LocusEvaluation, b: LocusEvaluation, before=None) -> float:
         """How far the non-critical multipliers moved (:func:`~cablesim.orbits.stability.step_ratio`)."""
         oa, ob = a.others, b.others
         if oa.size == 0 or oa.size != ob.size:

@@ -154,5 +154,5 @@ class MatrixFreeOrbitProblem(RotationPhase):
     def confirm(self, name: str, ev: MFEvaluation) -> str | None:
         return stability.confirm(name, leading_from(self.leading(ev)))
 
-    def step_ratio(self, ev_a: MFEvaluation, ev_b: MFEvaluation) -> float:
+    def step_ratio(self, ev_a: MFEvaluation, ev_b: MFEvaluation, ev_before=None) -> float:
         return truncated_step_ratio(self.leading(ev_a).multipliers, self.leading(ev_b).multipliers)

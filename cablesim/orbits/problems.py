@@ -61,7 +61,7 @@ class OrbitProblem(RotationPhase):
     def confirm(self, name: str, ev: Evaluation) -> str | None:
         return stability.confirm(name, self.tested(ev))
 
-    def step_ratio(self, ev_a: Evaluation, ev_b: Evaluation) -> float:
+    def step_ratio(self, ev_a: Evaluation, ev_b: Evaluation, ev_before: Evaluation | None = None) -> float:
         return stability.step_ratio(self.tested(ev_a), self.tested(ev_b))
 
 
@@ -98,18 +98,29 @@ class PlanarOrbitProblem(OrbitProblem):
     def test_functions(self, ev: Evaluation) -> np.ndarray:
         return stability.split_test_functions(*self.tested_blocks(ev))
 
-    def step_ratio(self, ev_a: Evaluation, ev_b: Evaluation) -> float:
+    def step_ratio(self, ev_a: Evaluation, ev_b: Evaluation, ev_before: Evaluation | None = None) -> float:
         """Each block in its own terms: the in-plane multipliers as the planar cable's
-        (:func:`~cablesim.orbits.stability.step_ratio`), the out-of-plane block on its matrix
-        (:func:`~cablesim.orbits.stability.interpolated_step_ratio`). The out-of-plane
-        multipliers of a lightly damped string turn fast with the parameter and pass near
-        ``+1`` and ``-1`` again and again without approaching the circle; judged as multipliers
-        they held the steps of the planar branch to a fraction of the planar cable's."""
+        (:func:`~cablesim.orbits.stability.step_ratio`), the out-of-plane block on its matrix,
+        along the geodesic from ``ev_a`` to ``ev_b`` with the model's error from ``ev_before``
+        (:func:`~cablesim.orbits.stability.geodesic_step_ratio`). The out-of-plane multipliers
+        of a lightly damped string turn fast with the parameter and pass near ``+1`` and ``-1``
+        again and again without approaching the circle; judged as multipliers they held the
+        steps of the planar branch to a fraction of the planar cable's."""
         if not self.block_step_rule:
             return super().step_ratio(ev_a, ev_b)
         in_a, in_b = block_multipliers(self.mirror, ev_a)[0], block_multipliers(self.mirror, ev_b)[0]
+        P_a, P_b = self.out_of_plane_block(ev_a), self.out_of_plane_block(ev_b)
+        if ev_before is None or self.out_of_plane_block(ev_before).shape != P_a.shape:
+            return max(stability.step_ratio(in_a, in_b), stability.interpolated_step_ratio(P_a, P_b))
+        s_before, s_b = -self.distance(ev_before, ev_a), self.distance(ev_a, ev_b)
         return max(stability.step_ratio(in_a, in_b),
-                   stability.interpolated_step_ratio(self.out_of_plane_block(ev_a), self.out_of_plane_block(ev_b)))
+                   stability.geodesic_step_ratio(P_a, P_b, self.out_of_plane_block(ev_before), s_before, s_b))
+
+    def distance(self, ev_a: Evaluation, ev_b: Evaluation) -> float:
+        """The scaled distance between two points of the branch (``u / u_scale``, ``lambda /
+        lam_scale``), the measure of arclength along it."""
+        du = (ev_b.u - ev_a.u) / self.u_scale
+        return float(np.hypot(np.linalg.norm(du), (ev_b.lam - ev_a.lam) / self.lam_scale))
 
     def out_of_plane_block(self, ev: Evaluation) -> np.ndarray:
         """The out-of-plane block of the monodromy, deflated by the neutral multiplier if any

@@ -135,8 +135,38 @@ def step_ratio(mu_a: np.ndarray, mu_b: np.ndarray, floor: float = 0.005, near: f
     return ratio
 
 
-#: Sub-steps of the linear interpolant of a monodromy block (:func:`interpolated_step_ratio`).
+#: Sub-steps of the interpolants of a monodromy block (:func:`interpolated_step_ratio`).
 INTERPOLANT_SUBSTEPS = 8
+
+
+def path_step_ratio(mus: np.ndarray, floor: float = 0.005, near: float = 0.3) -> float:
+    """The largest :func:`step_ratio` between consecutive rows of ``mus`` (the multipliers,
+    sorted, at the sub-steps of a path), and 2 (reject) if a test function
+    (:func:`test_functions`) changes sign along the path but not between its ends: a multiplier
+    that passes ``-1`` or ``+1`` and back, or a pair through the circle and back, within it."""
+    mus = np.asarray(mus, dtype=complex)
+    mods = np.sort(np.abs(mus), axis=1)
+    crit = np.abs(mods[:-1] - 1.0).min(axis=1)
+    ratio = float((np.abs(mods[1:] - mods[:-1]).max(axis=1) / np.maximum(0.5 * crit, floor)).max())
+    mu_a, mu_b = mus[:-1], mus[1:]
+    dist = np.minimum(np.abs(mu_a + 1.0), np.abs(mu_a - 1.0))
+    watched = dist < near
+    if watched.any():  # each watched multiplier's move to its nearest partner at the next sub-step
+        moved = np.abs(mu_b[:, None, :] - mu_a[:, :, None]).min(axis=2)
+        ratio = max(ratio, float((moved / np.maximum(0.5 * dist, floor))[watched].max()))
+    signs = np.sign(test_functions(mus))
+    hidden = (np.count_nonzero(signs[1:] != signs[:-1], axis=0) > 0) & (signs[0] == signs[-1])
+    return max(ratio, 2.0) if np.any(hidden) else ratio
+
+
+def _path_multipliers(path: np.ndarray) -> np.ndarray:
+    """The sorted multipliers of every matrix of a path ``(k, m, m)``."""
+    return np.array([sort_multipliers(mu) for mu in np.linalg.eigvals(path)])
+
+
+def _line(P_a: np.ndarray, P_b: np.ndarray, substeps: int) -> np.ndarray:
+    ts = np.linspace(0.0, 1.0, substeps + 1)[:, None, None]
+    return (1.0 - ts) * P_a + ts * P_b
 
 
 def interpolated_step_ratio(P_a: np.ndarray, P_b: np.ndarray, substeps: int = INTERPOLANT_SUBSTEPS,
@@ -150,12 +180,10 @@ def interpolated_step_ratio(P_a: np.ndarray, P_b: np.ndarray, substeps: int = IN
     The block is interpolated linearly, ``P(t) = (1 - t) P_a + t P_b``, and the step's ratio is
     the largest of
 
-    - :func:`step_ratio` between the multipliers of ``P`` at consecutive sub-steps
-      ``t = k / substeps`` (the moduli and the motion near ``+1`` and ``-1``, now of a path that
-      goes through the collisions on the real axis as the true multipliers do);
-    - 2 (reject) if a test function (:func:`test_functions`) of ``P`` changes sign inside the
-      step but not between its ends: a multiplier that passes ``-1`` or ``+1`` and back, or a
-      pair through the circle and back, within the step;
+    - :func:`path_step_ratio` of the multipliers of ``P`` at the sub-steps ``t = k / substeps``
+      (the moduli and the motion near ``+1`` and ``-1``, now of a path that goes through the
+      collisions on the real axis as the true multipliers do, and the sign changes of the tests
+      inside the step but not between its ends);
     - the linear model's error against the distance of ``P``'s multipliers from the unit circle
       (at most half of it, or of ``floor``, as :func:`step_ratio`): the defect
       ``|det P(1/2) / sqrt(det P_a det P_b) - 1|``, since ``log det`` of the true block is
@@ -164,19 +192,119 @@ def interpolated_step_ratio(P_a: np.ndarray, P_b: np.ndarray, substeps: int = IN
       step, about twice the error that turn gives its multipliers at mid-step.
     """
     P_a, P_b = np.asarray(P_a, dtype=float), np.asarray(P_b, dtype=float)
-    ts = np.linspace(0.0, 1.0, substeps + 1)
-    mus = [sort_multipliers(mu) for mu in np.linalg.eigvals(np.array([(1.0 - t) * P_a + t * P_b for t in ts]))]
-    ratio = max(step_ratio(mus[k], mus[k + 1], floor, near) for k in range(substeps))
-    signs = np.sign(test_functions(np.array(mus)))
-    hidden = (np.count_nonzero(signs[1:] != signs[:-1], axis=0) > 0) & (signs[0] == signs[-1])
-    if np.any(hidden):
-        ratio = max(ratio, 2.0)
+    return _line_ratio(P_a, P_b, _path_multipliers(_line(P_a, P_b, substeps)), floor, near)
+
+
+def _line_ratio(P_a, P_b, mus, floor, near) -> float:
+    """:func:`interpolated_step_ratio` from the multipliers ``mus`` along the line."""
+    ratio = path_step_ratio(mus, floor, near)
     mean = np.sqrt(abs(np.linalg.det(P_a) * np.linalg.det(P_b)))
     if mean > 0.0:
         defect = abs(np.linalg.det(0.5 * (P_a + P_b)) / mean - 1.0)
-        crit = float(np.abs(np.abs(np.concatenate(mus)) - 1.0).min())
+        crit = float(np.abs(np.abs(mus) - 1.0).min())
         ratio = max(ratio, defect / max(0.5 * crit, floor))
     return float(ratio)
+
+
+#: A straight-line ratio at or below which :func:`geodesic_step_ratio` does not follow the
+#: geodesic: the smaller ratio it might give would change nothing, since a ratio below 1/4
+#: already lets the continuation's step grow by its largest factor.
+LENIENT = 0.25
+
+#: Largest turn (radians) of an eigenvalue of ``P_a^-1 P_b`` over one step for which
+#: :func:`geodesic_step_ratio` follows the block along its geodesic (the real principal logarithm
+#: is then well defined); beyond it, or where the step's eigenvectors are too ill-conditioned
+#: (condition above :data:`GEODESIC_MAX_CONDITION`), only the straight line judges the step.
+GEODESIC_MAX_TURN = 0.5 * np.pi
+GEODESIC_MAX_CONDITION = 1e6
+#: Sub-steps of the geodesic in :func:`geodesic_step_ratio`: twice the straight line's, since a
+#: step along it may turn a pair by up to :data:`GEODESIC_MAX_TURN` and the motion near ``+1``
+#: and ``-1`` is judged between consecutive sub-steps (the sampling of the path, not its model,
+#: which the error estimate judges).
+GEODESIC_SUBSTEPS = 2 * INTERPOLANT_SUBSTEPS
+
+
+class StepLog:
+    """``Q = P_a^-1 P = V diag(w) V^-1`` with its real principal logarithm
+    ``L = V diag(log w) V^-1`` and powers ``Q^t = V diag(w^t) V^-1``, from one eigensolution of
+    ``Q - I`` (the eigenvectors of ``Q``; its eigenvalues ``w - 1`` carry the step's change to
+    full precision)."""
+
+    def __init__(self, P_a: np.ndarray, P: np.ndarray):
+        d, self.V = np.linalg.eig(np.linalg.solve(P_a, P - P_a))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            self.logw = np.log1p(d)
+        self.Vinv = np.linalg.inv(self.V) if np.all(np.isfinite(self.V)) else self.V
+
+    def usable(self) -> bool:
+        """Every eigenvalue turned by at most :data:`GEODESIC_MAX_TURN`, the eigenvectors'
+        condition (in the 1-norm) within :data:`GEODESIC_MAX_CONDITION`."""
+        if not (np.all(np.isfinite(self.logw)) and np.all(np.isfinite(self.Vinv))):
+            return False
+        cond = np.abs(self.V).sum(axis=0).max() * np.abs(self.Vinv).sum(axis=0).max()
+        return bool(np.abs(self.logw.imag).max() <= GEODESIC_MAX_TURN and cond <= GEODESIC_MAX_CONDITION)
+
+    def power(self, t: np.ndarray) -> np.ndarray:
+        """``Q^t`` for every ``t`` of a 1-d array, ``(len(t), m, m)``."""
+        return np.real((self.V * np.exp(np.asarray(t)[:, None, None] * self.logw)) @ self.Vinv)
+
+    def log(self) -> np.ndarray:
+        return np.real((self.V * self.logw) @ self.Vinv)
+
+
+def geodesic_step_ratio(P_a: np.ndarray, P_b: np.ndarray, P_before: np.ndarray | None = None,
+                        s_before: float = -1.0, s_b: float = 1.0, substeps: int = INTERPOLANT_SUBSTEPS,
+                        geodesic_substeps: int = GEODESIC_SUBSTEPS, floor: float = 0.005,
+                        near: float = 0.3) -> float:
+    """The step rule of :func:`interpolated_step_ratio` on the geodesic
+    ``P(t) = P_a (P_a^-1 P_b)^t`` as well as on the straight line between the blocks, with the
+    geodesic's error estimated from the point before the step; the smaller ratio counts.
+
+    A block of the form ``P_a exp(A dT)`` (a lightly damped string whose period changes) lies on
+    its geodesic: its pairs turn on their circles, where the straight line cuts across the
+    chord and its determinant defect binds the step although the multipliers stay off the
+    circle. The geodesic's own error is the curvature of ``Lambda(s) = log(P_a^-1 P(s))`` along
+    the branch (``s`` the arclength, ``s_before < 0`` at ``P_before``, ``s_b > 0`` at ``P_b``):
+    the parabola through the three points gives the mid-step error
+    ``E = -(s_b^2 / 4) (L_b / s_b - L_before / s_before) / (s_b - s_before)``, and the
+    multipliers move by at most about ``|P(1/2) E|``, which must stay within half their distance
+    from the circle (or ``floor``), as the linear rule's defect. Each model, within its own
+    error bound, certifies the step, hence the smaller ratio; the straight line alone judges it
+    where its ratio is at most :data:`LENIENT`, without a point before the step or where a
+    logarithm is not usable
+    (:meth:`StepLog.usable`: a turn of more than :data:`GEODESIC_MAX_TURN` over a step,
+    eigenvectors too ill-conditioned, or multipliers near zero that leave ``P_a^-1`` carrying
+    rounding).
+    """
+    P_a, P_b = np.asarray(P_a, dtype=float), np.asarray(P_b, dtype=float)
+    line = interpolated_step_ratio(P_a, P_b, substeps, floor, near)
+    if line <= LENIENT or P_before is None:
+        return line
+    geodesic = geodesic_model_ratio(P_a, P_b, P_before, s_before, s_b, geodesic_substeps, floor, near)
+    return line if geodesic is None else float(min(line, geodesic))
+
+
+def geodesic_model_ratio(P_a: np.ndarray, P_b: np.ndarray, P_before: np.ndarray, s_before: float, s_b: float,
+                         substeps: int = GEODESIC_SUBSTEPS, floor: float = 0.005,
+                         near: float = 0.3) -> float | None:
+    """The geodesic's own ratio in :func:`geodesic_step_ratio`: :func:`path_step_ratio` of the
+    multipliers along ``P_a (P_a^-1 P_b)^t`` and its error estimate against their distance from
+    the circle; None where a logarithm is not usable (:meth:`StepLog.usable`) or the arclengths
+    do not bracket ``P_a`` (``s_before < 0 < s_b``)."""
+    P_a, P_b = np.asarray(P_a, dtype=float), np.asarray(P_b, dtype=float)
+    if not s_before < 0.0 < s_b:
+        return None
+    step, back = StepLog(P_a, P_b), StepLog(P_a, np.asarray(P_before, dtype=float))
+    if not (step.usable() and back.usable()):
+        return None
+    geodesic = P_a @ step.power(np.linspace(0.0, 1.0, substeps + 1)[1:-1])
+    mus = np.concatenate([_path_multipliers(np.array([P_a])), _path_multipliers(geodesic),
+                          _path_multipliers(np.array([P_b]))])
+    ratio = path_step_ratio(mus, floor, near)
+    E = -(s_b * s_b / 4.0) * (step.log() / s_b - back.log() / s_before) / (s_b - s_before)
+    error = float(np.linalg.norm(geodesic[substeps // 2 - 1] @ E, 2))
+    crit = float(np.abs(np.abs(mus) - 1.0).min())
+    return float(max(ratio, error / max(0.5 * crit, floor)))
 
 
 def is_stable(mu: np.ndarray) -> bool:

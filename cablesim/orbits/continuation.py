@@ -255,12 +255,22 @@ def _tangent(Jfull: np.ndarray, ref: np.ndarray) -> np.ndarray | None:
     return t if t @ ref >= 0 else -t
 
 
-def _correct(sp: _Scaled, v_pred, normal, offset, st: Settings, radius: float):
+#: A corrector that gives up (:func:`_correct`) when a Newton step is more than this fraction of
+#: the last one (from the third on), or a patient one (``patient=True``) more than
+#: :data:`PATIENT_CONTRACTION`, which also takes :data:`PATIENT_ITERATIONS` times the iterations:
+#: near a double root (two solutions about to merge) Newton's steps shrink only linearly.
+CONTRACTION = 0.5
+PATIENT_CONTRACTION = 0.9
+PATIENT_ITERATIONS = 6
+
+
+def _correct(sp: _Scaled, v_pred, normal, offset, st: Settings, radius: float, patient: bool = False):
     """Newton on ``r = 0`` and ``normal . v = offset``; returns ``(v, ev, iterations, residual,
     bordered systems at ev)`` in scaled variables, or None."""
     v = v_pred.copy()
     prev = np.inf
-    for it in range(1, st.max_newton + 1):
+    contraction = PATIENT_CONTRACTION if patient else CONTRACTION
+    for it in range(1, st.max_newton * (PATIENT_ITERATIONS if patient else 1) + 1):
         ev = sp.evaluate(v)
         if ev is None:
             return None
@@ -275,7 +285,7 @@ def _correct(sp: _Scaled, v_pred, normal, offset, st: Settings, radius: float):
             return None
         if step <= st.newton_tol and res <= st.residual_tol:
             return v, ev, it, res, Jf
-        if it >= 3 and step > 0.5 * prev:  # not contracting
+        if it >= 3 and step > contraction * prev:  # not contracting
             return None
         prev = step
         v = v + dv
@@ -298,11 +308,16 @@ def _v(sp, p: Point):
     return sp.scale(p.u, p.lam)
 
 
-def _solve_at(sp, a: Point, sigma: float, st: Settings, special=None):
-    """The branch point at projected arclength ``sigma`` beyond ``a`` (along ``a.tangent``)."""
+def _solve_at(sp, a: Point, sigma: float, st: Settings, special=None, near: tuple | None = None,
+              patient: bool = False):
+    """The branch point at projected arclength ``sigma`` beyond ``a`` (along ``a.tangent``),
+    predicted from ``near = (v, s)``, a point of the branch in scaled variables at projected
+    arclength ``s`` (default ``a`` itself); ``patient``: the corrector of :func:`_correct`."""
     va = _v(sp, a)
-    pred = va + sigma * a.tangent
-    out = _correct(sp, pred, a.tangent, a.tangent @ va + sigma, st, radius=max(2.0 * abs(sigma), 1e-12) + 1.0)
+    v_near, s_near = (va, 0.0) if near is None else near
+    pred = v_near + (sigma - s_near) * a.tangent
+    out = _correct(sp, pred, a.tangent, a.tangent @ va + sigma, st, radius=max(2.0 * abs(sigma), 1e-12) + 1.0,
+                   patient=patient)
     if out is None:
         return None
     v, ev, its, res, Jf = out
@@ -329,6 +344,7 @@ def _locate(sp, a: Point, b: Point, k: int, name: str, st: Settings):
     va, vb = _v(sp, a), _v(sp, b)
     s_lo, s_hi = 0.0, float(a.tangent @ (vb - va))
     f_lo, f_hi = a.tests[k], b.tests[k]
+    v_lo, v_hi = va, vb
     best = None
     side = 0
     for _ in range(st.max_locate):
@@ -342,6 +358,11 @@ def _locate(sp, a: Point, b: Point, k: int, name: str, st: Settings):
         s = min(max(s, s_lo + 1e-3 * width), s_hi - 1e-3 * width)
         p = _solve_at(sp, a, s, st, special=name)
         if p is None:
+            # again, patiently, from the nearer bracket end: at a zero where two solutions merge
+            # (a 1:1 resonance, which ends a Neimark-Sacker curve) Newton's steps only halve
+            near = (v_lo, s_lo) if s - s_lo <= s_hi - s else (v_hi, s_hi)
+            p = _solve_at(sp, a, s, st, special=name, near=near, patient=True)
+        if p is None:
             return best, False
         fs = p.tests[k]
         # the trial nearest the zero: the last one may be the far end of the final bracket
@@ -350,12 +371,12 @@ def _locate(sp, a: Point, b: Point, k: int, name: str, st: Settings):
         if fs == 0.0:
             return p, True
         if np.sign(fs) == np.sign(f_lo):
-            s_lo, f_lo = s, fs
+            s_lo, f_lo, v_lo = s, fs, _v(sp, p)
             if side == -1:
                 f_hi *= 0.5
             side = -1
         else:
-            s_hi, f_hi = s, fs
+            s_hi, f_hi, v_hi = s, fs, _v(sp, p)
             if side == 1:
                 f_lo *= 0.5
             side = 1

@@ -249,6 +249,7 @@ class StepLog:
         return np.real((self.V * np.exp(np.asarray(t)[:, None, None] * self.logw)) @ self.Vinv)
 
     def log(self) -> np.ndarray:
+        """``L = log Q``."""
         return np.real((self.V * self.logw) @ self.Vinv)
 
 
@@ -269,12 +270,12 @@ def geodesic_step_ratio(P_a: np.ndarray, P_b: np.ndarray, P_before: np.ndarray |
     ``E = -(s_b^2 / 4) (L_b / s_b - L_before / s_before) / (s_b - s_before)``, and the
     multipliers move by at most about ``|P(1/2) E|``, which must stay within half their distance
     from the circle (or ``floor``), as the linear rule's defect. Each model, within its own
-    error bound, certifies the step, hence the smaller ratio; the straight line alone judges it
-    where its ratio is at most :data:`LENIENT`, without a point before the step or where a
-    logarithm is not usable
-    (:meth:`StepLog.usable`: a turn of more than :data:`GEODESIC_MAX_TURN` over a step,
-    eigenvectors too ill-conditioned, or multipliers near zero that leave ``P_a^-1`` carrying
-    rounding).
+    error bound, certifies the step, hence the smaller ratio (where multipliers near zero leave
+    the logarithms carrying rounding, the geodesic's estimate is large and the line's ratio
+    counts). The line alone judges the step where its ratio is at most :data:`LENIENT`, without
+    a point before the step, or where a logarithm is not usable (:meth:`StepLog.usable`: a turn
+    of more than :data:`GEODESIC_MAX_TURN` over the step, or eigenvectors too ill-conditioned).
+    The geodesic is sampled at ``geodesic_substeps``, the line at ``substeps``.
     """
     P_a, P_b = np.asarray(P_a, dtype=float), np.asarray(P_b, dtype=float)
     line = interpolated_step_ratio(P_a, P_b, substeps, floor, near)

@@ -5,7 +5,8 @@ References written out here: blocks ``P(s) = S exp(A (T0 + s)) S^-1`` (two light
 turning fast with ``s``, made non-normal by ``S``), which lie exactly on their geodesic;
 ``P(s) = exp(A + s B)`` with ``A`` and ``B`` that do not commute, which does not, with the
 geodesic's true mid-step error ``log(P_a^-1 P(h / 2)) - log(P_a^-1 P(h)) / 2`` from scipy's
-``logm``; and the period-doubling tongue of ``tests/test_step_rule_blocks.py`` in closed form.
+``logm``; and the period-doubling tongue of ``tests/test_step_rule_blocks.py`` in closed form
+(imported from it).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import scipy.linalg as sl
 from cablesim.orbits import Settings, continuation
 from cablesim.orbits.stability import (StepLog, geodesic_model_ratio, geodesic_step_ratio, interpolated_step_ratio,
                                        path_step_ratio)
+from test_step_rule_blocks import tongue, tongue_multipliers
 
 
 def turning(rates=(1.1, 2.3), damping=(0.004, 0.006), seed=3):
@@ -28,15 +30,6 @@ def turning(rates=(1.1, 2.3), damping=(0.004, 0.006), seed=3):
     S = np.eye(4) + 0.3 * np.random.default_rng(seed).normal(size=(4, 4))
     Sinv = np.linalg.inv(S)
     return lambda s: S @ sl.expm(A * (7.0 + s)) @ Sinv
-
-
-def tongue(th: float, rho: float = 0.9, d: float = 0.3) -> np.ndarray:
-    return -rho * np.array([[np.cos(th), np.sin(th) + d], [-(np.sin(th) - d), np.cos(th)]])
-
-
-def tongue_multipliers(th: float, rho: float = 0.9, d: float = 0.3) -> np.ndarray:
-    root = np.sqrt(complex(d * d - np.sin(th) ** 2))
-    return -rho * np.array([np.cos(th) + root, np.cos(th) - root])
 
 
 def test_a_block_on_its_geodesic_takes_the_steps_the_straight_line_refuses():

@@ -109,12 +109,10 @@ class PlanarOrbitProblem(OrbitProblem):
         if not self.block_step_rule:
             return super().step_ratio(ev_a, ev_b)
         in_a, in_b = block_multipliers(self.mirror, ev_a)[0], block_multipliers(self.mirror, ev_b)[0]
-        P_a, P_b = self.out_of_plane_block(ev_a), self.out_of_plane_block(ev_b)
-        if ev_before is None or self.out_of_plane_block(ev_before).shape != P_a.shape:
-            return max(stability.step_ratio(in_a, in_b), stability.interpolated_step_ratio(P_a, P_b))
-        s_before, s_b = -self.distance(ev_before, ev_a), self.distance(ev_a, ev_b)
-        return max(stability.step_ratio(in_a, in_b),
-                   stability.geodesic_step_ratio(P_a, P_b, self.out_of_plane_block(ev_before), s_before, s_b))
+        out = (self.out_of_plane_block(ev_a), self.out_of_plane_block(ev_b))
+        if ev_before is not None:  # the model's error from the point before the step
+            out += (self.out_of_plane_block(ev_before), -self.distance(ev_before, ev_a), self.distance(ev_a, ev_b))
+        return max(stability.step_ratio(in_a, in_b), stability.geodesic_step_ratio(*out))
 
     def distance(self, ev_a: Evaluation, ev_b: Evaluation) -> float:
         """The scaled distance between two points of the branch (``u / u_scale``, ``lambda /

@@ -122,16 +122,20 @@ def step_ratio(mu_a: np.ndarray, mu_b: np.ndarray, floor: float = 0.005, near: f
       back within a short parameter interval, would otherwise fit between two points whose
       moduli barely differ.
     """
-    mu_a = np.asarray(mu_a, dtype=complex)
-    mu_b = np.asarray(mu_b, dtype=complex)
-    ma = np.sort(np.abs(mu_a))
-    mb = np.sort(np.abs(mu_b))
-    crit = float(np.abs(ma - 1.0).min())
-    ratio = float(np.abs(mb - ma).max()) / max(0.5 * crit, floor)
+    return _motion_ratio(np.array([np.asarray(mu_a, dtype=complex), np.asarray(mu_b, dtype=complex)]), floor, near)
+
+
+def _motion_ratio(mus: np.ndarray, floor: float, near: float) -> float:
+    """The largest :func:`step_ratio` between consecutive rows of ``mus``."""
+    mods = np.sort(np.abs(mus), axis=1)
+    crit = np.abs(mods[:-1] - 1.0).min(axis=1)
+    ratio = float((np.abs(mods[1:] - mods[:-1]).max(axis=1) / np.maximum(0.5 * crit, floor)).max())
+    mu_a, mu_b = mus[:-1], mus[1:]
     dist = np.minimum(np.abs(mu_a + 1.0), np.abs(mu_a - 1.0))
-    for k in np.flatnonzero(dist < near):
-        moved = float(np.abs(mu_b - mu_a[k]).min())  # to its nearest partner at b
-        ratio = max(ratio, moved / max(0.5 * float(dist[k]), floor))
+    watched = dist < near
+    if watched.any():  # each watched multiplier's move to its nearest partner at the next row
+        moved = np.abs(mu_b[:, None, :] - mu_a[:, :, None]).min(axis=2)
+        ratio = max(ratio, float((moved / np.maximum(0.5 * dist, floor))[watched].max()))
     return ratio
 
 
@@ -145,15 +149,7 @@ def path_step_ratio(mus: np.ndarray, floor: float = 0.005, near: float = 0.3) ->
     (:func:`test_functions`) changes sign along the path but not between its ends: a multiplier
     that passes ``-1`` or ``+1`` and back, or a pair through the circle and back, within it."""
     mus = np.asarray(mus, dtype=complex)
-    mods = np.sort(np.abs(mus), axis=1)
-    crit = np.abs(mods[:-1] - 1.0).min(axis=1)
-    ratio = float((np.abs(mods[1:] - mods[:-1]).max(axis=1) / np.maximum(0.5 * crit, floor)).max())
-    mu_a, mu_b = mus[:-1], mus[1:]
-    dist = np.minimum(np.abs(mu_a + 1.0), np.abs(mu_a - 1.0))
-    watched = dist < near
-    if watched.any():  # each watched multiplier's move to its nearest partner at the next sub-step
-        moved = np.abs(mu_b[:, None, :] - mu_a[:, :, None]).min(axis=2)
-        ratio = max(ratio, float((moved / np.maximum(0.5 * dist, floor))[watched].max()))
+    ratio = _motion_ratio(mus, floor, near)
     signs = np.sign(test_functions(mus))
     hidden = (np.count_nonzero(signs[1:] != signs[:-1], axis=0) > 0) & (signs[0] == signs[-1])
     return max(ratio, 2.0) if np.any(hidden) else ratio

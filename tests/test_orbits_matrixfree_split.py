@@ -321,3 +321,21 @@ def test_each_plane_has_its_own_matrix_free_doubling_direction_at_a_double_minus
         assert np.linalg.norm(across.T @ w) <= 1e-14 * np.linalg.norm(w), plane
         assert np.linalg.norm(inside.T @ w) > 0.0
         assert np.linalg.norm(M @ w + w) < 1e-5 * np.linalg.norm(w), plane
+
+
+@pytest.mark.parametrize("FL, start, stop, kind", [(5.0, 6.0, 6.6, "pitchfork"), (0.6, 12.1, 12.3, "period-doubling")])
+def test_a_two_segment_matrix_free_branch_is_switched_at_as_the_dense_one(FL, start, stop, kind):
+    """On two shooting segments the critical eigenvector is carried from the first segment to the
+    second by the action of its Jacobian (``G_0 w``); the matrix-free path was refused there
+    with an error. At the bead's upper pitchfork and at the lower edge of its parametric tongue
+    it starts the nonplanar branch the dense two-segment path follows (its segment Jacobians
+    formed): the same bifurcation, the same orbits to 1e-6 of their size or their mirror images,
+    on the period-1 and on the period-2 (four-segment) child."""
+    eom = bead(FL, start)
+    dense, free = (continue_branches(eom, "omega", start, stop, segments=2, matrix_free=mf) for mf in (False, True))
+    assert [b.kind for b in dense.bifurcations] == [kind]
+    assert_same_bifurcations(dense, free)
+    cd, cf = (d.branches[d.bifurcations[0].child] for d in (dense, free))
+    assert cf.segments == cd.segments == (2 if kind == "pitchfork" else 4)
+    assert not cf.planar and len(cf.points) == len(cd.points) > 3
+    assert_same_orbits_or_mirrored(eom, cd, cf)

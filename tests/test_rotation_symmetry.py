@@ -158,3 +158,39 @@ def test_newton_from_a_start_off_the_family_of_rotated_orbits_converges(stay_bra
     motion = Motion(cable_from_case(case), omega, gamma)
     x0 = np.concatenate([motion.y0 + sol.u[:3], sol.u[3:]])
     assert np.abs(flow(motion, x0, periods=2.0)[0] - x0).max() < 1e-7 * np.abs(x0[3:]).max()
+
+
+def test_the_pitchfork_direction_is_not_the_generator_of_the_rotation():
+    """At a pitchfork of a planar orbit the rotation moves, the out-of-plane block holds two
+    multipliers at +1: the generator's ``g`` and the critical ``v``. Here the generator's is
+    the nearer (exactly 1 against the located ``1 - 1e-9``), and the eigenvector nearest +1,
+    taken without deflation, is ``g``: it leads to the rotated planar orbit. With the rotation's
+    phase the direction is the critical null vector without its component along ``g``: in the
+    odd subspace, orthogonal to ``g``, a null vector of ``Phi_o - I`` to the located 1e-9."""
+    from types import SimpleNamespace
+
+    from cablesim.orbits.switching import pitchfork_direction
+    from cablesim.orbits.symmetry import Mirror
+
+    rng = np.random.default_rng(7)
+    mirror = Mirror(Q=np.linalg.qr(rng.standard_normal((6, 6)))[0], n_odd=2)
+    g_o, v_o = np.array([1.0, 0.3]), np.array([0.2, 1.0])
+    V = np.column_stack([g_o, v_o])
+    Po = V @ np.diag([1.0, 1.0 - 1e-9]) @ np.linalg.inv(V)
+    Pe = np.diag([0.5, -0.3, 0.2, 0.1]) + 0.05 * rng.standard_normal((4, 4))
+    B = np.zeros((6, 6))
+    B[:4, :4], B[4:, 4:] = Pe, Po
+    ev = SimpleNamespace(monodromy=mirror.Q @ B @ mirror.Q.T)
+    g = mirror.odd @ g_o
+    q = g / np.linalg.norm(g)
+    scale = np.ones(6)
+
+    plain, _ = pitchfork_direction(ev, mirror, 1, scale, 1e-3)
+    assert abs(plain @ q) / np.linalg.norm(plain) > 1.0 - 1e-12  # the hazard: the generator itself
+
+    w, eps = pitchfork_direction(ev, mirror, 1, scale, 1e-3, phase=q)
+    assert eps * np.linalg.norm(w) == pytest.approx(1e-3, rel=1e-12)
+    assert np.linalg.norm(mirror.even.T @ w) <= 1e-14 * np.linalg.norm(w)
+    assert abs(w @ q) <= 1e-14 * np.linalg.norm(w)
+    w_o = mirror.odd.T @ w
+    assert np.linalg.norm(Po @ w_o - w_o) <= 1e-8 * np.linalg.norm(w_o)

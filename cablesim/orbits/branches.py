@@ -38,6 +38,7 @@ from .orbitpoint import bifurcation_at, orbit_point
 from .diagram import Bifurcation, BranchEnd, BranchesInterrupted, OrbitBranch, OrbitPoint, ResponseDiagram
 from .problems import OrbitProblem, PlanarOrbitProblem
 from .resume import TraceLog
+from .rotation import phase_direction
 from .shooting import FlowStatus, Shooting, solve_orbit
 from .splitleading import PlanarMatrixFreeProblem, split_leading
 from .starting import cable_scales, integrate_to_steady, linear_response_state
@@ -221,13 +222,14 @@ class _Tracer:
         both signs fail, it is tried again at a quarter of the size, at most
         ``SWITCH_ATTEMPTS`` times."""
         m1 = br.segments
-        ev = self.shooting(br.period, m1).evaluate(p.u, p.parameter)
+        sh1 = self.shooting(br.period, m1)
+        ev = sh1.evaluate(p.u, p.parameter)
         if ev.status != ok.OK:
             return None
         if self.matrix_free:
-            self.leading(br, self.shootings[(br.period, m1)], ev)
+            self.leading(br, sh1, ev)
         dirn, eps = doubling_direction(ev, m1, self.state_scale, self.switch_size,
-                                       self.system.mirror if br.planar else None, bif.plane)
+                                       self.system.mirror if br.planar else None, bif.plane, shooting=sh1)
         sh2 = self.shooting(2 * br.period, 2 * m1)
         base = np.concatenate([p.u, p.u])
         factor = start_factor(sh2, base, dirn, eps, p.parameter, np.tile(self.state_scale, 2 * m1))
@@ -257,7 +259,9 @@ class _Tracer:
             return None
         if self.matrix_free:
             self.leading(br, sh, ev)
-        dirn, eps = pitchfork_direction(ev, self.system.mirror, br.segments, self.state_scale, self.switch_size)
+        phase = phase_direction(self.system.rotation, p.u, np.tile(self.state_scale, br.segments), self.n, br.segments)
+        dirn, eps = pitchfork_direction(ev, self.system.mirror, br.segments, self.state_scale, self.switch_size,
+                                        shooting=sh, phase=phase)
         size = self.switch_size
         for _ in range(SWITCH_ATTEMPTS):
             first = replace(p, planes=None, whirl=in_plane_whirling(self.n // 6))  # the planar orbit

@@ -35,6 +35,7 @@ from typing import Callable
 
 import numpy as np
 
+from .rotation import deflate, without
 from .shooting import Evaluation, FlowStatus
 
 
@@ -67,7 +68,8 @@ def lap_separation(u: np.ndarray, n: int, m_parent: int, scale: np.ndarray) -> f
 
 
 def doubling_direction(ev: Evaluation, segments: int, state_scale: np.ndarray,
-                       switch_size: float, mirror=None, plane: str | None = None) -> tuple[np.ndarray, float]:
+                       switch_size: float, mirror=None, plane: str | None = None,
+                       shooting=None) -> tuple[np.ndarray, float]:
     """Direction into the period-doubled branch at a period doubling, and the step along it.
 
     On a planar orbit of a mirror-symmetric cable (``mirror`` and the ``plane`` of the critical
@@ -91,6 +93,9 @@ def doubling_direction(ev: Evaluation, segments: int, state_scale: np.ndarray,
         The cable's mirror symmetry, for a planar parent orbit.
     plane : str, optional
         The block of the critical multiplier (``"in-plane"`` or ``"out-of-plane"``).
+    shooting : MatrixFreeShooting, optional
+        The shooting of a matrix-free orbit of several segments, whose segment Jacobians
+        ``G_k`` are applied to carry the eigenvector (:func:`segment_images`).
 
     Returns
     -------
@@ -99,15 +104,22 @@ def doubling_direction(ev: Evaluation, segments: int, state_scale: np.ndarray,
     eps : float
         Step along ``direction`` of scaled size ``switch_size``.
     """
-    if ev.monodromy is None and segments != 1:
-        raise ValueError("a matrix-free period doubling is switched at from single shooting only")
-    W = [_critical_vector(ev, state_scale, mirror, plane)]
-    for k in range(segments - 1):
-        W.append(ev.G[k] @ W[-1])
-    W = np.array(W)
+    W = np.array(segment_images(ev, _critical_vector(ev, state_scale, mirror, plane), segments, shooting))
     direction = np.concatenate([W.ravel(), -W.ravel()])
     eps = switch_size / np.linalg.norm(direction / np.tile(state_scale, 2 * segments))
     return direction, eps
+
+
+def segment_images(ev: Evaluation, w0: np.ndarray, segments: int, shooting=None) -> list:
+    """``[w_0, G_0 w_0, G_1 G_0 w_0, ...]`` (``segments`` vectors): a vector at the orbit's start
+    carried through its shooting segments, by the formed segment Jacobians ``ev.G`` of a dense
+    evaluation or by their action ``shooting.segment_apply`` on a matrix-free one."""
+    W = [np.asarray(w0, dtype=float)]
+    if segments > 1 and ev.monodromy is None and shooting is None:
+        raise ValueError("a matrix-free orbit of several segments needs its shooting to carry a vector through them")
+    for k in range(segments - 1):
+        W.append(ev.G[k] @ W[-1] if ev.monodromy is not None else shooting.segment_apply(ev, k, W[-1][:, None])[:, 0])
+    return W
 
 
 def _critical_vector(ev: Evaluation, state_scale: np.ndarray, mirror, plane: str | None) -> np.ndarray:
@@ -258,16 +270,43 @@ class MergeWatch:
 # ----------------------------------------------------------------------------------------------
 # Symmetry-breaking pitchforks of planar orbits (cablesim.orbits.symmetry)
 # ----------------------------------------------------------------------------------------------
-def pitchfork_direction(ev: Evaluation, mirror, segments: int, state_scale: np.ndarray,
-                        switch_size: float) -> tuple[np.ndarray, float]:
+def pitchfork_direction(ev: Evaluation, mirror, segments: int, state_scale: np.ndarray, switch_size: float,
+                        shooting=None, phase: np.ndarray | None = None) -> tuple[np.ndarray, float]:
     """Direction into the nonplanar branch at a pitchfork of a planar orbit, and the step.
 
     The critical eigenvector of the out-of-plane block ``Phi_o`` (multiplier +1) is ``w_0 = Q_o
-    e``; carried through the segments, ``w_{k+1} = G_k w_k``, it is a null vector of the shooting
-    Jacobian that lies in the odd subspace. On a matrix-free orbit (single shooting) it is the
-    out-of-plane block's leading eigenvector (:mod:`cablesim.orbits.splitleading`). The branch
-    leaves the planar one along it with no change of the parameter (a pitchfork's parabola);
-    ``-eps`` gives the mirror image.
+    e``; carried through the segments, ``w_{k+1} = G_k w_k`` (:func:`segment_images`), it is a
+    null vector of the shooting Jacobian that lies in the odd subspace. On a matrix-free orbit it
+    is the out-of-plane block's leading eigenvector (:mod:`cablesim.orbits.splitleading`). The
+    branch leaves the planar one along it with no change of the parameter (a pitchfork's
+    parabola); ``-eps`` gives the mirror image.
+
+    On a planar orbit that a rotation symmetry moves (:mod:`cablesim.orbits.rotation`), the
+    generator ``g`` is odd and ``Phi_o`` holds its multiplier +1 besides the critical one: the
+    eigenvector nearest +1 could be ``g``, which leads to the rotated planar orbit, not off the
+    plane. The block is then deflated along ``g`` (:func:`~cablesim.orbits.rotation.deflate`, as
+    the tests that located the pitchfork saw it; the matrix-free block is computed on the
+    deflated action already), and the direction is taken without its component along the
+    stacked generator ``q`` (still a null vector: ``G_k g_k = g_(k+1)``), so that it satisfies
+    the phase condition ``q . du = 0``.
+
+    Parameters
+    ----------
+    ev : Evaluation
+        Shooting evaluation of the planar orbit at its pitchfork.
+    mirror : Mirror
+        The cable's mirror symmetry.
+    segments : int
+        Shooting segments of the orbit.
+    state_scale : ndarray (n,)
+        Typical size of each state component.
+    switch_size : float
+        Scaled size of the perturbation.
+    shooting : MatrixFreeShooting, optional
+        The shooting of a matrix-free orbit of several segments (:func:`segment_images`).
+    phase : ndarray (segments n,), optional
+        ``q = g / |g|``: the unit generator of the rotation over the segments
+        (:func:`~cablesim.orbits.rotation.phase_direction`), on an orbit the rotation moves.
 
     Returns
     -------
@@ -275,19 +314,19 @@ def pitchfork_direction(ev: Evaluation, mirror, segments: int, state_scale: np.n
     eps : float
         Step along ``direction`` of scaled size ``switch_size``.
     """
+    n = mirror.dim
     if ev.monodromy is None:  # matrix-free: the out-of-plane block's leading eigenvectors (ev.split)
-        if segments != 1:
-            raise ValueError("a matrix-free pitchfork is switched at from single shooting only")
         w = ev.split.vector(mirror.labels[1], 1.0) * np.asarray(state_scale, dtype=float)
-        W = [mirror.odd @ (mirror.odd.T @ w)]  # in the odd subspace to round-off: exactly there
+        w0 = mirror.odd @ (mirror.odd.T @ w)  # in the odd subspace to round-off: exactly there
     else:
         _, Po, _ = mirror.blocks(ev.monodromy)
+        if phase is not None:
+            Po = deflate(Po, mirror.odd.T @ phase[:n])
         mu, V = np.linalg.eig(Po)
-        j = int(np.argmin(np.abs(mu - 1.0)))
-        W = [mirror.odd @ np.real(V[:, j])]
-    for k in range(segments - 1):
-        W.append(ev.G[k] @ W[-1])
-    direction = np.concatenate(W)
+        w0 = mirror.odd @ np.real(V[:, int(np.argmin(np.abs(mu - 1.0)))])
+    direction = np.concatenate(segment_images(ev, w0, segments, shooting))
+    if phase is not None:
+        direction = without(direction, phase)
     eps = switch_size / np.linalg.norm(direction / np.tile(state_scale, segments))
     return direction, eps
 

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
-from .stability import sort_multipliers
+from .stability import geodesic_model_ratio, sort_multipliers
 
 #: Default bound: multipliers of larger modulus are computed. A multiplier must travel from
 #: the bound to the unit circle to cause a bifurcation; the continuation's step control keeps
@@ -279,6 +279,54 @@ def truncated_step_ratio(mu_a: np.ndarray, mu_b: np.ndarray, floor: float = 0.00
         moved = float(np.abs(mu_b - mu_a[j]).min())
         ratio = max(ratio, moved / max(0.5 * float(dist[j]), floor))
     return ratio
+
+
+def kept_block(lead: Leading) -> tuple[np.ndarray, np.ndarray]:
+    """``(V, S)``: an orthonormal basis of the invariant subspace of the kept multipliers (those
+    above the bound; :attr:`Leading.basis` holds one Ritz value below it besides) and the
+    monodromy on it, ``M V = V S``."""
+    Z, S = _leading_schur(lead.schur, lead.bound)
+    return lead.basis @ Z, S
+
+
+def aligned_block(V: np.ndarray, S: np.ndarray, basis: np.ndarray) -> np.ndarray:
+    """The monodromy ``S`` on the subspace ``V`` in the coordinates of the orthonormal ``basis``
+    of an invariant subspace of a nearby orbit: ``Q^T S Q`` with ``Q`` the rotation that takes
+    ``V`` nearest to ``basis`` (orthogonal Procrustes: ``V^T basis = U s W^T``, ``Q = U W^T``).
+    Similar to ``S``, so its eigenvalues are the kept multipliers."""
+    U, _, Wt = np.linalg.svd(V.T @ basis)
+    Q = U @ Wt
+    return Q.T @ S @ Q
+
+
+def leading_step_ratio(lead_a: Leading, lead_b: Leading, lead_before: Leading | None = None,
+                       s_before: float = -1.0, s_b: float = 1.0) -> float:
+    """The step rule of a matrix-free branch from ``lead_a`` to ``lead_b``: where a truncated
+    spectrum is kept at the two points and at the point before the step with one count, the
+    monodromy on the kept subspace along its geodesic
+    (:func:`~cablesim.orbits.stability.geodesic_model_ratio` of the blocks aligned by
+    :func:`aligned_block`, ``s_before < 0 < s_b`` the arclengths), else the kept multipliers
+    compared (:func:`truncated_step_ratio`).
+
+    A heavy cable keeps tens of lightly damped pairs (modulus about 0.94) that turn around the
+    circle as the frequency changes and pass near -1 and +1 again and again; judged as
+    multipliers that move, they hold the steps to a fraction of what their moduli need. On the
+    geodesic a turning pair keeps its modulus. The multipliers' guard is also blind where a pair
+    crosses the real axis within the step (the nearest multiplier at the other end is its own
+    conjugate), so it accepts a step across a tongue whose ends look alike; the geodesic's error
+    estimate (the curvature of its logarithm) refuses it. On a complete spectrum (a cable small
+    enough for the whole monodromy) the multipliers judge, as on the dense path, so that both
+    visit the same points; so they do where a count changes (a multiplier crosses the bound), at
+    a branch's first step and where a logarithm is not usable.
+    """
+    leads = (lead_a, lead_b, lead_before)
+    if lead_before is not None and not any(lead.complete for lead in leads):
+        (Va, Sa), (Vb, Sb), (Vz, Sz) = (kept_block(lead) for lead in leads)
+        if Va.shape == Vb.shape == Vz.shape and Va.shape[1] > 0:
+            geodesic = geodesic_model_ratio(Sa, aligned_block(Vb, Sb, Va), aligned_block(Vz, Sz, Va), s_before, s_b)
+            if geodesic is not None:
+                return geodesic
+    return truncated_step_ratio(lead_a.multipliers, lead_b.multipliers)
 
 
 class Deflation:

@@ -9,7 +9,8 @@ invariant subspace of the monodromy at the latest point where the multipliers we
 (:func:`~cablesim.orbits.matrixfree.orbit_leading`, warm-started from the previous point's
 subspace) and the bifurcation tests and the step control work on them
 (:func:`~cablesim.orbits.floquet.truncated_tests`,
-:func:`~cablesim.orbits.floquet.truncated_step_ratio`).
+:func:`~cablesim.orbits.floquet.leading_step_ratio`: on a truncated spectrum, the monodromy on the
+kept subspace along its geodesic).
 
 On a system invariant under rotations about a cable's chord (:mod:`cablesim.orbits.rotation`)
 the problem treats an orbit the rotation moves as the dense one does: its periodicity condition
@@ -38,7 +39,7 @@ import numpy as np
 
 from . import kernels as ok
 from . import stability
-from .floquet import DEFAULT_BOUND, Deflation, Leading, leading_from, truncated_step_ratio, truncated_tests
+from .floquet import DEFAULT_BOUND, Deflation, Leading, leading_from, leading_step_ratio, truncated_tests
 from .matrixfree import Bordered, MatrixFreeShooting, MFEvaluation, orbit_leading
 from .rotation import LEADING_SHIFT, Neutral, RotationPhase, action_neutral
 from .stability import sort_multipliers
@@ -154,5 +155,16 @@ class MatrixFreeOrbitProblem(RotationPhase):
     def confirm(self, name: str, ev: MFEvaluation) -> str | None:
         return stability.confirm(name, leading_from(self.leading(ev)))
 
-    def step_ratio(self, ev_a: MFEvaluation, ev_b: MFEvaluation, ev_before=None) -> float:
-        return truncated_step_ratio(self.leading(ev_a).multipliers, self.leading(ev_b).multipliers)
+    def step_ratio(self, ev_a: MFEvaluation, ev_b: MFEvaluation, ev_before: MFEvaluation | None = None) -> float:
+        """:func:`~cablesim.orbits.floquet.leading_step_ratio`: on a truncated spectrum the
+        monodromy on the kept subspace along its geodesic, its error estimated from
+        ``ev_before``; else the kept multipliers."""
+        if ev_before is None:
+            return leading_step_ratio(self.leading(ev_a), self.leading(ev_b))
+        return leading_step_ratio(self.leading(ev_a), self.leading(ev_b), self.leading(ev_before),
+                                  -self.distance(ev_before, ev_a), self.distance(ev_a, ev_b))
+
+    def distance(self, ev_a: MFEvaluation, ev_b: MFEvaluation) -> float:
+        """The scaled distance between two points of the branch
+        (:func:`~cablesim.orbits.stability.scaled_distance`)."""
+        return stability.scaled_distance(ev_a, ev_b, self.u_scale, self.lam_scale)

@@ -117,8 +117,7 @@ class PlanarOrbitProblem(OrbitProblem):
     def distance(self, ev_a: Evaluation, ev_b: Evaluation) -> float:
         """The scaled distance between two points of the branch (``u / u_scale``, ``lambda /
         lam_scale``), the measure of arclength along it."""
-        du = (ev_b.u - ev_a.u) / self.u_scale
-        return float(np.hypot(np.linalg.norm(du), (ev_b.lam - ev_a.lam) / self.lam_scale))
+        return stability.scaled_distance(ev_a, ev_b, self.u_scale, self.lam_scale)
 
     def out_of_plane_block(self, ev: Evaluation) -> np.ndarray:
         """The out-of-plane block of the monodromy, deflated by the neutral multiplier if any

@@ -304,6 +304,14 @@ def geodesic_model_ratio(P_a: np.ndarray, P_b: np.ndarray, P_before: np.ndarray,
     return float(max(ratio, error / max(0.5 * crit, floor)))
 
 
+def scaled_distance(ev_a, ev_b, u_scale: np.ndarray, lam_scale: float) -> float:
+    """The scaled distance between two points of a branch (evaluations with ``u`` and ``lam``:
+    ``u / u_scale``, ``lambda / lam_scale``), the measure of arclength the geodesic rules'
+    error estimates take."""
+    du = (ev_b.u - ev_a.u) / u_scale
+    return float(np.hypot(np.linalg.norm(du), (ev_b.lam - ev_a.lam) / lam_scale))
+
+
 def is_stable(mu: np.ndarray) -> bool:
     """All multipliers strictly inside the unit circle."""
     return bool(np.abs(mu).max() < 1.0)

@@ -67,28 +67,40 @@ def test_the_geodesic_error_estimate_converges_to_the_true_mid_step_error():
     assert all(r1 < 0.6 * r0 for r0, r1 in zip(rel, rel[1:]))
 
 
-def test_a_multiplier_through_minus_one_and_back_within_the_step_is_seen_on_the_geodesic():
-    # the tongue's multipliers are the same at both ends of [-0.5, 0.5] and pass -1 twice inside
-    a, b = -0.5, 0.5
-    ths = np.linspace(a, b, 2001)
-    true = np.sign(np.prod(1.0 + np.array([tongue_multipliers(t) for t in ths]), axis=1).real)
-    assert np.count_nonzero(true[1:] != true[:-1]) == 2
-    # judged on the geodesic alone, with the point before each step (as the continuation does:
-    # halve a refused step, grow an accepted one by 1.5), a march puts points between the
-    # crossings; every step is judged by the geodesic, none left to the straight line
-    pts, h = [a - 0.05, a], b - a
+def doubling_sign_changes(ths) -> int:
+    """Sign changes of the tongue's period-doubling test ``prod(1 + mu)`` (closed form) along ``ths``."""
+    pd = np.sign(np.prod(1.0 + np.array([tongue_multipliers(t) for t in ths]), axis=1).real)
+    return int(np.count_nonzero(pd[1:] != pd[:-1]))
+
+
+def march(judge, a: float, b: float, back: float = 0.05) -> list:
+    """The points of a march from ``a`` to ``b`` as the continuation's: a step refused by
+    ``judge(before, start, end) > 1`` is halved, an accepted one grows by 1.5; the first step
+    starts with ``b - a`` and has a point ``back`` before ``a``."""
+    pts, h = [a - back, a], b - a
     while pts[-1] < b - 1e-12:
         nxt = min(pts[-1] + h, b)
-        z, s = pts[-2], pts[-1]
-        ratio = geodesic_model_ratio(tongue(s), tongue(nxt), tongue(z), z - s, nxt - s)
-        assert ratio is not None
-        if ratio > 1.0:
+        if judge(pts[-2], pts[-1], nxt) > 1.0:
             h *= 0.5
             continue
         pts.append(nxt)
         h *= 1.5
-    pd = np.sign([np.prod(1.0 + tongue_multipliers(t)).real for t in pts[1:]])
-    assert np.count_nonzero(pd[1:] != pd[:-1]) == 2
+    return pts[1:]
+
+
+def test_a_multiplier_through_minus_one_and_back_within_the_step_is_seen_on_the_geodesic():
+    # the tongue's multipliers are the same at both ends of [-0.5, 0.5] and pass -1 twice inside
+    a, b = -0.5, 0.5
+    assert doubling_sign_changes(np.linspace(a, b, 2001)) == 2
+
+    # judged on the geodesic alone, with the point before each step, a march puts points
+    # between the crossings; every step is judged by the geodesic, none left to the straight line
+    def judge(z, s, nxt):
+        ratio = geodesic_model_ratio(tongue(s), tongue(nxt), tongue(z), z - s, nxt - s)
+        assert ratio is not None
+        return ratio
+
+    assert doubling_sign_changes(march(judge, a, b)) == 2
     # the rule the continuation uses takes the smaller of the two models' ratios; the first
     # step across the whole tongue is refused by both
     assert geodesic_step_ratio(tongue(a), tongue(b), tongue(a - 0.05), -0.05, b - a) > 1.0

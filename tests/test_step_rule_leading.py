@@ -18,7 +18,8 @@ import scipy.linalg as sl
 
 from cablesim.orbits.floquet import (aligned_block, kept_block, leading_multipliers, leading_step_ratio,
                                      truncated_step_ratio)
-from test_step_rule_blocks import tongue, tongue_multipliers
+from test_step_rule_blocks import tongue
+from test_step_rule_geodesic import doubling_sign_changes, march
 
 N = 120
 
@@ -82,21 +83,13 @@ def test_a_tongue_inside_the_step_is_not_stepped_over():
     the closed form."""
     M = family(lambda s: np.pad(tongue(s), ((0, 2), (0, 2))) + np.diag([0, 0, 0.7, 0.6]), 4, 0.2)
     a, b = -0.5, 0.5
-    ths = np.linspace(a, b, 2001)
-    true = np.sign(np.prod(1.0 + np.array([tongue_multipliers(t) for t in ths]), axis=1).real)
-    assert np.count_nonzero(true[1:] != true[:-1]) == 2
+    assert doubling_sign_changes(np.linspace(a, b, 2001)) == 2
     leads = {s: leading(M, s) for s in (a - 0.05, a, b)}
     assert truncated_step_ratio(leads[a].multipliers, leads[b].multipliers) < 0.25
     assert leading_step_ratio(leads[a], leads[b], leads[a - 0.05], -0.05, b - a) > 1.0
-    pts, h = [a - 0.05, a], b - a
-    while pts[-1] < b - 1e-12:
-        nxt = min(pts[-1] + h, b)
+
+    def judge(z, s, nxt):
         leads.setdefault(nxt, leading(M, nxt))
-        z, s = pts[-2], pts[-1]
-        if leading_step_ratio(leads[s], leads[nxt], leads[z], z - s, nxt - s) > 1.0:
-            h *= 0.5
-            continue
-        pts.append(nxt)
-        h *= 1.5
-    pd = np.sign([np.prod(1.0 + tongue_multipliers(t)).real for t in pts[1:]])
-    assert np.count_nonzero(pd[1:] != pd[:-1]) == 2
+        return leading_step_ratio(leads[s], leads[nxt], leads[z], z - s, nxt - s)
+
+    assert doubling_sign_changes(march(judge, a, b)) == 2

@@ -160,11 +160,6 @@ def _path_multipliers(path: np.ndarray) -> np.ndarray:
     return np.array([sort_multipliers(mu) for mu in np.linalg.eigvals(path)])
 
 
-def _line(P_a: np.ndarray, P_b: np.ndarray, substeps: int) -> np.ndarray:
-    ts = np.linspace(0.0, 1.0, substeps + 1)[:, None, None]
-    return (1.0 - ts) * P_a + ts * P_b
-
-
 def interpolated_step_ratio(P_a: np.ndarray, P_b: np.ndarray, substeps: int = INTERPOLANT_SUBSTEPS,
                             floor: float = 0.005, near: float = 0.3) -> float:
     """:func:`step_ratio` of a block of the monodromy between two points, judged on the matrix
@@ -188,11 +183,8 @@ def interpolated_step_ratio(P_a: np.ndarray, P_b: np.ndarray, substeps: int = IN
       step, about twice the error that turn gives its multipliers at mid-step.
     """
     P_a, P_b = np.asarray(P_a, dtype=float), np.asarray(P_b, dtype=float)
-    return _line_ratio(P_a, P_b, _path_multipliers(_line(P_a, P_b, substeps)), floor, near)
-
-
-def _line_ratio(P_a, P_b, mus, floor, near) -> float:
-    """:func:`interpolated_step_ratio` from the multipliers ``mus`` along the line."""
+    ts = np.linspace(0.0, 1.0, substeps + 1)[:, None, None]
+    mus = _path_multipliers((1.0 - ts) * P_a + ts * P_b)
     ratio = path_step_ratio(mus, floor, near)
     mean = np.sqrt(abs(np.linalg.det(P_a) * np.linalg.det(P_b)))
     if mean > 0.0:
@@ -295,8 +287,7 @@ def geodesic_model_ratio(P_a: np.ndarray, P_b: np.ndarray, P_before: np.ndarray,
     if not (step.usable() and back.usable()):
         return None
     geodesic = P_a @ step.power(np.linspace(0.0, 1.0, substeps + 1)[1:-1])
-    mus = np.concatenate([_path_multipliers(np.array([P_a])), _path_multipliers(geodesic),
-                          _path_multipliers(np.array([P_b]))])
+    mus = _path_multipliers(np.concatenate([P_a[None], geodesic, P_b[None]]))
     ratio = path_step_ratio(mus, floor, near)
     E = -(s_b * s_b / 4.0) * (step.log() / s_b - back.log() / s_before) / (s_b - s_before)
     error = float(np.linalg.norm(geodesic[substeps // 2 - 1] @ E, 2))

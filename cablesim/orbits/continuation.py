@@ -23,11 +23,11 @@ Optional: ``test_names`` (tuple of str) and ``test_functions(ev) -> ndarray``
     ``det(J_u)``): they are ignored in an interval where the tangent's parameter component also
     changes sign.
 Optional: ``bordered(ev, u_scale, lam_scale, r_scale)``
-    For problems that form no Jacobian (``ev.J_u`` None): an object whose ``solve(normal, rhs)``
-    returns the solution ``dv`` of the scaled bordered system ``[J_u J_lam; normal] dv = rhs``
-    (or None) and whose ``tangent(ref)`` returns the unit null vector of ``[J_u J_lam]`` with a
-    positive projection on ``ref`` (or None), for instance by a Krylov method on the Jacobian's
-    action on vectors.
+    For problems that form no Jacobian (``ev.J_u`` None): an object whose ``solve(normal, rhs,
+    atol)`` returns the solution ``dv`` of the scaled bordered system ``[J_u J_lam; normal] dv =
+    rhs`` (or None; an iterative solver may stop at a residual ``atol``) and whose
+    ``tangent(ref)`` returns the unit null vector of ``[J_u J_lam]`` with a positive projection
+    on ``ref`` (or None), for instance by a Krylov method on the Jacobian's action on vectors.
 Optional: ``step_ratio(ev_a, ev_b, ev_before) -> float``
     A problem-specific measure of the change between consecutive points (for instance of the
     quantities the test functions depend on); a step with a ratio above 1 is rejected and
@@ -229,7 +229,7 @@ class _DenseBordered:
     def __init__(self, Jfull: np.ndarray):
         self.J = Jfull
 
-    def solve(self, normal: np.ndarray, rhs: np.ndarray) -> np.ndarray | None:
+    def solve(self, normal: np.ndarray, rhs: np.ndarray, atol: float = 0.0) -> np.ndarray | None:
         try:
             return np.linalg.solve(np.vstack([self.J, normal[None, :]]), rhs)
         except np.linalg.LinAlgError:
@@ -260,6 +260,10 @@ def _tangent(Jfull: np.ndarray, ref: np.ndarray) -> np.ndarray | None:
 #: :data:`PATIENT_CONTRACTION`, which also takes :data:`PATIENT_ITERATIONS` times the iterations:
 #: near a double root (two solutions about to merge) Newton's steps shrink only linearly.
 CONTRACTION = 0.5
+#: An iterative solution of the bordered system stops at a residual of this fraction of the
+#: Newton tolerance (``atol`` of ``solve``): near convergence the step need only be told from the
+#: tolerance, and a relative residual alone would solve a step of 1e-12 to 1e-18.
+LINEAR_FLOOR = 1e-3
 PATIENT_CONTRACTION = 0.9
 PATIENT_ITERATIONS = 6
 
@@ -276,7 +280,7 @@ def _correct(sp: _Scaled, v_pred, normal, offset, st: Settings, radius: float, p
             return None
         R = ev.r / sp.rs
         Jf = sp.linear(ev)
-        dv = Jf.solve(normal, -np.concatenate([R, [normal @ v - offset]]))
+        dv = Jf.solve(normal, -np.concatenate([R, [normal @ v - offset]]), atol=LINEAR_FLOOR * st.newton_tol)
         if dv is None:
             return None
         step = float(np.abs(dv).max())

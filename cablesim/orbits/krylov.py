@@ -25,8 +25,9 @@ class KrylovResult:
     converged: bool
 
 
-def gmres(apply, b: np.ndarray, tol: float = 1e-6, max_iter: int = 100, precondition=None) -> KrylovResult:
-    """Solve ``A x = b`` to ``|b - A x| <= tol |b|``.
+def gmres(apply, b: np.ndarray, tol: float = 1e-6, max_iter: int = 100, precondition=None,
+          atol: float = 0.0) -> KrylovResult:
+    """Solve ``A x = b`` to ``|b - A x| <= max(tol |b|, atol)``.
 
     Parameters
     ----------
@@ -40,6 +41,14 @@ def gmres(apply, b: np.ndarray, tol: float = 1e-6, max_iter: int = 100, precondi
     precondition : callable, optional
         ``x -> P^-1 x`` (right preconditioning: GMRES on ``A P^-1``, so that the residual it
         minimises is the true one).
+    atol : float
+        Absolute residual below which the iteration stops whatever ``|b|`` (a Newton step whose
+        size only has to be told from its tolerance needs no more).
+
+    Returns
+    -------
+    KrylovResult
+        ``residual`` is relative to ``|b|``; ``converged`` whether the tolerance was met.
     """
     b = np.asarray(b, dtype=float)
     N = b.size
@@ -55,6 +64,7 @@ def gmres(apply, b: np.ndarray, tol: float = 1e-6, max_iter: int = 100, precondi
     g[0] = beta
     Vk[0] = b / beta
     res = 1.0
+    goal = max(tol, atol / beta)
     k = 0
     for k in range(1, m + 1):
         w = np.asarray(apply(P(Vk[k - 1])), dtype=float)
@@ -80,7 +90,7 @@ def gmres(apply, b: np.ndarray, tol: float = 1e-6, max_iter: int = 100, precondi
         g[k] = -sn[k - 1] * g[k - 1]
         g[k - 1] = cs[k - 1] * g[k - 1]
         res = abs(g[k]) / beta
-        if res <= tol:
+        if res <= goal:
             break
         hn = float(np.linalg.norm(w))
         if hn == 0.0:
@@ -90,4 +100,4 @@ def gmres(apply, b: np.ndarray, tol: float = 1e-6, max_iter: int = 100, precondi
         return KrylovResult(np.zeros(N), 0, 1.0, False)
     y = np.linalg.solve(np.triu(H[:k, :k]), g[:k])
     x = P(Vk[:k].T @ y)
-    return KrylovResult(np.asarray(x, dtype=float), k, float(res), bool(res <= tol))
+    return KrylovResult(np.asarray(x, dtype=float), k, float(res), bool(res <= goal))

@@ -532,17 +532,22 @@ class Bordered:
             return np.concatenate([pre(v[:-1]), v[-1:]])
         return apply
 
-    def solve(self, normal: np.ndarray, rhs: np.ndarray, tol: float | None = None) -> np.ndarray | None:
-        """``dv`` with ``[J_u J_lam; normal] dv = rhs`` (scaled), or None if GMRES fails."""
+    def solve(self, normal: np.ndarray, rhs: np.ndarray, tol: float | None = None,
+              atol: float = 0.0) -> np.ndarray | None:
+        """``dv`` with ``[J_u J_lam; normal] dv = rhs`` (scaled) to a relative residual ``tol``
+        (default: the corrector's) or an absolute one ``atol``, whichever is larger; None if
+        GMRES fails."""
+        tol = self.tol if tol is None else tol
         try:
-            sol = gmres(self._matvec(np.asarray(normal, dtype=float)), rhs, tol=self.tol if tol is None else tol,
-                        max_iter=self.max_iter, precondition=self._precondition())
+            sol = gmres(self._matvec(np.asarray(normal, dtype=float)), rhs, tol=tol, max_iter=self.max_iter,
+                        precondition=self._precondition(), atol=atol)
         except FloatingPointError:  # the variational equations failed: the step is shortened
             return None
         self.sh.newton_steps += 1
         self.sh.krylov_iterations += sol.iterations
         self.ev.newton_krylov += sol.iterations
-        if not np.all(np.isfinite(sol.x)) or sol.residual > 1e3 * max(self.tol, 1e-12):
+        goal = max(tol, atol / max(float(np.linalg.norm(rhs)), np.finfo(float).tiny), 1e-12)
+        if not np.all(np.isfinite(sol.x)) or sol.residual > 1e3 * goal:
             return None
         return self._projected(sol.x)
 

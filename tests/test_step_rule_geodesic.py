@@ -125,6 +125,33 @@ def test_a_pair_through_the_circle_and_back_off_the_geodesic_is_refused_by_its_e
     assert geodesic_model_ratio(P(0.0), P(h), P(-h), -h, h) > 1.0
 
 
+def test_a_fast_multiplier_deep_in_the_disc_does_not_hold_the_step_of_one_near_the_circle():
+    # two pairs in one block, mixed by a non-orthogonal S: one at modulus 0.95 turning steadily
+    # (on its geodesic), one at 0.55 whose modulus curves with s, P(s) = S blocks(s) S^-1
+    rot = lambda r, a: r * np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])  # noqa: E731
+    S = np.eye(4) + 0.2 * np.random.default_rng(5).normal(size=(4, 4))
+    Sinv = np.linalg.inv(S)
+
+    def P(s):
+        return S @ sl.block_diag(rot(0.95, 1.0 + 0.1 * s), rot(0.55 * np.exp(0.6 * s * s), 2.0 + 0.3 * s)) @ Sinv
+
+    h = 0.5
+    Pz, Pa, Pb = P(-h), P(0.0), P(h)
+    ratio = geodesic_model_ratio(Pa, Pb, Pz, -h, h)
+    # the same error matrix against the least distance from the circle (0.05, the steady pair's)
+    step, back = StepLog(Pa, Pb), StepLog(Pa, Pz)
+    E = -(h * h / 4.0) * (step.log() / h - back.log() / -h) / (2.0 * h)
+    middle = Pa @ step.power(np.array([0.5]))[0]
+    assert np.linalg.norm(middle @ E, 2) / (0.5 * 0.05) > 1.0
+    assert ratio < 0.5
+    # the certificate holds: every true multiplier at mid-step within a quarter of its distance
+    # from the circle of the geodesic's (the rule allows half)
+    true = np.linalg.eigvals(P(0.5 * h))
+    model = np.linalg.eigvals(middle)
+    for mu in true:
+        assert np.abs(model - mu).min() <= 0.25 * (1.0 - abs(mu))
+
+
 class Recorded:
     """``r(u, lam) = u - lam`` (a straight branch), whose step rule records what it is given."""
 

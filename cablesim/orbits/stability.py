@@ -255,9 +255,9 @@ def geodesic_step_ratio(P_a: np.ndarray, P_b: np.ndarray, P_before: np.ndarray |
     circle. The geodesic's own error is the curvature of ``Lambda(s) = log(P_a^-1 P(s))`` along
     the branch (``s`` the arclength, ``s_before < 0`` at ``P_before``, ``s_b > 0`` at ``P_b``):
     the parabola through the three points gives the mid-step error
-    ``E = -(s_b^2 / 4) (L_b / s_b - L_before / s_before) / (s_b - s_before)``, and the
-    multipliers move by at most about ``|P(1/2) E|``, which must stay within half their distance
-    from the circle (or ``floor``), as the linear rule's defect. Each model, within its own
+    ``E = -(s_b^2 / 4) (L_b / s_b - L_before / s_before) / (s_b - s_before)``, and each
+    multiplier's first-order shift by ``P(1/2) E`` must stay within half its own distance from
+    the circle (or ``floor``), as the linear rule's defect (:func:`_model_error_ratio`). Each model, within its own
     error bound, certifies the step, hence the smaller ratio (where multipliers near zero leave
     the logarithms carrying rounding, the geodesic's estimate is large and the line's ratio
     counts). The line alone judges the step where its ratio is at most :data:`LENIENT`, without
@@ -290,9 +290,27 @@ def geodesic_model_ratio(P_a: np.ndarray, P_b: np.ndarray, P_before: np.ndarray,
     mus = _path_multipliers(np.concatenate([P_a[None], geodesic, P_b[None]]))
     ratio = path_step_ratio(mus, floor, near)
     E = -(s_b * s_b / 4.0) * (step.log() / s_b - back.log() / s_before) / (s_b - s_before)
-    error = float(np.linalg.norm(geodesic[substeps // 2 - 1] @ E, 2))
-    crit = float(np.abs(np.abs(mus) - 1.0).min())
-    return float(max(ratio, error / max(0.5 * crit, floor)))
+    middle = geodesic[substeps // 2 - 1]
+    return float(max(ratio, _model_error_ratio(middle, middle @ E, mus, floor)))
+
+
+def _model_error_ratio(P: np.ndarray, dP: np.ndarray, mus: np.ndarray, floor: float) -> float:
+    """The model error ``dP`` of the block ``P`` at mid-step against the multipliers' distance
+    from the circle: each multiplier's first-order shift ``|y_i^H dP x_i|`` (``x_i``, ``y_i`` its
+    right and left eigenvectors, ``y_i^H x_i = 1``) over half its own distance (or ``floor``).
+    The shift of a multiplier far inside the disc does not count against one near the circle,
+    and near a collision on the real axis the eigenvectors' condition makes the shifts large, as
+    the true ones are. Where the eigenvectors cannot be inverted, ``|dP|`` against the least
+    distance along the path ``mus``."""
+    try:
+        mu, X = np.linalg.eig(P)
+        shift = np.abs(np.einsum("ij,jk,ki->i", np.linalg.inv(X), dP, X))
+    except np.linalg.LinAlgError:
+        shift = None
+    if shift is None or not np.all(np.isfinite(shift)):
+        crit = float(np.abs(np.abs(mus) - 1.0).min())
+        return float(np.linalg.norm(dP, 2)) / max(0.5 * crit, floor)
+    return float((shift / np.maximum(0.5 * np.abs(np.abs(mu) - 1.0), floor)).max())
 
 
 def scaled_distance(ev_a, ev_b, u_scale: np.ndarray, lam_scale: float) -> float:

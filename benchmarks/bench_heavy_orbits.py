@@ -103,8 +103,9 @@ def response(n: int, start: float, stop: float, scheme: str, load: float) -> Non
     # a branch stopped by a flow that failed says why (SLACK: it ended at a grazing orbit)
     ends = ",".join(b.end.name + (f"({b.failure.name})" if getattr(b, "failure", None) is not None else "")
                     for b in d.branches)
+    folds = ",".join(f"{p.parameter:.4f}" for b in d.branches for p in b.points if p.special == "fold")
     print(f"{n:5d}  {cpu:8.1f}  {wall:8.1f}  {s['points']:6d}  {s['evaluations']:6d}  {s['newton_steps']:6d}  "
-          f"{per:6.1f}  {ends}")
+          f"{per:6.1f}  {ends}  {folds or '-'}")
 
 
 def multipliers_alone(lead_a, lead_b, *before):
@@ -113,7 +114,7 @@ def multipliers_alone(lead_a, lead_b, *before):
 
 
 def against_multipliers(nodes: list, start: float, stop: float, scheme: str, load: float, repeats: int) -> None:
-    print("nodes  rule         cpu_s  wall_s  points  orbits  newton  krylov/newton  end")
+    print("nodes  rule         cpu_s  wall_s  points  orbits  newton  krylov/newton  end  folds_rad/s")
     for n in nodes:
         for _ in range(repeats):
             for name, rule in (("geodesic", floquet.leading_step_ratio), ("multipliers", multipliers_alone)):
@@ -190,7 +191,7 @@ def main() -> None:
     if a.against_multipliers:
         against_multipliers(a.n or [20], a.start, a.stop, a.scheme, a.load, a.repeats)
         return
-    print("nodes  cpu_s  wall_s  points  orbits  newton  krylov/newton  end")
+    print("nodes  cpu_s  wall_s  points  orbits  newton  krylov/newton  end  folds_rad/s")
     for n in a.n or [20, 50]:
         response(n, a.start, a.stop, a.scheme, a.load)
 

@@ -237,6 +237,47 @@ def test_leading_multipliers_with_a_complex_pair_below_the_bound():
     assert np.abs(M @ lead.basis - lead.basis @ lead.schur).max() < DISCARDED_TOL
 
 
+def _projector(V):
+    Q, _ = np.linalg.qr(V)
+    return Q @ Q.T
+
+
+def test_kept_subspace_from_the_eigenvectors_is_the_ordered_schur_forms():
+    """The kept subspace taken from the Ritz vectors (a QR of a few columns) is the invariant
+    subspace the ordered real Schur form of the projected matrix gives, to round-off, on a
+    spectrum with real and complex leading multipliers; the Schur form decides where the
+    eigenvectors are near dependent (a defective multiplier)."""
+    import cablesim.orbits.floquet as fq
+
+    rng = np.random.default_rng(11)
+    m = 40
+    D = np.diag(np.concatenate([[1.05, -0.8, 0.0, 0.0, 0.6], 0.3 * rng.random(m - 5)]))
+    D[2:4, 2:4] = 0.9 * np.array([[np.cos(0.7), -np.sin(0.7)], [np.sin(0.7), np.cos(0.7)]])
+    S = np.eye(m) + 0.3 * rng.standard_normal((m, m)) / np.sqrt(m)
+    H = S @ D @ np.linalg.inv(S)
+    theta, Y = np.linalg.eig(H)
+    order = np.lexsort((-theta.imag, -np.abs(theta)))
+    theta, Y = theta[order], Y[:, order]
+    keep = np.abs(theta) > 0.5
+    assert keep.sum() == 5
+    Z, T = fq._eigen_span(H, theta, Y, keep)
+    Zs, Ts = fq._leading_schur(H, 0.5)
+    assert np.abs(Z.T @ Z - np.eye(5)).max() < 1e-13
+    assert np.abs(H @ Z - Z @ T).max() < 1e-12
+    assert np.abs(_projector(Z) - _projector(Zs)).max() < 1e-11
+    assert np.sort_complex(np.linalg.eigvals(T)) == pytest.approx(np.sort_complex(np.linalg.eigvals(Ts)), abs=1e-12)
+    # a Jordan block of 0.9 kept: its two eigenvectors agree to 1e-7, no basis of the subspace
+    J = np.diag(np.concatenate([[0.9, 0.9], 0.3 * rng.random(m - 2)]))
+    J[0, 1] = 1.0
+    HJ = S @ J @ np.linalg.inv(S)
+    theta, Y = np.linalg.eig(HJ)
+    order = np.lexsort((-theta.imag, -np.abs(theta)))
+    theta, Y = theta[order], Y[:, order]
+    assert fq._eigen_span(HJ, theta, Y, np.abs(theta) > 0.5) is None
+    lead = fq.leading_multipliers(lambda X: HJ @ X, m, bound=0.5)
+    assert np.abs(HJ @ lead.basis - lead.basis @ lead.schur).max() < DISCARDED_TOL
+
+
 def test_leading_subspace_when_the_ordered_schur_form_fails(monkeypatch):
     """Where LAPACK's reordering fails (seen on a 20-node branch), the kept subspace comes from
     the eigenvectors and is still invariant."""
@@ -251,6 +292,7 @@ def test_leading_subspace_when_the_ordered_schur_form_fails(monkeypatch):
     S = np.eye(n) + 0.3 * rng.standard_normal((n, n)) / np.sqrt(n)
     M = S @ D @ np.linalg.inv(S)
     monkeypatch.setattr(fq.sla, "schur", refuse)
+    monkeypatch.setattr(fq, "_eigen_span", lambda *args: None)  # the Schur form's own fallback
     lead = fq.leading_multipliers(lambda X: M @ X, n, bound=0.5)
     assert lead.multipliers.size == 3
     # the subspace holds one Ritz vector below the bound too, converged to DISCARDED_TOL only

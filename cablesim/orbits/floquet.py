@@ -121,14 +121,15 @@ def _dense(apply, n: int, bound: float) -> Leading:
 
 
 def _ritz(B, MB):
-    """Ritz values (by decreasing modulus), vectors and residual norms of ``span(B)``."""
+    """Ritz values (by decreasing modulus), their vectors in the coordinates of ``B`` and in the
+    state, and residual norms of ``span(B)``."""
     H = B.T @ MB
     theta, Y = np.linalg.eig(H)
     order = np.lexsort((-theta.imag, -np.abs(theta)))
     theta, Y = theta[order], Y[:, order]
     X = B @ Y
     R = MB @ Y - X * theta
-    return H, theta, X, R, np.linalg.norm(R, axis=0) / np.linalg.norm(X, axis=0)
+    return H, theta, Y, X, R, np.linalg.norm(R, axis=0) / np.linalg.norm(X, axis=0)
 
 
 def leading_multipliers(apply, n: int, bound: float = DEFAULT_BOUND, tol: float = DEFAULT_TOL,
@@ -171,7 +172,7 @@ def leading_multipliers(apply, n: int, bound: float = DEFAULT_BOUND, tol: float 
     MB = apply(B)
     products = B.shape[1]
     while True:
-        H, theta, X, R, res = _ritz(B, MB)
+        H, theta, Y, X, R, res = _ritz(B, MB)
         m = theta.size
         nk = int(np.sum(np.abs(theta) > bound))
         ok_kept = bool(np.all(res[:nk] <= tol))
@@ -200,7 +201,7 @@ def leading_multipliers(apply, n: int, bound: float = DEFAULT_BOUND, tol: float 
         MX = apply(Xn)
         products += Xn.shape[1]
         B, MB = np.hstack([B, Xn]), np.hstack([MB, MX])
-    return _result(B, MB, H, theta, X, res, nk, bound, products, complete=B.shape[1] >= n)
+    return _result(B, H, theta, Y, X, res, nk, bound, products, complete=B.shape[1] >= n)
 
 
 def _leading_schur(H: np.ndarray, cut: float):
@@ -231,13 +232,43 @@ def _restart(B, MB, H, nk):
     return B @ Z, MB @ Z
 
 
-def _result(B, MB, H, theta, X, res, nk, bound, products, complete) -> Leading:
+def _eigen_span(H: np.ndarray, theta: np.ndarray, Y: np.ndarray, keep: np.ndarray):
+    """``(Z, T)`` as :func:`_leading_schur` from the eigenvectors ``Y`` of ``H`` for the
+    eigenvalues ``theta[keep]`` (a conjugate pair by its real and imaginary parts), at the
+    cost of a QR of ``k`` columns instead of a Schur form of ``H``; None where those
+    eigenvectors are too near dependent (a nearly defective eigenvalue) or their span is not
+    invariant to round-off, for the Schur form to decide."""
+    cols = []
+    for j in np.flatnonzero(keep):
+        if theta[j].imag == 0.0:
+            cols.append(Y[:, j].real)
+        elif theta[j].imag > 0.0:
+            cols.extend((Y[:, j].real, Y[:, j].imag))
+    if len(cols) != int(np.sum(keep)):
+        return None  # a pair split by the cut or unpaired: the Schur form decides
+    Q, Rq = np.linalg.qr(np.array(cols).T)
+    d = np.abs(np.diag(Rq))
+    if d.min() < 1e-6 * d.max():
+        return None
+    HQ = H @ Q
+    T = Q.T @ HQ
+    if np.linalg.norm(HQ - Q @ T) > 1e-12 * max(np.linalg.norm(H), 1e-300):
+        return None
+    try:
+        S, W = sla.schur(T, output="real")
+    except np.linalg.LinAlgError:
+        return Q, T  # any basis of the subspace serves; the Schur form is for the reader
+    return Q @ W, S
+
+
+def _result(B, H, theta, Y, X, res, nk, bound, products, complete) -> Leading:
     m = theta.size
     q = min(m, nk + 1)
     if complete:
         q = m
     cut = 0.5 * (abs(theta[q - 1]) + abs(theta[q])) if q < m else -1.0
-    Z, schur = _leading_schur(H, cut)
+    span = _eigen_span(H, theta, Y, np.abs(theta) > cut) if q < m else None
+    Z, schur = span if span is not None else _leading_schur(H, cut)
     basis = B @ Z
     k = m if complete else nk
     vec = X[:, :k] / np.linalg.norm(X[:, :k], axis=0)

@@ -25,7 +25,8 @@ The package, from the bottom layer up (a module imports only from layers below i
 
 - ``names``, ``errors``, ``version``, ``channels`` -- the vocabulary; ``jit`` -- the decorator of
   every compiled kernel, whose on-disk cache is keyed on a hash of the compiled sources, and the
-  watch on what numba compiles; ``roots`` -- Brent's bracketed root (as scipy computes it);
+  watch on what numba compiles; ``blas`` -- the BLAS libraries held to one thread while orbits
+  are traced; ``roots`` -- Brent's bracketed root (as scipy computes it);
 - ``cable`` -- the model's data: geometry, axial rigidity, masses, the degree-of-freedom order;
 - ``mechanics/`` -- the cable's physics written once for any number of components per node: the
   segment law, its assembly, the closure problem on the complementary energy, the approximate

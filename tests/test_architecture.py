@@ -19,7 +19,7 @@ ROOT = Path(__file__).resolve().parents[1] / "cablesim"
 
 #: Layer of each top-level module or subpackage of cablesim (lower imports nothing higher).
 LAYERS = {
-    "version": 0, "names": 0, "errors": 0, "jit": 0, "roots": 0,
+    "version": 0, "names": 0, "errors": 0, "jit": 0, "blas": 0, "roots": 0,
     "cable": 1, "channels": 1,
     "mechanics": 2,
     "statics": 3, "modal": 3,

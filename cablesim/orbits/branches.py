@@ -30,6 +30,7 @@ from typing import Callable
 
 import numpy as np
 
+from ..blas import one_blas_thread
 from . import kernels as ok
 from .continuation import Settings, continuation
 from .matrixfree import MatrixFreeShooting, orbit_leading, solve_orbit_mf
@@ -489,8 +490,9 @@ def trace_branches(
                      integration, liouville_tol, switch_size, mf, log, measure)
     tracer.log.partial = lambda: tracer.partial(time.perf_counter() - t_start)
     try:
-        tracer.first_branch(u0, start, period, segments)
-        tracer.collect_bifurcations(switch_branches, max_period)
+        with one_blas_thread():  # small dense matrices: a second thread only spins (cablesim.blas)
+            tracer.first_branch(u0, start, period, segments)
+            tracer.collect_bifurcations(switch_branches, max_period)
     except KeyboardInterrupt:  # keep every orbit and every bifurcation located so far
         tracer.record_located()
         tracer.diagram.stats = tracer.stats(time.perf_counter() - t_start)

@@ -286,11 +286,11 @@ def test_ctrl_c_keeps_a_valid_file(tmp_path):
                 assert proc.poll() is None, err_path.read_text()
                 assert time.monotonic() < deadline
                 time.sleep(0.1)
-            time.sleep(4.0)
+            time.sleep(6.0)
             assert proc.poll() is None
             sent = time.monotonic()
             proc.send_signal(signal.SIGINT)
-            code = proc.wait(timeout=15)
+            code = proc.wait(timeout=60)
             took = time.monotonic() - sent
         finally:
             if proc.poll() is None:
@@ -299,7 +299,9 @@ def test_ctrl_c_keeps_a_valid_file(tmp_path):
     stderr = err_path.read_text()
     print(f"Ctrl-C: exit code {code}, exited {took:.2f} s after SIGINT")
     assert code == 130, (code, stderr)
-    assert took < 10.0  # observed 2-3.5 s: the chunk ends, the split and the file are written
+    # observed 2-3.5 s on an idle machine (the chunk ends, the split and the file are written);
+    # the margin is for a loaded one: the full run would take hours
+    assert took < 30.0
     assert "Traceback" not in stderr
     assert not (tmp_path / "x.h5.part").exists()
     h = read_history(tmp_path / "x.h5")

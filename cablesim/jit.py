@@ -164,8 +164,14 @@ def _stable_cache_class():
     by one entry a run), and an index entry whose function had been collected could not be
     written again (``ReferenceError: underlying object has vanished``). Here such a type enters
     the key as the function's name, bytecode and source stamp (:func:`_function_key`).
+
+    A specialisation loaded from the cache is given the argument types it was looked up with:
+    the stored ones hold copies of the functions rebuilt from the pickle, and a kernel compiled
+    in this process that calls it (its caller missing from the cache: a first compilation
+    interrupted, or two processes compiling at once) found no version for its own functions and
+    failed to type.
     """
-    from numba.core import types
+    from numba.core import types, typing
     from numba.core.caching import FunctionCache
 
     class StableFunctionCache(FunctionCache):
@@ -173,6 +179,15 @@ def _stable_cache_class():
             stable = tuple(f"compiled function {_function_key(t.dispatcher.py_func)}"
                            if isinstance(t, types.Dispatcher) else t for t in sig)
             return super()._index_key(stable, codegen)
+
+        def load_overload(self, sig, target_context):
+            cres = super().load_overload(sig, target_context)
+            if cres is not None and any(isinstance(t, types.Dispatcher) for t in sig):
+                # the stored signature holds copies of the functions, rebuilt from the pickle;
+                # a kernel compiled now that calls this one looks it up by the live ones
+                cres.fndesc.argtypes = tuple(sig)
+                cres = cres._replace(signature=typing.signature(cres.signature.return_type, *sig))
+            return cres
 
     return StableFunctionCache
 

@@ -186,3 +186,53 @@ def test_the_cache_key_of_a_compiled_function_argument_outlives_the_function():
     gc.collect()
     assert "compiled function" in str(key[0][0]) and "make.<locals>.field" in str(key[0][0])
     pickle.dumps(key)  # raised ReferenceError while the key held the function's type
+
+
+_CALLEE_MODULE = '''
+from cablesim.jit import njit
+
+
+@njit
+def square(x):
+    return x * x
+
+
+@njit
+def apply_twice(f, x):
+    return f(f(x))
+
+
+@njit
+def caller(f, x):
+    return apply_twice(f, x) + 1.0
+'''
+
+
+def test_a_kernel_compiled_after_the_kernels_it_calls_were_cached():
+    """A cache holding a kernel that takes a compiled function (``apply_twice``, as the slack
+    flows' ``_start_modes`` takes the gap functions) but not the kernel calling it (a first
+    compilation interrupted between the two, or two processes compiling at once): the caller,
+    compiled in a later process, found the callee's cached version typed with copies of the
+    functions rebuilt from the pickle and failed (numba TypingError: ``Invalid use of type(
+    CPUDispatcher(...))``). It now compiles and runs."""
+    import os
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        (folder / "callee_probe.py").write_text(_CALLEE_MODULE)
+        code = f"import sys; sys.path.insert(0, {str(folder)!r}); import callee_probe as m; print(m.caller(m.square, 3.0))"
+        env = dict(os.environ, NUMBA_CACHE_DIR=str(folder / "cache"))
+
+        def run():
+            return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300)
+
+        first = run()
+        assert first.returncode == 0 and first.stdout.strip() == "82.0", first.stderr[-2000:]
+        callers = list((folder / "cache").rglob("callee_probe.caller-*"))
+        assert len(callers) == 2 and list((folder / "cache").rglob("callee_probe.apply_twice-*.nbi"))
+        for path in callers:
+            path.unlink()
+        for _ in range(2):  # the caller compiled again, then loaded from the cache
+            again = run()
+            assert again.returncode == 0 and again.stdout.strip() == "82.0", again.stderr[-2000:]

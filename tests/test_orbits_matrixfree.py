@@ -242,38 +242,44 @@ def _projector(V):
     return Q @ Q.T
 
 
-def test_kept_subspace_from_the_eigenvectors_is_the_ordered_schur_forms():
+def test_kept_subspace_from_the_eigenvectors_is_the_ordered_schur_forms(monkeypatch):
     """The kept subspace taken from the Ritz vectors (a QR of a few columns) is the invariant
     subspace the ordered real Schur form of the projected matrix gives, to round-off, on a
-    spectrum with real and complex leading multipliers; the Schur form decides where the
-    eigenvectors are near dependent (a defective multiplier)."""
+    spectrum with real and complex leading multipliers, without forming that Schur form; the
+    Schur form decides where the eigenvectors are near dependent (a defective multiplier)."""
+    import scipy.linalg as sla
+
     import cablesim.orbits.floquet as fq
 
+    calls = []
+    schur = sla.schur
+
+    def counted(*args, **kwargs):
+        calls.append(args[0].shape)
+        return schur(*args, **kwargs)
+
+    monkeypatch.setattr(fq.sla, "schur", counted)
     rng = np.random.default_rng(11)
     m = 40
     D = np.diag(np.concatenate([[1.05, -0.8, 0.0, 0.0, 0.6], 0.3 * rng.random(m - 5)]))
     D[2:4, 2:4] = 0.9 * np.array([[np.cos(0.7), -np.sin(0.7)], [np.sin(0.7), np.cos(0.7)]])
     S = np.eye(m) + 0.3 * rng.standard_normal((m, m)) / np.sqrt(m)
     H = S @ D @ np.linalg.inv(S)
-    theta, Y = np.linalg.eig(H)
-    order = np.lexsort((-theta.imag, -np.abs(theta)))
-    theta, Y = theta[order], Y[:, order]
-    keep = np.abs(theta) > 0.5
-    assert keep.sum() == 5
-    Z, T = fq._eigen_span(H, theta, Y, keep)
-    Zs, Ts = fq._leading_schur(H, 0.5)
+    Z, T = fq._leading_schur(H, 0.5)
+    assert calls == []  # from the eigenvectors
+    Ts, Zs, sdim = schur(H, output="real", sort=lambda x, y: np.hypot(x, y) > 0.5)
+    assert sdim == 5 and Z.shape == (m, 5)
     assert np.abs(Z.T @ Z - np.eye(5)).max() < 1e-13
     assert np.abs(H @ Z - Z @ T).max() < 1e-12
-    assert np.abs(_projector(Z) - _projector(Zs)).max() < 1e-11
-    assert np.sort_complex(np.linalg.eigvals(T)) == pytest.approx(np.sort_complex(np.linalg.eigvals(Ts)), abs=1e-12)
+    assert np.abs(_projector(Z) - _projector(Zs[:, :5])).max() < 1e-11
+    assert np.sort_complex(np.linalg.eigvals(T)) == pytest.approx(np.sort_complex(np.linalg.eigvals(Ts[:5, :5])), abs=1e-12)
     # a Jordan block of 0.9 kept: its two eigenvectors agree to 1e-7, no basis of the subspace
     J = np.diag(np.concatenate([[0.9, 0.9], 0.3 * rng.random(m - 2)]))
     J[0, 1] = 1.0
     HJ = S @ J @ np.linalg.inv(S)
-    theta, Y = np.linalg.eig(HJ)
-    order = np.lexsort((-theta.imag, -np.abs(theta)))
-    theta, Y = theta[order], Y[:, order]
-    assert fq._eigen_span(HJ, theta, Y, np.abs(theta) > 0.5) is None
+    ZJ, TJ = fq._leading_schur(HJ, 0.5)
+    assert calls == [(m, m)]  # the ordered Schur form decided
+    assert ZJ.shape == (m, 2) and np.abs(HJ @ ZJ - ZJ @ TJ).max() < 1e-12
     lead = fq.leading_multipliers(lambda X: HJ @ X, m, bound=0.5)
     assert np.abs(HJ @ lead.basis - lead.basis @ lead.schur).max() < DISCARDED_TOL
 
@@ -292,7 +298,7 @@ def test_leading_subspace_when_the_ordered_schur_form_fails(monkeypatch):
     S = np.eye(n) + 0.3 * rng.standard_normal((n, n)) / np.sqrt(n)
     M = S @ D @ np.linalg.inv(S)
     monkeypatch.setattr(fq.sla, "schur", refuse)
-    monkeypatch.setattr(fq, "_eigen_span", lambda *args: None)  # the Schur form's own fallback
+    monkeypatch.setattr(fq, "SPAN_TOL", -1.0)  # the eigenvectors' span refused: the Schur form's fallback
     lead = fq.leading_multipliers(lambda X: M @ X, n, bound=0.5)
     assert lead.multipliers.size == 3
     # the subspace holds one Ritz vector below the bound too, converged to DISCARDED_TOL only

@@ -64,8 +64,8 @@ class Leading:
     vectors : ndarray complex (n, k)
         Their eigenvectors (unit, scaled coordinates).
     basis, schur : ndarray (n, q), (q, q)
-        Orthonormal real basis of the kept invariant subspace and one Ritz value below it,
-        ``M basis = basis schur`` (real Schur form): warm start and preconditioner.
+        Orthonormal real basis of the kept invariant subspace and one Ritz value below it, and
+        the monodromy on it, ``M basis = basis schur``: warm start and preconditioner.
     discarded : float
         Largest modulus left out (0 when ``complete``).
     bound : float
@@ -191,7 +191,7 @@ def leading_multipliers(apply, n: int, bound: float = DEFAULT_BOUND, tol: float 
                 cols.append(R[:, j].imag)
         Xn = np.array(cols).T if cols else np.zeros((n, 0))
         if m + Xn.shape[1] > max_basis:
-            B, MB = _restart(B, MB, H, nk)
+            B, MB = _restart(B, MB, H, theta, Y, nk)
         Xn = _orth(Xn, B)
         if Xn.shape[1] == 0:
             Xn = _orth(rng.standard_normal((n, block)), B)
@@ -204,61 +204,64 @@ def leading_multipliers(apply, n: int, bound: float = DEFAULT_BOUND, tol: float 
     return _result(B, H, theta, Y, X, res, nk, bound, products, complete=B.shape[1] >= n)
 
 
-def _leading_schur(H: np.ndarray, cut: float):
-    """``(Z, T)``: an orthonormal basis ``Z`` of the invariant subspace of ``H`` for its
-    eigenvalues of modulus above ``cut``, and ``T = Z^T H Z``. The ordered real Schur form, or,
-    where LAPACK's reordering moves an eigenvalue across the cut (moduli that close to it), the
-    real span of those eigenvectors."""
-    try:
-        T, Z, sdim = sla.schur(H, output="real", sort=lambda x, y: np.hypot(x, y) > cut)
-        sdim = max(int(sdim), 1)
-        return Z[:, :sdim], T[:sdim, :sdim]
-    except np.linalg.LinAlgError:
-        theta, Y = np.linalg.eig(H)
-        keep = np.abs(theta) > cut
-        if not np.any(keep):
-            keep[int(np.argmax(np.abs(theta)))] = True
-        Z = _orth(np.hstack([Y[:, keep].real, Y[:, keep].imag]))
-        return Z, Z.T @ H @ Z
+#: The eigenvectors' span is taken as the kept subspace where ``|H Z - Z T| <= SPAN_TOL |H|``.
+SPAN_TOL = 1e-12
 
 
-def _restart(B, MB, H, nk):
-    """Keep the real Schur vectors of the wanted Ritz values and a few below them."""
-    m = H.shape[0]
-    keep = min(m, nk + max(4, nk // 4))
-    mods = np.sort(np.abs(np.linalg.eigvals(H)))[::-1]
-    cut = 0.5 * (mods[keep - 1] + mods[keep]) if keep < m else -1.0
-    Z, _ = _leading_schur(H, cut)
-    return B @ Z, MB @ Z
-
-
-def _eigen_span(H: np.ndarray, theta: np.ndarray, Y: np.ndarray, keep: np.ndarray):
-    """``(Z, T)`` as :func:`_leading_schur` from the eigenvectors ``Y`` of ``H`` for the
-    eigenvalues ``theta[keep]`` (a conjugate pair by its real and imaginary parts), at the
-    cost of a QR of ``k`` columns instead of a Schur form of ``H``; None where those
-    eigenvectors are too near dependent (a nearly defective eigenvalue) or their span is not
-    invariant to round-off, for the Schur form to decide."""
+def _eigen_columns(theta: np.ndarray, Y: np.ndarray, keep: np.ndarray) -> np.ndarray | None:
+    """Real columns spanning the eigenvectors ``Y`` of ``theta[keep]``, one per eigenvalue (a
+    real one's vector; a conjugate pair's real and imaginary parts, once); None where ``keep``
+    splits a pair."""
     cols = []
     for j in np.flatnonzero(keep):
         if theta[j].imag == 0.0:
             cols.append(Y[:, j].real)
         elif theta[j].imag > 0.0:
             cols.extend((Y[:, j].real, Y[:, j].imag))
-    if len(cols) != int(np.sum(keep)):
-        return None  # a pair split by the cut or unpaired: the Schur form decides
-    Q, Rq = np.linalg.qr(np.array(cols).T)
-    d = np.abs(np.diag(Rq))
-    if d.min() < 1e-6 * d.max():
-        return None
-    HQ = H @ Q
-    T = Q.T @ HQ
-    if np.linalg.norm(HQ - Q @ T) > 1e-12 * max(np.linalg.norm(H), 1e-300):
-        return None
+    return np.array(cols).T if len(cols) == int(keep.sum()) else None
+
+
+def _leading_schur(H: np.ndarray, cut: float, eig: tuple | None = None):
+    """``(Z, T)``: an orthonormal basis ``Z`` of the invariant subspace of ``H`` for its
+    eigenvalues of modulus above ``cut``, and ``T = Z^T H Z``; ``eig``: ``(theta, Y)``, the
+    eigen decomposition of ``H`` where it is at hand.
+
+    The real span of those eigenvectors (a QR of a few columns) where they are independent to
+    ``1e-6`` and their span is invariant to :data:`SPAN_TOL`; else (a nearly defective
+    eigenvalue, a pair split by the cut) the ordered real Schur form; and where LAPACK's
+    reordering moves an eigenvalue across the cut (moduli that close to it), the span of the
+    eigenvectors however conditioned."""
+    theta, Y = np.linalg.eig(H) if eig is None else eig
+    keep = np.abs(theta) > cut
+    if not np.any(keep):
+        keep[int(np.argmax(np.abs(theta)))] = True
+    X = _eigen_columns(theta, Y, keep)
+    if X is not None:
+        Z, R = np.linalg.qr(X)
+        d = np.abs(np.diag(R))
+        if d.min() >= 1e-6 * d.max():
+            HZ = H @ Z
+            T = Z.T @ HZ
+            if np.linalg.norm(HZ - Z @ T) <= SPAN_TOL * np.linalg.norm(H):
+                return Z, T
     try:
-        S, W = sla.schur(T, output="real")
+        T, Z, sdim = sla.schur(H, output="real", sort=lambda x, y: np.hypot(x, y) > cut)
+        sdim = max(int(sdim), 1)
+        return Z[:, :sdim], T[:sdim, :sdim]
     except np.linalg.LinAlgError:
-        return Q, T  # any basis of the subspace serves; the Schur form is for the reader
-    return Q @ W, S
+        Z = _orth(np.hstack([Y[:, keep].real, Y[:, keep].imag]))
+        return Z, Z.T @ H @ Z
+
+
+def _restart(B, MB, H, theta, Y, nk):
+    """Keep the basis of the wanted Ritz values and a few below them (``theta``, ``Y``: the
+    Ritz pairs of ``H``, by decreasing modulus)."""
+    m = H.shape[0]
+    keep = min(m, nk + max(4, nk // 4))
+    mods = np.abs(theta)
+    cut = 0.5 * (mods[keep - 1] + mods[keep]) if keep < m else -1.0
+    Z, _ = _leading_schur(H, cut, (theta, Y))
+    return B @ Z, MB @ Z
 
 
 def _result(B, H, theta, Y, X, res, nk, bound, products, complete) -> Leading:
@@ -267,8 +270,7 @@ def _result(B, H, theta, Y, X, res, nk, bound, products, complete) -> Leading:
     if complete:
         q = m
     cut = 0.5 * (abs(theta[q - 1]) + abs(theta[q])) if q < m else -1.0
-    span = _eigen_span(H, theta, Y, np.abs(theta) > cut) if q < m else None
-    Z, schur = span if span is not None else _leading_schur(H, cut)
+    Z, schur = _leading_schur(H, cut, (theta, Y))
     basis = B @ Z
     k = m if complete else nk
     vec = X[:, :k] / np.linalg.norm(X[:, :k], axis=0)

@@ -33,7 +33,7 @@ def test_orbits_are_traced_on_one_blas_thread():
     seen = []
     eom = heavy(12, 1.5, load=50.0)
     d = continue_branches(eom, "omega", 1.5, 1.52, switch_branches=False, matrix_free=True, scheme="auto",
-                          callback=lambda p: seen.append(_blas_threads()) and None)
+                          callback=lambda p: seen.append(_blas_threads()))
     assert len(d.branches[0].points) >= 2 and len(seen) == len(d.branches[0].points)
     assert all(threads == [1] * len(threads) for threads in seen)
     assert _blas_threads() == before

@@ -208,7 +208,7 @@ def caller(f, x):
 '''
 
 
-def test_a_kernel_compiled_after_the_kernels_it_calls_were_cached():
+def test_a_kernel_compiled_after_the_kernels_it_calls_were_cached(tmp_path):
     """A cache holding a kernel that takes a compiled function (``apply_twice``, as the slack
     flows' ``_start_modes`` takes the gap functions) but not the kernel calling it (a first
     compilation interrupted between the two, or two processes compiling at once): the caller,
@@ -216,23 +216,20 @@ def test_a_kernel_compiled_after_the_kernels_it_calls_were_cached():
     functions rebuilt from the pickle and failed (numba TypingError: ``Invalid use of type(
     CPUDispatcher(...))``). It now compiles and runs."""
     import os
-    import tempfile
 
-    with tempfile.TemporaryDirectory() as tmp:
-        folder = Path(tmp)
-        (folder / "callee_probe.py").write_text(_CALLEE_MODULE)
-        code = f"import sys; sys.path.insert(0, {str(folder)!r}); import callee_probe as m; print(m.caller(m.square, 3.0))"
-        env = dict(os.environ, NUMBA_CACHE_DIR=str(folder / "cache"))
+    (tmp_path / "callee_probe.py").write_text(_CALLEE_MODULE)
+    code = f"import sys; sys.path.insert(0, {str(tmp_path)!r}); import callee_probe as m; print(m.caller(m.square, 3.0))"
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
 
-        def run():
-            return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300)
+    def run():
+        return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300)
 
-        first = run()
-        assert first.returncode == 0 and first.stdout.strip() == "82.0", first.stderr[-2000:]
-        callers = list((folder / "cache").rglob("callee_probe.caller-*"))
-        assert len(callers) == 2 and list((folder / "cache").rglob("callee_probe.apply_twice-*.nbi"))
-        for path in callers:
-            path.unlink()
-        for _ in range(2):  # the caller compiled again, then loaded from the cache
-            again = run()
-            assert again.returncode == 0 and again.stdout.strip() == "82.0", again.stderr[-2000:]
+    first = run()
+    assert first.returncode == 0 and first.stdout.strip() == "82.0", first.stderr[-2000:]
+    callers = list((tmp_path / "cache").rglob("callee_probe.caller-*"))
+    assert len(callers) == 2 and list((tmp_path / "cache").rglob("callee_probe.apply_twice-*.nbi"))
+    for path in callers:
+        path.unlink()
+    for _ in range(2):  # the caller compiled again, then loaded from the cache
+        again = run()
+        assert again.returncode == 0 and again.stdout.strip() == "82.0", again.stderr[-2000:]

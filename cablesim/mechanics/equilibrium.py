@@ -9,7 +9,7 @@ complementary energy, :func:`slack_segment`) or a Newton method that did not con
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -113,6 +113,10 @@ class ScaledClosure:
         S = np.ascontiguousarray(cable.S / ell)
         return cls(ell=ell, p=p, S=S, c=tuple(float(x) for x in cable.chord / ell), Q=np.ascontiguousarray(Q / p),
                    eps=compliance * p, tol=CLOSURE_RTOL * max(1.0, float(S.sum())))
+
+    def rebased(self, r: int) -> "ScaledClosure":
+        """The same problem with segment ``r``'s force as the unknown: ``Q_k - Q_r`` for ``Q_k``."""
+        return replace(self, Q=np.ascontiguousarray(self.Q - self.Q[r]))
 
     def forces(self, F: np.ndarray):
         """``(F_k, T_k, e_k, l_k, closure error)`` at the scaled segment-1 force ``F``."""
@@ -224,6 +228,15 @@ def solve_segment_forces(cable: Cable, P: np.ndarray, elastic: bool = True, F_st
             started = True
         code = cl.minimise(sc.S, sc.Q, sc.eps, sc.c, F, sc.tol, MAX_NEWTON) if started else cl.FAIL_ITERATIONS
         Fk, T, e, lk, err = sc.forces(F)
+        if started and code in (cl.FAIL_ITERATIONS, cl.FAIL_STALLED) and np.isfinite(err):
+            # A segment force far below the loads is the difference F - Q_k of two much larger
+            # vectors: its direction carries their rounding amplified by |Q_k| / T_k, and the
+            # closure error stalls above its tolerance. Solve again with that segment's force as
+            # the unknown (Q_k - Q_r for Q_k), which takes no difference for it.
+            r = int(np.argmin(T))
+            F, sc = Fk[r].copy(), sc.rebased(r)
+            code = cl.minimise(sc.S, sc.Q, sc.eps, sc.c, F, sc.tol, MAX_NEWTON)
+            Fk, T, e, lk, err = sc.forces(F)
     if not started or code < 0 or not np.isfinite(err):
         if check_slack:
             _raise_if_slack(cable, sc)

@@ -54,15 +54,15 @@ def factor(AB, kl, ku, piv):
                 cc[kv + j - c] = cc[kv + j + p - c]
                 cc[kv + j + p - c] = tmp
         rp = 1.0 / col[kv]
-        for d in range(1, km + 1):
-            col[kv + d] *= rp
+        lower = col[kv + 1 : kv + km + 1]
+        for d in range(km):
+            lower[d] *= rp
         for c in range(j + 1, ju + 1):
-            cc = AB[c]
-            ajc = cc[kv + j - c]
-            if ajc != 0.0:
-                off = kv + j - c
-                for d in range(1, km + 1):
-                    cc[off + d] -= col[kv + d] * ajc
+            off = kv + j - c
+            ajc = AB[c, off]
+            target = AB[c, off + 1 : off + km + 1]
+            for d in range(km):
+                target[d] -= lower[d] * ajc
     return True
 
 
